@@ -1,0 +1,1 @@
+"""usvsim's baselines package."""

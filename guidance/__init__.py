@@ -1,0 +1,1 @@
+"""usvsim's guidance package."""

@@ -1,0 +1,1 @@
+"""usvsim's learning package."""

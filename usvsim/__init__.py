@@ -1,0 +1,20 @@
+"""usvsim: learning and testing steering policies for unmanned surface vehicles.
+
+Modules (the architecture, bottom up): :mod:`usvsim.vessels` (parameters), :mod:`usvsim.model`
+(CasADi 3-DOF model), :mod:`usvsim.autopilot` (heading autopilot, speed control),
+:mod:`usvsim.plant` (batched closed-loop plant), :mod:`usvsim.sensors` and
+:mod:`usvsim.navigation` (GPS/compass/gyro and the Kalman filter), then the task, environments,
+evaluation and command-line interface.
+"""
+
+from __future__ import annotations
+
+import gymnasium
+
+__version__ = "0.1.0"
+
+ENV_ID = "usvsim/PoleAvoidance-v0"
+
+if ENV_ID not in gymnasium.registry:
+    # string entry point: the environment module is imported only on gymnasium.make
+    gymnasium.register(id=ENV_ID, entry_point="usvsim.env:PoleAvoidanceEnv")
