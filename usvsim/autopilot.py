@@ -73,6 +73,20 @@ class AutopilotConfig:
     rover_rate_p: float = 0.2  # s/rad, ATC_STR_RAT_P
     rover_rate_i: float = 0.2  # 1/rad, ATC_STR_RAT_I
     rover_rate_imax: float = 1.0  # -, ATC_STR_RAT_IMAX
+    rover_acc_max: float = math.radians(120.0)  # rad/s², ATC_STR_ACC_MAX
+
+    @classmethod
+    def rover_tuned(cls) -> AutopilotConfig:
+        """Rover cascade re-tuned for the default vessel.
+
+        ArduPilot's defaults (FF = P = I = 0.2) assume a light, well-damped rover. This hull's yaw
+        is sluggish (Nomoto T ≈ 17 s) and they give a limit cycle; raising the rate P to 10 and
+        lowering the heading P to 1, the way ArduPilot's steering-rate tuning guide proceeds
+        (rate loop first, then the heading loop), gives a settled 30° step in ≈ 6 s.
+        """
+        return cls(
+            kind="rover", rover_ang_p=1.0, rover_rate_ff=0.7, rover_rate_p=10.0, rover_rate_i=0.2
+        )
 
     def __post_init__(self) -> None:
         if self.kind not in ("pid", "rover"):
@@ -99,16 +113,35 @@ class AutopilotDesign:
     def gains_vector(self) -> NDArray[np.float64]:
         """Parameters fed to the compiled control law (layout: see :func:`control_law`)."""
         c = self.config
-        return np.array([
-            self.Kp, self.Kd, self.Ki, self.nomoto.m, self.nomoto.d,
-            c.ref_omega, c.ref_zeta, c.ref_rate_max, c.ref_acc_max, c.integral_max,
-            2.0 * c.speed_omega, c.speed_omega**2, self.m11, self.tau_n_max,
-            c.rover_ang_p, c.rover_rate_max, c.rover_rate_ff, c.rover_rate_p, c.rover_rate_i,
-            c.rover_rate_imax,
-        ], dtype=float)
+        return np.array(
+            [
+                self.Kp,
+                self.Kd,
+                self.Ki,
+                self.nomoto.m,
+                self.nomoto.d,
+                c.ref_omega,
+                c.ref_zeta,
+                c.ref_rate_max,
+                c.ref_acc_max,
+                c.integral_max,
+                2.0 * c.speed_omega,
+                c.speed_omega**2,
+                self.m11,
+                self.tau_n_max,
+                c.rover_ang_p,
+                c.rover_rate_max,
+                c.rover_rate_ff,
+                c.rover_rate_p,
+                c.rover_rate_i,
+                c.rover_rate_imax,
+                c.rover_acc_max,
+            ],
+            dtype=float,
+        )
 
 
-NG = 20  # gains vector size
+NG = 21  # gains vector size
 
 
 def _max_yaw_moment(act: Actuation) -> float:
@@ -117,7 +150,9 @@ def _max_yaw_moment(act: Actuation) -> float:
     return act.lever_m * act.a1_max * math.sin(act.a2_max)
 
 
-def design_autopilot(vessel: VesselParams, config: AutopilotConfig | None = None) -> AutopilotDesign:
+def design_autopilot(
+    vessel: VesselParams, config: AutopilotConfig | None = None
+) -> AutopilotDesign:
     """Design the heading PID by pole placement on the Nomoto model linearised at cruise speed."""
     config = config or AutopilotConfig()
     A, B = linearize(vessel, config.cruise_speed_mps)
@@ -127,8 +162,13 @@ def design_autopilot(vessel: VesselParams, config: AutopilotConfig | None = None
     Kd = 2.0 * z * wn * m - d  # eq. (15.86)
     Ki = wn / 10.0 * Kp  # eq. (15.87)
     return AutopilotDesign(
-        config=config, nomoto=nomoto, Kp=Kp, Kd=Kd, Ki=Ki,
-        m11=float(mass_matrix(vessel)[0, 0]), tau_n_max=_max_yaw_moment(vessel.actuation),
+        config=config,
+        nomoto=nomoto,
+        Kp=Kp,
+        Kd=Kd,
+        Ki=Ki,
+        m11=float(mass_matrix(vessel)[0, 0]),
+        tau_n_max=_max_yaw_moment(vessel.actuation),
     )
 
 
@@ -170,8 +210,29 @@ def control_law(
     vector of :meth:`AutopilotDesign.gains_vector`. The autopilot uses the true ψ, r, u: it stands
     for an inner loop with its own high-rate sensors.
     """
-    (Kp, Kd, Ki, m_ff, d_ff, w, zr, r_max, a_max, z_max,
-     kpu, kiu, m11, tau_n_max, ang_p, rr_max, r_ff, r_p, r_i, r_imax) = (g[i] for i in range(NG))
+    (
+        Kp,
+        Kd,
+        Ki,
+        m_ff,
+        d_ff,
+        w,
+        zr,
+        r_max,
+        a_max,
+        z_max,
+        kpu,
+        kiu,
+        m11,
+        tau_n_max,
+        ang_p,
+        rr_max,
+        r_ff,
+        r_p,
+        r_i,
+        r_imax,
+        r_acc,
+    ) = (g[i] for i in range(NG))
     psi, u, r = x[2], x[3], x[5]
     psi_ref, u_ref = cmd[0], cmd[1]
 
@@ -190,8 +251,7 @@ def control_law(
         z_next = ca.if_else(ca.fabs(tau_n_des) < tau_n_max, z_psi + dt_s * err, z_psi)
         z_next = _sat(z_next, z_max)
         # 3rd-order reference model, Euler-discretised with velocity/acceleration limits
-        jerk = (w**3 * _ssa(psi_ref - psi_d) - (2 * zr + 1) * w * a_d
-                - (2 * zr + 1) * w**2 * r_d)
+        jerk = w**3 * _ssa(psi_ref - psi_d) - (2 * zr + 1) * w * a_d - (2 * zr + 1) * w**2 * r_d
         a_next = _sat(a_d + dt_s * jerk, a_max)
         r_next = _sat(r_d + dt_s * a_d, r_max)
         psi_next = _ssa(psi_d + dt_s * r_d)
@@ -199,6 +259,8 @@ def control_law(
         c_next = ca.vertcat(psi_next, r_next, a_next, z_next, z_u)
     else:
         r_des = _sat(ang_p * _ssa(psi_ref - psi), rr_max)
+        # ATC_STR_ACC_MAX: the desired turn rate changes by at most acc_max dt per update
+        r_des = ca.fmin(ca.fmax(r_des, c[1] - r_acc * dt_s), c[1] + r_acc * dt_s)
         r_err = r_des - r
         integ = _sat(c[3] + r_i * r_err * dt_s, r_imax)
         steer = _sat(r_ff * r_des + r_p * r_err + integ, 1.0)
@@ -227,27 +289,36 @@ def design_report(vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0
     """
     import control
 
-    lines = [f"vessel {vessel.name}: L = {vessel.length_m:.2f} m, B = {vessel.beam_m:.2f} m, "
-             f"m = {vessel.m:.0f} kg, Iz = {vessel.Iz:.0f} kg m²"]
+    lines = [
+        f"vessel {vessel.name}: L = {vessel.length_m:.2f} m, B = {vessel.beam_m:.2f} m, "
+        f"m = {vessel.m:.0f} kg, Iz = {vessel.Iz:.0f} kg m²"
+    ]
     n = design.nomoto
     c = design.config
-    lines.append(f"Nomoto at {c.cruise_speed_mps:.1f} m/s: K = {n.K:.4g} rad/(s N m), "
-                 f"T = {n.T:.3f} s  (m = {n.m:.4g} kg m², d = {n.d:.4g} N m s)")
-    lines.append(f"PID ({c.kind} selected): ω_n = {c.omega_n} rad/s, ζ = {c.zeta}: "
-                 f"K_p = {design.Kp:.4g} N m/rad, K_d = {design.Kd:.4g} N m s/rad, "
-                 f"K_i = {design.Ki:.4g} N m/(rad s)")
+    lines.append(
+        f"Nomoto at {c.cruise_speed_mps:.1f} m/s: K = {n.K:.4g} rad/(s N m), "
+        f"T = {n.T:.3f} s  (m = {n.m:.4g} kg m², d = {n.d:.4g} N m s)"
+    )
+    lines.append(
+        f"PID ({c.kind} selected): ω_n = {c.omega_n} rad/s, ζ = {c.zeta}: "
+        f"K_p = {design.Kp:.4g} N m/rad, K_d = {design.Kd:.4g} N m s/rad, "
+        f"K_i = {design.Ki:.4g} N m/(rad s)"
+    )
     loop = _loop_transfer(vessel, design, dt_s)
     gm, pm, wcg, wcp = control.margin(loop)
     cl = control.feedback(loop, 1)
     poles = np.sort_complex(control.poles(cl))
     lines.append("closed-loop poles: " + ", ".join(f"{p.real:.3f}{p.imag:+.3f}j" for p in poles))
     gm_db = 20 * math.log10(gm) if np.isfinite(gm) and gm > 0 else float("inf")
-    lines.append(f"gain margin {gm_db:.1f} dB at {wcg:.2f} rad/s, phase margin {pm:.1f}° at "
-                 f"{wcp:.2f} rad/s")
-    lines.append(f"reference model: ω = {c.ref_omega} rad/s, ζ = {c.ref_zeta}, "
-                 f"r_max = {math.degrees(c.ref_rate_max):.1f}°/s, "
-                 f"a_max = {math.degrees(c.ref_acc_max):.1f}°/s²; "
-                 f"max yaw moment {design.tau_n_max:.4g} N m")
+    lines.append(
+        f"gain margin {gm_db:.1f} dB at {wcg:.2f} rad/s, phase margin {pm:.1f}° at {wcp:.2f} rad/s"
+    )
+    lines.append(
+        f"reference model: ω = {c.ref_omega} rad/s, ζ = {c.ref_zeta}, "
+        f"r_max = {math.degrees(c.ref_rate_max):.1f}°/s, "
+        f"a_max = {math.degrees(c.ref_acc_max):.1f}°/s²; "
+        f"max yaw moment {design.tau_n_max:.4g} N m"
+    )
     return "\n".join(lines)
 
 

@@ -90,8 +90,13 @@ def _generate_source(fn: ca.Function) -> str:
             os.chdir(cwd)
         body = (Path(tmp) / name).read_text()
     driver = _DRIVER.format(
-        ns=fn.size1_in(0), na=fn.size1_in(1), sz_arg=fn.sz_arg(), sz_res=fn.sz_res(),
-        sz_iw=fn.sz_iw(), sz_w=fn.sz_w(), fname=fn.name(),
+        ns=fn.size1_in(0),
+        na=fn.size1_in(1),
+        sz_arg=fn.sz_arg(),
+        sz_res=fn.sz_res(),
+        sz_iw=fn.sz_iw(),
+        sz_w=fn.sz_w(),
+        fname=fn.name(),
     )
     return body + driver
 
@@ -110,8 +115,12 @@ def _compile(source: str) -> Path:
         src = Path(tmp) / "step.c"
         src.write_text(source)
         tmp_lib = Path(tmp) / "step.so"
-        proc = subprocess.run([cc, *_CFLAGS, str(src), "-o", str(tmp_lib), "-lm"],
-                              capture_output=True, text=True, check=False)
+        proc = subprocess.run(
+            [cc, *_CFLAGS, str(src), "-o", str(tmp_lib), "-lm"],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
         if proc.returncode != 0:
             raise CompileError(f"{cc} failed:\n{proc.stderr[-2000:]}")
         os.replace(tmp_lib, lib)  # atomic: other processes see the whole library or none
@@ -142,14 +151,24 @@ class BatchStepper:
                     raise
         if self._lib is not None:
             c_double_p = ctypes.POINTER(ctypes.c_double)
-            self._lib.usv_batch.argtypes = [ctypes.c_int, ctypes.c_int, c_double_p, c_double_p,
-                                            c_double_p, ctypes.c_int, c_double_p]
+            self._lib.usv_batch.argtypes = [
+                ctypes.c_int,
+                ctypes.c_int,
+                c_double_p,
+                c_double_p,
+                c_double_p,
+                ctypes.c_int,
+                c_double_p,
+            ]
             self._lib.usv_batch.restype = None
         self.backend: str = "compiled" if self._lib is not None else "casadi"
 
     def run(
-        self, s0: NDArray[np.float64], per_boat: NDArray[np.float64],
-        shared: NDArray[np.float64], n_sub: int,
+        self,
+        s0: NDArray[np.float64],
+        per_boat: NDArray[np.float64],
+        shared: NDArray[np.float64],
+        n_sub: int,
     ) -> NDArray[np.float64]:
         """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na) and shared (ng,)."""
         s0 = np.ascontiguousarray(s0, dtype=np.float64)
@@ -159,8 +178,15 @@ class BatchStepper:
         traj = np.empty((n, n_sub, self.ns))
         if self._lib is not None:
             ptr = ctypes.POINTER(ctypes.c_double)
-            self._lib.usv_batch(n, n_sub, s0.ctypes.data_as(ptr), shared.ctypes.data_as(ptr),
-                                per_boat.ctypes.data_as(ptr), self.na, traj.ctypes.data_as(ptr))
+            self._lib.usv_batch(
+                n,
+                n_sub,
+                s0.ctypes.data_as(ptr),
+                shared.ctypes.data_as(ptr),
+                per_boat.ctypes.data_as(ptr),
+                self.na,
+                traj.ctypes.data_as(ptr),
+            )
             return traj
         fmap = self._maps.get(n)
         if fmap is None:

@@ -82,10 +82,24 @@ def damping_forces(v: VesselParams, nu_r: Any) -> Any:
     u, vv, r = nu_r[0], nu_r[1], nu_r[2]
     au, av, ar = ca.fabs(u), ca.fabs(vv), ca.fabs(r)
     X = v.X_u * u + v.X_uu * au * u + v.X_uuu * u**3
-    Y = (v.Y_v * vv + v.Y_r * r + v.Y_vv * av * vv + v.Y_rv * ar * vv + v.Y_vr * av * r
-         + v.Y_rr * ar * r + v.Y_vvv * vv**3)
-    N = (v.N_v * vv + v.N_r * r + v.N_vv * av * vv + v.N_rv * ar * vv + v.N_vr * av * r
-         + v.N_rr * ar * r + v.N_rrr * r**3)
+    Y = (
+        v.Y_v * vv
+        + v.Y_r * r
+        + v.Y_vv * av * vv
+        + v.Y_rv * ar * vv
+        + v.Y_vr * av * r
+        + v.Y_rr * ar * r
+        + v.Y_vvv * vv**3
+    )
+    N = (
+        v.N_v * vv
+        + v.N_r * r
+        + v.N_vv * av * vv
+        + v.N_rv * ar * vv
+        + v.N_vr * av * r
+        + v.N_rr * ar * r
+        + v.N_rrr * r**3
+    )
     return -ca.vertcat(X, Y, N)
 
 
@@ -159,8 +173,9 @@ def build_force_dynamics(v: VesselParams) -> ca.Function:
     tau = ca.SX.sym("tau", 3)
     p = ca.SX.sym("p", NP)
     eta_dot, nu_dot = _rigid_body_rates(v, x, tau, p)
-    return ca.Function("f_tau", [x, tau, p], [ca.vertcat(eta_dot, nu_dot)],
-                       ["x", "tau", "p"], ["xdot"])
+    return ca.Function(
+        "f_tau", [x, tau, p], [ca.vertcat(eta_dot, nu_dot)], ["x", "tau", "p"], ["xdot"]
+    )
 
 
 def rk4_expr(f: ca.Function, x: Any, u: Any, p: Any, dt_s: float) -> Any:

@@ -21,7 +21,6 @@ trajectory       (N, T, 13)    [x, c] after each step
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import casadi as ca
 import numpy as np
@@ -61,8 +60,9 @@ def build_closed_loop_step(vessel: VesselParams, kind: AutopilotKind, dt_s: floa
     a_cmd, c_next = control_law(vessel, kind, x, c, w[0:2], g, dt_s)
     x_next = rk4_expr(f, x, a_cmd, w[2:4], dt_s)
     x_next[2] = ca.fmod(ca.fmod(x_next[2] + ca.pi, 2 * ca.pi) + 2 * ca.pi, 2 * ca.pi) - ca.pi
-    return ca.Function("usv_cl_step", [s, w, g], [ca.vertcat(x_next, c_next)],
-                       ["s", "w", "g"], ["s_next"])
+    return ca.Function(
+        "usv_cl_step", [s, w, g], [ca.vertcat(x_next, c_next)], ["s", "w", "g"], ["s_next"]
+    )
 
 
 @dataclass(frozen=True)
@@ -136,8 +136,9 @@ class Plant:
         self.gains = self.design.gains_vector()
         self._stepper = BatchStepper(self.step_function, backend)
         u = ca.SX.sym("u")
-        self._surge_drag = ca.Function("drag", [u], [damping_forces(self.vessel,
-                                                                    ca.vertcat(u, 0, 0))[0]])
+        self._surge_drag = ca.Function(
+            "drag", [u], [damping_forces(self.vessel, ca.vertcat(u, 0, 0))[0]]
+        )
 
     @property
     def backend(self) -> str:
@@ -163,7 +164,9 @@ class Plant:
         if not np.all(np.isfinite(eta)):
             raise ValueError("eta contains NaN or inf")
         n = eta.shape[0]
-        speed = _as_vector("speed_mps", self.cruise_speed_mps if speed_mps is None else speed_mps, n)
+        speed = _as_vector(
+            "speed_mps", self.cruise_speed_mps if speed_mps is None else speed_mps, n
+        )
         x = np.zeros((n, NX))
         x[:, 0:2] = eta[:, 0:2]
         x[:, 2] = ssa(eta[:, 2])
@@ -184,15 +187,18 @@ class Plant:
         """
         n = state.n_boats
         if state.x.shape != (n, NX) or state.c.shape != (n, NC):
-            raise ValueError(f"state arrays must be (N, {NX}) and (N, {NC}), got "
-                             f"{state.x.shape} and {state.c.shape}")
+            raise ValueError(
+                f"state arrays must be (N, {NX}) and (N, {NC}), got "
+                f"{state.x.shape} and {state.c.shape}"
+            )
         if not (np.all(np.isfinite(state.x)) and np.all(np.isfinite(state.c))):
             raise ValueError("plant state contains NaN or inf")
         if not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
             raise ValueError(f"n_steps must be a positive integer, got {n_steps!r}")
         psi_ref = _as_vector("psi_ref_rad", psi_ref_rad, n)
         speed = _as_vector(
-            "speed_ref_mps", self.cruise_speed_mps if speed_ref_mps is None else speed_ref_mps, n)
+            "speed_ref_mps", self.cruise_speed_mps if speed_ref_mps is None else speed_ref_mps, n
+        )
         w = np.empty((n, 4))
         w[:, 0] = psi_ref
         w[:, 1] = speed

@@ -119,15 +119,18 @@ class VesselParams:
         for name in ("length_m", "beam_m", "m", "Iz"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"VesselParams.{name} must be > 0, got {getattr(self, name)}")
-        # Damping must dissipate energy (Fossen 2021, §6.4): diagonal linear and nonlinear terms <= 0
+        # damping must dissipate energy (Fossen 2021, §6.4): diagonal terms <= 0
         for name in ("X_u", "Y_v", "N_r", "X_uu", "Y_vv", "N_rr", "X_uuu", "Y_vvv", "N_rrr"):
             if getattr(self, name) > 0:
-                raise ValueError(f"VesselParams.{name} must be <= 0 (dissipative), got "
-                                 f"{getattr(self, name)}")
+                raise ValueError(
+                    f"VesselParams.{name} must be <= 0 (dissipative), got {getattr(self, name)}"
+                )
         for name in ("X_udot", "Y_vdot", "N_rdot"):
             if getattr(self, name) > 0:
-                raise ValueError(f"VesselParams.{name} must be <= 0 (SNAME added mass), got "
-                                 f"{getattr(self, name)}")
+                raise ValueError(
+                    f"VesselParams.{name} must be <= 0 (SNAME added mass), got "
+                    f"{getattr(self, name)}"
+                )
 
     @property
     def half_beam_m(self) -> float:
@@ -307,7 +310,7 @@ VESSELS: dict[str, VesselParams] = {
 
 
 def get_vessel(name: str) -> VesselParams:
-    """Return a preset by name (``default``, ``viknes830``, ``viknes830_nr3224``, ``cybership2``)."""
+    """Return a preset by name: ``default``, ``viknes830``, ``viknes830_nr3224``, ``cybership2``."""
     try:
         return VESSELS[name]
     except KeyError:
