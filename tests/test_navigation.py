@@ -117,6 +117,11 @@ def ref_step(
     s, n = cfg.sensors, len(refs)
     gyro = nu[:, 2] + np.array([b.bias_true for b in refs]) + rng.normal(0, s.gyro_sigma_radps, n)
     gps = eta[:, :2] + rng.normal(0.0, s.gps_sigma_m, (n, 2)) if k % 2 == 0 else None
+    gps_vel = None
+    if gps is not None and cfg.gnss_velocity:
+        c, sn = np.cos(eta[:, 2]), np.sin(eta[:, 2])
+        vel = np.stack([c * nu[:, 0] - sn * nu[:, 1], sn * nu[:, 0] + c * nu[:, 1]], -1)
+        gps_vel = vel + rng.normal(0.0, s.gps_velocity_sigma_mps, (n, 2))
     compass = ssa(eta[:, 2] + rng.normal(0.0, s.compass_sigma_rad, n))
     for i, b in enumerate(refs):
         omega = gyro[i] - b.head.x[1]
@@ -126,6 +131,9 @@ def ref_step(
         b.pos.predict()
         if gps is not None:
             b.pos.update(gps[i])
+        if gps_vel is not None:
+            H_v = np.array([[0, 0, 1.0, 0], [0, 0, 0, 1.0]])
+            b.pos.update(gps_vel[i], R=s.gps_velocity_sigma_mps**2 * np.eye(2), H=H_v)
         hx = b.head.x[0]
         b.head.update(np.array([hx + ssa(compass[i] - hx)]))  # unwrapped measurement
 
@@ -292,8 +300,9 @@ def test_raw_gnss_rmse_is_what_the_ratio_assumes() -> None:
 
 
 def test_turn_rate_aiding_beats_plain_constant_velocity() -> None:
-    aided = NavConfig()
-    plain = NavConfig(turn_rate_aided=False, accel_sigma_mps2=1.2)  # best plain CV sigma_a
+    # position fixes only (with GNSS velocity both are ~0.14): aiding is what beats the lag
+    aided = NavConfig(gnss_velocity=False, accel_sigma_mps2=0.2)
+    plain = NavConfig(turn_rate_aided=False, accel_sigma_mps2=1.2, gnss_velocity=False)
     _, est_aided, eta = run_manoeuvre(aided, 64)
     _, est_plain, _ = run_manoeuvre(plain, 64)
     ratio_aided = position_rmse_ratio(est_aided, eta, 1.5)
@@ -478,3 +487,31 @@ def test_step_before_reset_raises() -> None:
     nav.reset(eta, nu, np.random.default_rng(0), mask=np.array([True, True, False]))
     with pytest.raises(RuntimeError, match="reset"):
         nav.step(0, eta, nu, np.random.default_rng(0))
+
+
+def test_position_estimate_beats_raw_gnss_on_the_plant() -> None:
+    """The issue's bar on the real closed-loop plant: RMSE ≤ 0.5 x raw GPS at default noise.
+
+    Zig-zag ±30° every 10 s for 120 s, 32 boats (the default hull sideslips strongly in turns,
+    which a kinematic manoeuvre does not show). Measured: 0.14 (position-only filter: 0.49).
+    """
+    import math
+
+    from usvsim.plant import Plant
+
+    plant = Plant("default")
+    n = 32
+    rng = np.random.default_rng(0)
+    nav = Navigator(NavConfig(), n)
+    state = plant.initial_state(np.zeros((n, 3)))
+    nav.reset(state.eta, state.nu, rng)
+    sq_err = []
+    for k in range(60):
+        psi_ref = np.full(n, math.radians(30.0 if (k // 5) % 2 == 0 else -30.0))
+        state, traj = plant.step(state, psi_ref, n_steps=20)
+        est = nav.run(traj[:, :, 0:3], traj[:, :, 3:6], rng, first_step_index=20 * k + 1)
+        sq_err.append(np.sum((est.pos_ne - traj[:, :, 0:2]) ** 2, axis=-1))
+    rmse = math.sqrt(np.mean(np.concatenate(sq_err)))
+    raw_rmse = math.sqrt(2.0) * NavConfig().sensors.gps_sigma_m
+    assert rmse <= 0.5 * raw_rmse
+    assert rmse <= 0.25 * raw_rmse  # measured 0.14: keeps the margin visible

@@ -60,6 +60,9 @@ class SensorConfig:
     # CEP ≈ 1.18 σ for a circular Gaussian, so σ ≈ 1.7-2.1 m; 1.5 m is a good consumer fix.
     gps_rate_hz: float = 5.0
     # Hz, consumer receivers (u-blox NEO-M8 class) update at up to 10 Hz; 5 Hz is common.
+    gps_velocity_sigma_mps: float = 0.1
+    # m/s, per horizontal axis, GNSS Doppler velocity reported with each fix (NMEA RMC/VTG,
+    # UBX NAV-PVT, MAVLink GLOBAL_POSITION_INT vx/vy); u-blox NEO-M8 datasheet: 0.05 m/s.
     compass_sigma_rad: float = float(np.deg2rad(1.0))
     # rad, marine electronic (fluxgate / MEMS) compasses are specified around 1° RMS static.
     compass_rate_hz: float = 10.0
@@ -196,6 +199,19 @@ def sample_gps(pos_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig) 
 def _draw_gps(pos_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig) -> FloatArray:
     """:func:`sample_gps` without input checks (for callers that validated already)."""
     return pos_ne + rng.normal(0.0, cfg.gps_sigma_m, size=pos_ne.shape)
+
+
+def sample_gps_velocity(
+    vel_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig
+) -> FloatArray:
+    """GNSS Doppler velocity: true velocity over ground (N, 2) m/s plus white noise per axis."""
+    return _draw_gps_velocity(_as_checked("vel_ne", vel_ne, (2,)), rng, cfg)
+
+
+def _draw_gps_velocity(
+    vel_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig
+) -> FloatArray:
+    return vel_ne + rng.normal(0.0, cfg.gps_velocity_sigma_mps, size=vel_ne.shape)
 
 
 def sample_compass(psi: FloatArray, rng: np.random.Generator, cfg: SensorConfig) -> FloatArray:
