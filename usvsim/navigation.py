@@ -582,7 +582,7 @@ class Navigator:
         self._L_pp = self._r_gps * k_p  # Λ_pp (1 − Λ_pp / S) = R Λ_pp / S
 
     def _update_velocity(self, z: ComplexArray) -> None:
-        """GNSS velocity update with ``z = v_N + i v_E`` (N,): ``H = [0, 1]``, ``K = [Λ_pw, Λ_ww] / S``.
+        """GNSS velocity update, ``z = v_N + i v_E`` (N,): ``H = [0, 1]``, ``K = [Λ_pw, Λ_ww]/S``.
 
         ``Λ⁺ = Λ − K S Kᴴ``: Λ_pp −= |Λ_pw|²/S, Λ_pw −= Λ_pw Λ_ww/S, Λ_ww −= Λ_ww²/S.
         """
