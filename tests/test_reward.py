@@ -1,0 +1,42 @@
+"""Reward: the corrected Gaussian form of table-4-1.md at known distances."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from usvsim.reward import GaussianReward, RewardTerms
+
+
+def test_values_at_known_distances():
+    d_pole = np.array([0.0, 5.0, 10.0, 1e3])
+    d_goal = np.array([0.0, 100.0, 200.0, 1e5])
+    t = GaussianReward()(d_pole, d_goal)
+    np.testing.assert_allclose(
+        t.pole, [-2.0, -2 * math.exp(-0.5), -2 * math.exp(-2.0), 0.0], rtol=1e-15, atol=1e-300
+    )
+    np.testing.assert_allclose(
+        t.goal, [0.0, math.exp(-0.5) - 1.0, math.exp(-2.0) - 1.0, -1.0], rtol=1e-15
+    )
+    np.testing.assert_allclose(t.total, t.pole + t.goal)
+    assert t.pole[1] == pytest.approx(-1.2130613194252668, rel=1e-15)
+    assert t.goal[1] == pytest.approx(-0.3934693402873666, rel=1e-15)
+
+
+def test_ranges_match_the_study():
+    d = np.linspace(0.0, 500.0, 1001)
+    t = GaussianReward()(d, d)
+    assert t.pole.min() == -2.0 and t.pole.max() <= 0.0
+    assert t.goal.min() >= -1.0 and t.goal.max() == 0.0
+
+
+def test_invalid_parameters_raise():
+    with pytest.raises(ValueError, match="pole_sigma_m"):
+        GaussianReward(pole_sigma_m=0.0)
+
+
+def test_terms_dataclass_sum():
+    terms = RewardTerms(pole=np.array([-1.0]), goal=np.array([-0.25]))
+    assert terms.total.tolist() == [-1.25]

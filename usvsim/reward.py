@@ -1,0 +1,75 @@
+"""Rewards of the pole-avoidance task (for RL), computed from the TRUE distances.
+
+The study's handcrafted reward (Vedeler 2019) in the corrected form of
+``shared/reference/table-4-1.md``::
+
+    r      = r_pole + r_goal
+    r_pole = -w_pole · exp(-½ (d_pole / σ_pole)²),   w_pole = 2, σ_pole = 5 m     ∈ (-2, 0)
+    r_goal = -w_goal + w_goal · exp(-½ (d_goal / σ_goal)²),  w_goal = 1, σ_goal = 100 m  ∈ (-1, 0)
+
+(the study's 1/(σ√(2π)) factor contradicts its stated ranges, and its goal term used the pole's
+position: a typo; usvsim uses the forms above).
+
+Pluggable: anything matching :class:`RewardFunction` — a callable from the true distances to a
+:class:`RewardTerms` — can be passed to the environments; each term is reported in ``info``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["GaussianReward", "RewardFunction", "RewardTerms"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RewardTerms:
+    """The two terms of the reward for N boats, each (N,); the reward is their sum."""
+
+    pole: FloatArray
+    goal: FloatArray
+
+    @property
+    def total(self) -> FloatArray:
+        """``pole + goal`` (N,)."""
+        return self.pole + self.goal
+
+
+class RewardFunction(Protocol):
+    """A reward from the true distances (m, each (N,)) at the end of a decision period."""
+
+    def __call__(self, d_pole_m: FloatArray, d_goal_m: FloatArray) -> RewardTerms: ...
+
+
+@dataclass(frozen=True)
+class GaussianReward:
+    """The study's Gaussian reward, corrected (module docstring).
+
+    >>> terms = GaussianReward()(np.array([0.0, 5.0]), np.array([0.0, 100.0]))
+    >>> terms.pole.round(4).tolist(), terms.goal.round(4).tolist()
+    ([-2.0, -1.2131], [0.0, -0.3935])
+    """
+
+    pole_weight: float = 2.0  # study: r_pole ∈ (-2, 0)
+    pole_sigma_m: float = 5.0  # m; study
+    goal_weight: float = 1.0  # study: r_goal ∈ (-1, 0)
+    goal_sigma_m: float = 100.0  # m; study
+
+    def __post_init__(self) -> None:
+        for name in ("pole_weight", "pole_sigma_m", "goal_weight", "goal_sigma_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"GaussianReward.{name} must be finite and > 0, got {value!r}")
+
+    def __call__(self, d_pole_m: FloatArray, d_goal_m: FloatArray) -> RewardTerms:
+        pole = -self.pole_weight * np.exp(-0.5 * (np.asarray(d_pole_m) / self.pole_sigma_m) ** 2)
+        goal = self.goal_weight * (
+            np.exp(-0.5 * (np.asarray(d_goal_m) / self.goal_sigma_m) ** 2) - 1.0
+        )
+        return RewardTerms(pole=pole, goal=goal)
