@@ -161,7 +161,7 @@ def test_same_seed_same_episode(plant):
 
 
 def test_batched_env_equals_n_single_envs(plant):
-    n, steps, seed = 4, 45, 10
+    n, steps, seed = 4, 120, 10
     actions = np.random.default_rng(2).integers(0, 41, (steps, n))
     vec = PoleAvoidanceVectorEnv(n, action="categorical", plant=plant)
     singles = [PoleAvoidanceEnv(action="categorical", plant=plant) for _ in range(n)]

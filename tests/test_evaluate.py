@@ -32,14 +32,14 @@ def straight_records(plant):
 
 
 class BearingKeeper:
-    """Deterministic per-row helmsman: keeps the pole 40° off the bow, then heads for the goal."""
+    """Deterministic per-row helmsman: keeps the pole 75° off the bow, then heads for the goal."""
 
     def reset(self, n_boats):
         self.n = n_boats
 
     def act(self, obs):
         r_pole, phi_pole, _, phi_goal = obs.T
-        avoid = np.where(phi_pole >= 0, phi_pole - 0.7, phi_pole + 0.7)
+        avoid = np.where(phi_pole >= 0, phi_pole - 1.3, phi_pole + 1.3)
         target = np.where((r_pole < 40) & (np.abs(phi_pole) < math.pi / 2), avoid, phi_goal)
         return np.clip(target / math.radians(30.0), -1, 1)[:, None].astype(np.float32)
 

@@ -175,6 +175,17 @@ class BatchStepper:
         per_boat = np.ascontiguousarray(per_boat, dtype=np.float64)
         shared = np.ascontiguousarray(shared, dtype=np.float64)
         n = s0.shape[0]
+        # the C code trusts these sizes: check them here
+        if s0.ndim != 2 or s0.shape[1] != self.ns:
+            raise ValueError(f"state must have shape (N, {self.ns}), got {s0.shape}")
+        if per_boat.shape != (n, self.na):
+            raise ValueError(
+                f"per-boat input must have shape ({n}, {self.na}), got {per_boat.shape}"
+            )
+        if shared.shape != (self.ng,):
+            raise ValueError(f"shared input must have shape ({self.ng},), got {shared.shape}")
+        if not isinstance(n_sub, (int, np.integer)) or n_sub < 1:
+            raise ValueError(f"n_sub must be a positive integer, got {n_sub!r}")
         traj = np.empty((n, n_sub, self.ns))
         if self._lib is not None:
             ptr = ctypes.POINTER(ctypes.c_double)
