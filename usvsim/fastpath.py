@@ -47,7 +47,8 @@ _DRIVER = r"""
 #define NS {ns}
 #define NA {na}
 void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
-               const double* per_boat, int n_per_boat, double* traj) {{
+               const double* per_boat, int n_per_boat, const double* per_step, int n_per_step,
+               double* traj) {{
   #pragma omp parallel for schedule(static) if(n >= 64)
   for (int i = 0; i < n; ++i) {{
     double s[NS], s_next[NS];
@@ -60,6 +61,7 @@ void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
       arg[0] = s;
       arg[1] = per_boat + (long)i * n_per_boat;
       arg[2] = shared_in;
+      if (n_per_step > 0) arg[3] = per_step + ((long)i * n_sub + k) * n_per_step;
       res[0] = s_next;
       {fname}(arg, res, iw, w, 0);
       memcpy(s, s_next, sizeof(s));
@@ -128,17 +130,19 @@ def _compile(source: str) -> Path:
 
 
 class BatchStepper:
-    """Evaluate ``fn(s, per_boat, shared) -> s_next`` for N boats and ``n_sub`` repeated steps.
+    """Evaluate ``fn(s, per_boat, shared[, per_step]) -> s_next`` for N boats, ``n_sub`` steps.
 
-    ``fn`` must have exactly three inputs (state, per-boat input, shared input) and one output of
+    ``fn`` has three or four inputs (state, per-boat input held over the steps, input shared by
+    all boats, and optionally an input per boat and step, e.g. sensor noise) and one output of
     the state's size. :meth:`run` returns the trajectory of states after each sub-step.
     """
 
     def __init__(self, fn: ca.Function, backend: Backend = "auto") -> None:
-        if fn.n_in() != 3 or fn.n_out() != 1 or fn.size1_out(0) != fn.size1_in(0):
-            raise ValueError("BatchStepper needs fn(state, per_boat, shared) -> state_next")
+        if fn.n_in() not in (3, 4) or fn.n_out() != 1 or fn.size1_out(0) != fn.size1_in(0):
+            raise ValueError("BatchStepper needs fn(state, per_boat, shared[, per_step]) -> state")
         self.fn = fn
         self.ns, self.na, self.ng = fn.size1_in(0), fn.size1_in(1), fn.size1_in(2)
+        self.nps = fn.size1_in(3) if fn.n_in() == 4 else 0
         self._lib: ctypes.CDLL | None = None
         self._maps: dict[int, ca.Function] = {}
         if backend not in ("auto", "compiled", "casadi"):
@@ -159,6 +163,8 @@ class BatchStepper:
                 c_double_p,
                 ctypes.c_int,
                 c_double_p,
+                ctypes.c_int,
+                c_double_p,
             ]
             self._lib.usv_batch.restype = None
         self.backend: str = "compiled" if self._lib is not None else "casadi"
@@ -169,8 +175,10 @@ class BatchStepper:
         per_boat: NDArray[np.float64],
         shared: NDArray[np.float64],
         n_sub: int,
+        per_step: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
-        """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na) and shared (ng,)."""
+        """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na), shared (ng,) and,
+        for a four-input ``fn``, per-step inputs (N, n_sub, nps)."""
         s0 = np.ascontiguousarray(s0, dtype=np.float64)
         per_boat = np.ascontiguousarray(per_boat, dtype=np.float64)
         shared = np.ascontiguousarray(shared, dtype=np.float64)
@@ -186,6 +194,17 @@ class BatchStepper:
             raise ValueError(f"shared input must have shape ({self.ng},), got {shared.shape}")
         if not isinstance(n_sub, (int, np.integer)) or n_sub < 1:
             raise ValueError(f"n_sub must be a positive integer, got {n_sub!r}")
+        if self.nps:
+            if per_step is None:
+                raise ValueError("this step function needs a per-step input")
+            per_step = np.ascontiguousarray(per_step, dtype=np.float64)
+            if per_step.shape != (n, n_sub, self.nps):
+                raise ValueError(
+                    f"per-step input must have shape ({n}, {n_sub}, {self.nps}), "
+                    f"got {per_step.shape}"
+                )
+        elif per_step is not None:
+            raise ValueError("this step function takes no per-step input")
         traj = np.empty((n, n_sub, self.ns))
         if self._lib is not None:
             ptr = ctypes.POINTER(ctypes.c_double)
@@ -196,6 +215,8 @@ class BatchStepper:
                 shared.ctypes.data_as(ptr),
                 per_boat.ctypes.data_as(ptr),
                 self.na,
+                None if per_step is None else per_step.ctypes.data_as(ptr),
+                self.nps,
                 traj.ctypes.data_as(ptr),
             )
             return traj
@@ -204,6 +225,7 @@ class BatchStepper:
             fmap = self._maps[n] = self.fn.map(n, "thread", 2)
         s = s0.T
         for k in range(n_sub):
-            s = np.asarray(fmap(s, per_boat.T, shared))
+            extra = () if per_step is None else (per_step[:, k, :].T,)
+            s = np.asarray(fmap(s, per_boat.T, shared, *extra))
             traj[:, k, :] = s.T
         return traj

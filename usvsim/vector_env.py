@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 from usvsim.angles import ssa
 from usvsim.autopilot import AutopilotConfig
 from usvsim.navigation import NavConfig, Navigator
+from usvsim.navplant import NavigatedPlant
 from usvsim.observations import build_observation, observation_space
 from usvsim.plant import Plant, PlantState
 from usvsim.radar import RadarConfig
@@ -236,6 +237,7 @@ class PoleAvoidanceBatch:
         if abs(self.plant.dt_s - self.scenario.dt_s) > 1e-12:
             raise ValueError(f"Plant.dt_s {self.plant.dt_s} != Scenario.dt_s {self.scenario.dt_s}")
         self.nav = Navigator(nav, n)
+        self._navplant = NavigatedPlant(self.plant, nav)  # plant + filter, compiled together
         self._noise = BoatNoise(n)
         self._collision_m = self.scenario.pole_radius_m + self.plant.vessel.half_beam_m
         self._state: PlantState = self.plant.initial_state(np.zeros((n, 3)))
@@ -319,16 +321,17 @@ class PoleAvoidanceBatch:
         )
         T = sc.steps_per_decision
         psi_ref = ssa(self._est_psi + dpsi)
-        self._state, traj = self.plant.step(self._state, psi_ref, sc.speed_mps, n_steps=T)
-        est = self.nav.run(
-            traj[:, :, 0:3],
-            traj[:, :, 3:6],
-            self._rng_view(None),
-            first_step_index=self._plant_step + 1,
+        # the same as plant.step then nav.run(..., self._rng_view(None), ...), fused in C
+        first = self._plant_step + 1
+        normals = self._noise.for_boats(None).standard_normal(
+            (self.n_boats, self._navplant.draws_needed(first, T))
+        )
+        self._state, traj, nav_traj = self._navplant.step(
+            self._state, self.nav, psi_ref, sc.speed_mps, T, first, normals
         )
         self._plant_step += T
-        self._est_pos = est.pos_ne[:, -1].copy()
-        self._est_psi = est.psi[:, -1].copy()
+        self._est_pos = nav_traj[:, -1, 0:2].copy()
+        self._est_psi = nav_traj[:, -1, 8].copy()
 
         pos = traj[:, :, 0:2]
         d_pole = np.hypot(*np.moveaxis(pos - self.pole_ne[:, None], -1, 0))  # (N, T)

@@ -1,0 +1,88 @@
+"""The fused compiled plant + filter equals Plant.step followed by Navigator.run."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from usvsim.navigation import NavConfig, Navigator, build_nav_step, export_nav_state
+from usvsim.navplant import NavigatedPlant
+from usvsim.plant import Plant
+
+
+class RecordingRng:
+    """A Generator stand-in that records the standard normals the navigator draws."""
+
+    def __init__(self, normals: np.ndarray) -> None:
+        self.normals, self.col = normals, 0
+
+    def normal(self, loc=0.0, scale=1.0, size=None):
+        m = int(np.prod(size[1:]))
+        z = self.normals[:, self.col : self.col + m].reshape(size)
+        self.col += m
+        return loc + scale * z
+
+
+@pytest.fixture(scope="module")
+def plant() -> Plant:
+    return Plant("default")
+
+
+def boats(plant: Plant, n: int, seed: int):
+    rng = np.random.default_rng(seed)
+    eta = np.column_stack([rng.uniform(-50, 50, (n, 2)), rng.uniform(-3, 3, n)])
+    return plant.initial_state(eta), rng
+
+
+@pytest.mark.parametrize(
+    "cfg",
+    [NavConfig(), NavConfig(turn_rate_aided=False), NavConfig(gnss_velocity=False)],
+    ids=["aided+velocity", "cv", "position-only"],
+)
+def test_fused_step_equals_plant_then_navigator(plant, cfg):
+    n, T = 16, 20
+    state, rng = boats(plant, n, 0)
+    nav_a, nav_b = Navigator(cfg, n), Navigator(cfg, n)
+    nav_a.reset(state.eta, state.nu, np.random.default_rng(1))
+    nav_b.reset(state.eta, state.nu, np.random.default_rng(1))
+    fused = NavigatedPlant(plant, cfg)
+    s_fused, s_ref = state, state
+    first = 1
+    for _ in range(3):  # three decision periods
+        psi_ref = rng.uniform(-3, 3, n)
+        normals = rng.standard_normal((n, fused.draws_needed(first, T)))
+        s_fused, traj_f, nav_traj = fused.step(s_fused, nav_a, psi_ref, 3.0, T, first, normals)
+        s_ref, traj_r = plant.step(s_ref, psi_ref, 3.0, n_steps=T)
+        est = nav_b.run(traj_r[:, :, 0:3], traj_r[:, :, 3:6], RecordingRng(normals), first)
+        first += T
+        np.testing.assert_allclose(traj_f, traj_r, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(nav_traj[:, :, 0:2], est.pos_ne, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(nav_traj[:, :, 8], est.psi, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(export_nav_state(nav_a), export_nav_state(nav_b), atol=1e-9)
+
+
+def test_nav_step_function_matches_navigator_one_step(plant):
+    cfg = NavConfig()
+    state, _ = boats(plant, 4, 3)
+    nav = Navigator(cfg, 4)
+    nav.reset(state.eta, state.nu, np.random.default_rng(2))
+    before = export_nav_state(nav)
+    normals = np.random.default_rng(4).standard_normal((4, 6))  # step 2: gyro, GNSS, vel, compass
+    new, _ = plant.step(state, 0.0)
+    nav.step(2, new.eta, new.nu, RecordingRng(normals))
+    F = build_nav_step(cfg)
+    e = np.column_stack([normals, np.ones((4, 2))])
+    out = np.stack([np.asarray(F(before[i], new.x[i], e[i])).ravel() for i in range(4)])
+    np.testing.assert_allclose(out, export_nav_state(nav), atol=1e-12)
+
+
+def test_fused_step_rejects_wrong_noise(plant):
+    cfg = NavConfig()
+    state, _ = boats(plant, 2, 0)
+    nav = Navigator(cfg, 2)
+    nav.reset(state.eta, state.nu, np.random.default_rng(0))
+    fused = NavigatedPlant(plant, cfg)
+    with pytest.raises(ValueError, match="normals per boat"):
+        fused.step(state, nav, np.zeros(2), 3.0, 20, 1, np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="NaN or inf"):
+        fused.step(state, nav, np.array([0.0, np.nan]), 3.0, 20, 1, np.zeros((2, 100)))
