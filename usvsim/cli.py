@@ -108,10 +108,31 @@ def run_perf(args: PerfArgs) -> int:
     return 0
 
 
-COMMANDS: dict[str, tuple[type, Callable[[Any], int]]] = {
-    "demo": (DemoArgs, run_demo),
-    "perf": (PerfArgs, run_perf),
-}
+def _lazy(module: str) -> Callable[[Any], int]:
+    """``module.run``, imported when the command runs (keeps ``usvsim --help`` fast)."""
+
+    def run(args: Any) -> int:
+        import importlib
+
+        result: int = importlib.import_module(module).run(args)
+        return result
+
+    return run
+
+
+def _commands() -> dict[str, tuple[type, Callable[[Any], int]]]:
+    from usvsim.bridge import BridgeArgs
+    from usvsim.sitl import SitlArgs
+    from usvsim.sitl_physics import SitlPhysicsArgs
+
+    commands: dict[str, tuple[type, Callable[[Any], int]]] = {
+        "demo": (DemoArgs, run_demo),
+        "perf": (PerfArgs, run_perf),
+        "sitl": (SitlArgs, _lazy("usvsim.sitl")),
+        "sitl-physics": (SitlPhysicsArgs, _lazy("usvsim.sitl_physics")),
+        "bridge": (BridgeArgs, _lazy("usvsim.bridge")),
+    }
+    return commands
 
 
 def _add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
@@ -148,7 +169,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="usvsim: learn and test steering policies for unmanned surface vehicles.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name, (cls, _) in COMMANDS.items():
+    for name, (cls, _) in _commands().items():
         doc = (cls.__doc__ or "").strip().splitlines()[0]
         _add_dataclass_arguments(sub.add_parser(name, help=doc, description=doc), cls)
     return parser
@@ -160,7 +181,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if ns.command is None:
         parser.print_help()
         return 0
-    cls, run = COMMANDS[ns.command]
+    cls, run = _commands()[ns.command]
     values = {k: v for k, v in vars(ns).items() if k != "command"}
     return run(cls(**values))
 

@@ -781,6 +781,8 @@ def build_nav_step(cfg: NavConfig) -> Any:
     P_psi = P_psi - dt * (P_pb + P_pb_new) + q_psi
     P_pb, P_b = P_pb_new, P_b + q_bias
     # position predict (coordinated turn at the gyro rate, or constant velocity)
+    G: tuple[Any, Any]
+    E: tuple[Any, Any]
     if cfg.turn_rate_aided:
         half = (0.5 * dt) * omega
         sinc = ca.if_else(half != 0, ca.sin(half) / half, 1.0)

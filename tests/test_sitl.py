@@ -1,0 +1,190 @@
+"""The Rover-like MAVLink endpoint (usvsim.sitl) on loopback, faster than real time."""
+
+import math
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from usvsim.mavlink_link import (
+    CommandAck,
+    GlobalPosition,
+    Heartbeat,
+    MavlinkLink,
+    Received,
+    RoverMode,
+    StatusText,
+)
+from usvsim.sitl import RoverSitl, SitlArgs
+
+SPEEDUP = 40.0
+KEY = bytes(range(1, 33))
+
+
+@contextmanager
+def running(args: SitlArgs) -> Iterator[RoverSitl]:
+    sitl = RoverSitl(args)
+    stop = threading.Event()
+    thread = threading.Thread(target=sitl.serve, args=(stop, 60.0), daemon=True)
+    thread.start()
+    try:
+        yield sitl
+    finally:
+        stop.set()
+        thread.join(5.0)
+        sitl.link.close()
+
+
+def sitl_args(**kw: object) -> SitlArgs:
+    return SitlArgs(listen="udpin:127.0.0.1:0", speedup=SPEEDUP, **kw)  # type: ignore[arg-type]
+
+
+@pytest.fixture
+def sitl() -> Iterator[RoverSitl]:
+    with running(sitl_args()) as s:
+        yield s
+
+
+@pytest.fixture
+def gcs(sitl: RoverSitl) -> Iterator[MavlinkLink]:
+    link = MavlinkLink(f"udpout:127.0.0.1:{sitl.link.local_port}")
+    link.wait_heartbeat(5.0)
+    yield link
+    link.close()
+
+
+def until(
+    link: MavlinkLink,
+    done: Callable[[list[Received]], bool],
+    timeout_s: float = 5.0,
+    each: Callable[[], None] | None = None,
+) -> list[Received]:
+    got: list[Received] = []
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and not done(got):
+        got += link.poll(0.02)
+        if each:
+            each()
+    return got
+
+
+def acks(got: list[Received]) -> list[tuple[int, int]]:
+    return [(r.message.command, r.message.result) for r in got if isinstance(r.message, CommandAck)]
+
+
+def test_heartbeat_is_an_ardupilot_boat_in_manual(gcs: MavlinkLink) -> None:
+    hb = until(gcs, lambda g: any(isinstance(r.message, Heartbeat) for r in g))
+    msg = next(r.message for r in hb if isinstance(r.message, Heartbeat))
+    assert (msg.type, msg.autopilot, msg.custom_mode, msg.armed) == (11, 3, 0, False)
+
+
+def test_mode_arm_and_interval_are_acknowledged(sitl: RoverSitl, gcs: MavlinkLink) -> None:
+    gcs.set_mode(1, RoverMode.GUIDED)
+    gcs.send_set_mode_message(1, RoverMode.LOITER)
+    gcs.arm(1)
+    gcs.request_message_interval(1, "GLOBAL_POSITION_INT", 10.0)
+    gcs.set_mode(1, RoverMode.AUTO)  # not in the subset: denied
+    got = until(gcs, lambda g: len(acks(g)) >= 5)
+    assert acks(got) == [(176, 0), (11, 0), (400, 0), (511, 0), (176, 2)]
+    assert sitl.mode == RoverMode.LOITER and sitl.armed
+
+
+def test_telemetry_rate_follows_set_message_interval(gcs: MavlinkLink) -> None:
+    gcs.request_message_interval(1, "GLOBAL_POSITION_INT", 10.0)
+    until(gcs, lambda g: len(acks(g)) >= 1)
+    got = until(gcs, lambda g: sum(isinstance(r.message, GlobalPosition) for r in g) >= 21)
+    t = [r.message.time_boot_ms for r in got if isinstance(r.message, GlobalPosition)]
+    assert np.all(np.diff(t[1:]) == 100)  # vehicle clock: every 100 ms
+
+
+def test_guided_target_ignored_outside_guided(sitl: RoverSitl, gcs: MavlinkLink) -> None:
+    gcs.set_mode(1, RoverMode.HOLD)
+    gcs.arm(1)
+    until(gcs, lambda g: len(acks(g)) >= 2)
+    t_end = sitl.time_ms + 1000
+    until(gcs, lambda g: sitl.time_ms > t_end, each=lambda: gcs.send_heading(1, 1.0, 3.0))
+    assert sitl.record.targets == []
+    assert float(np.hypot(*sitl.state.x[0, 3:5])) < 0.5  # waterjet idle thrust only
+
+
+def test_guided_heading_and_speed_are_tracked(sitl: RoverSitl, gcs: MavlinkLink) -> None:
+    gcs.set_mode(1, RoverMode.GUIDED)
+    gcs.arm(1)
+    until(gcs, lambda g: len(acks(g)) >= 2)
+    t_end = sitl.time_ms + 40_000
+    until(
+        gcs,
+        lambda g: sitl.time_ms > t_end,
+        timeout_s=10.0,
+        each=lambda: gcs.send_heading(1, math.radians(-90.0), 3.0),
+    )
+    x = sitl.state.x[0]
+    assert math.degrees(x[2]) == pytest.approx(-90.0, abs=1.0)
+    assert x[3] == pytest.approx(3.0, abs=0.1)
+
+
+def test_guided_timeout_stops_and_holds_position(sitl: RoverSitl, gcs: MavlinkLink) -> None:
+    gcs.set_mode(1, RoverMode.GUIDED)
+    gcs.arm(1)
+    until(gcs, lambda g: len(acks(g)) >= 2)
+    t_stream_end = sitl.time_ms + 20_000
+    until(
+        gcs,
+        lambda g: sitl.time_ms > t_stream_end,
+        timeout_s=10.0,
+        each=lambda: gcs.send_heading(1, 0.0, 3.0),
+    )
+    got = until(gcs, lambda g: bool(sitl.record.guided_timeouts_s))
+    last_target = sitl.record.targets[-1][0]
+    t_out = sitl.record.guided_timeouts_s[0]
+    got += until(gcs, lambda g: sitl.time_ms > (t_out + 20.0) * 1000, timeout_s=10.0)
+    assert len(sitl.record.guided_timeouts_s) == 1
+    assert t_out - last_target == pytest.approx(3.0, abs=0.15)
+    assert any(isinstance(r.message, StatusText) and "timeout" in r.message.text for r in got)
+    assert sitl.mode == RoverMode.GUIDED  # like Rover: the mode stays, the boat stops
+    states = np.array(sitl.record.states)
+    t = np.array(sitl.record.times_s)
+    speed = np.hypot(states[:, 3], states[:, 4])
+    after = t > t_out + 1.0
+    # motors off (thrust decays with its 0.3 s lag) and the boat coasts down, never speeds up
+    assert np.all(states[after, 6] < 0.01 * 24000.0)
+    assert np.all(np.diff(speed[after]) <= 1e-9)
+    assert speed[-1] < 0.5 * speed[np.searchsorted(t, t_out)]
+
+
+def test_foreign_target_and_malformed_packets_are_ignored(
+    sitl: RoverSitl, gcs: MavlinkLink
+) -> None:
+    gcs.send_raw(b"\xfd\xff\x00garbage" * 10)
+    gcs.set_mode(42, RoverMode.GUIDED)  # another vehicle's command
+    gcs.arm(1)
+    # a garbage frame header may hold the parser until enough bytes arrive to resynchronise:
+    # keep the link alive with heartbeats, as the bridge does
+    got = until(gcs, lambda g: len(acks(g)) >= 1, each=gcs.send_gcs_heartbeat)
+    assert acks(got) == [(400, 0)]
+    assert sitl.mode == RoverMode.MANUAL and sitl.armed
+
+
+def test_signing_on_rejects_unsigned_commands(tmp_path: Path) -> None:
+    key_file = tmp_path / "key"
+    key_file.write_bytes(KEY)
+    with running(sitl_args(signing_key=str(key_file))) as sitl:
+        port = sitl.link.local_port
+        unsigned = MavlinkLink(f"udpout:127.0.0.1:{port}")
+        signed = MavlinkLink(f"udpout:127.0.0.1:{port}", signing_key=KEY)
+        try:
+            signed.wait_heartbeat(5.0)
+            for _ in range(3):
+                unsigned.arm(1)
+            until(signed, lambda g: sitl.link.rejected_unsigned >= 3)
+            assert not sitl.armed and sitl.link.rejected_unsigned >= 3
+            signed.arm(1)
+            got = until(signed, lambda g: len(acks(g)) >= 1)
+            assert acks(got) == [(400, 0)] and sitl.armed
+        finally:
+            unsigned.close()
+            signed.close()
