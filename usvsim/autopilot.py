@@ -85,6 +85,14 @@ class AutopilotConfig:
     rover_acc_max: float = math.radians(120.0)  # rad/s², ATC_STR_ACC_MAX
 
     @classmethod
+    def from_name(cls, name: str) -> AutopilotConfig:
+        """The named preset: ``pid`` (default), ``rover`` (ArduPilot defaults), ``rover-tuned``."""
+        presets = {"pid": cls, "rover": lambda: cls(kind="rover"), "rover-tuned": cls.rover_tuned}
+        if name not in presets:
+            raise ValueError(f"unknown autopilot {name!r}; choose {', '.join(presets)}")
+        return presets[name]()
+
+    @classmethod
     def rover_tuned(cls) -> AutopilotConfig:
         """Rover cascade re-tuned for the default vessel.
 

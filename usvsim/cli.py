@@ -40,13 +40,10 @@ class PerfArgs:
 def _autopilot_config(name: str) -> Any:
     from usvsim.autopilot import AutopilotConfig
 
-    if name == "pid":
-        return AutopilotConfig()
-    if name == "rover":
-        return AutopilotConfig(kind="rover")
-    if name == "rover-tuned":
-        return AutopilotConfig.rover_tuned()
-    raise SystemExit(f"usvsim: unknown autopilot {name!r}; choose pid, rover or rover-tuned")
+    try:
+        return AutopilotConfig.from_name(name)
+    except ValueError as err:
+        raise SystemExit(f"usvsim: {err}") from None
 
 
 def run_demo(args: DemoArgs) -> int:

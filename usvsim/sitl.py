@@ -116,13 +116,7 @@ class SitlArgs:
 
 
 def _autopilot(name: str) -> AutopilotConfig:
-    if name == "pid":
-        return AutopilotConfig()
-    if name == "rover":
-        return AutopilotConfig(kind="rover")
-    if name == "rover-tuned":
-        return AutopilotConfig.rover_tuned()
-    raise ValueError(f"unknown autopilot {name!r}; choose pid, rover or rover-tuned")
+    return AutopilotConfig.from_name(name)
 
 
 @dataclass
