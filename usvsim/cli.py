@@ -135,6 +135,10 @@ def _commands() -> dict[str, tuple[type, Callable[[Any], int]]]:
 def _add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
     comments = _field_comments(cls)
     for f in dataclasses.fields(cls):
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            # a field without a default is a positional argument
+            parser.add_argument(f.name, help=comments.get(f.name))
+            continue
         flag = "--" + f.name.replace("_", "-")
         help_text = f"{comments.get(f.name, '')} (default: {f.default})"
         if f.type in ("bool", bool):
