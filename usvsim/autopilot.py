@@ -87,10 +87,13 @@ class AutopilotConfig:
     @classmethod
     def from_name(cls, name: str) -> AutopilotConfig:
         """The named preset: ``pid`` (default), ``rover`` (ArduPilot defaults), ``rover-tuned``."""
-        presets = {"pid": cls, "rover": lambda: cls(kind="rover"), "rover-tuned": cls.rover_tuned}
-        if name not in presets:
-            raise ValueError(f"unknown autopilot {name!r}; choose {', '.join(presets)}")
-        return presets[name]()
+        if name == "pid":
+            return cls()
+        if name == "rover":
+            return cls(kind="rover")
+        if name == "rover-tuned":
+            return cls.rover_tuned()
+        raise ValueError(f"unknown autopilot {name!r}; choose pid, rover, rover-tuned")
 
     @classmethod
     def rover_tuned(cls) -> AutopilotConfig:

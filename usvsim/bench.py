@@ -302,9 +302,9 @@ def write_results(result: BenchResult, out: Path, plots: bool = True) -> list[Pa
 
 
 def _write_plots(result: BenchResult, out: Path) -> list[Path]:
-    import matplotlib
+    from usvsim.mpl import use_file_backend_if_headless
 
-    matplotlib.use("Agg")
+    use_file_backend_if_headless()
     import matplotlib.pyplot as plt
 
     from usvsim.fileio import atomic_savefig

@@ -118,11 +118,13 @@ def _lazy(module: str) -> Callable[[Any], int]:
 
 
 def _commands() -> dict[str, tuple[type, Callable[[Any], int]]]:
+    from usvsim.bench import BenchArgs
     from usvsim.bridge import BridgeArgs
     from usvsim.sitl import SitlArgs
     from usvsim.sitl_physics import SitlPhysicsArgs
 
     commands: dict[str, tuple[type, Callable[[Any], int]]] = {
+        "bench": (BenchArgs, _lazy("usvsim.bench")),
         "demo": (DemoArgs, run_demo),
         "perf": (PerfArgs, run_perf),
         "sitl": (SitlArgs, _lazy("usvsim.sitl")),

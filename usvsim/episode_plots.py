@@ -12,17 +12,17 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")  # headless: files only, never a window
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
 from usvsim.evaluate import EpisodeRecord
+from usvsim.mpl import use_file_backend_if_headless
 from usvsim.observations import relative_polar
 from usvsim.radar import RadarConfig, render_radar
 from usvsim.scenario import Scenario
+
+use_file_backend_if_headless()  # before any figure: files only when headless
 
 __all__ = ["plot_episode", "plot_radar_strip"]
 

@@ -9,16 +9,15 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib
-
-if not matplotlib.get_backend().lower().startswith(("module://", "qt", "tk", "gtk", "wx")):
-    matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
 from usvsim.fileio import atomic_savefig
+from usvsim.mpl import use_file_backend_if_headless
 from usvsim.plant import Plant
+
+use_file_backend_if_headless()  # before any figure: files only when headless
 
 __all__ = [
     "bode_figure",
