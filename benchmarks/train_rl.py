@@ -1,0 +1,167 @@
+"""Training wall-clock benchmark of the four RL setups (issue 5), and the shipped models.
+
+For each setup this runs the recorded training command (``usvsim train SETUP --seed S``, the
+setup's defaults otherwise; :mod:`learning.train_cli`) on this machine's CPU with
+``--threads`` torch threads, then evaluates the run's ``best.pt`` on the 15 validation and 200
+held-out episodes (:mod:`learning.evaluate_cli`) and writes a Markdown table::
+
+    python benchmarks/train_rl.py                       # all four setups
+    python benchmarks/train_rl.py --setups rl-gaussian-positional --out /tmp/bench
+    python benchmarks/train_rl.py --ship                # also copy the models to usvsim/models
+
+Reported per setup: wall-clock, environment steps and iterations to the FIRST 15/15 validation
+(validation time included), the study's iterations to its best validation (Table 4.1,
+``shared/reference/table-4-1.md``), the whole run (it stops after ``--stop-after`` consecutive
+15/15), and the shipped checkpoint's validation / held-out results. ``--ship`` writes slim
+copies (policy + normaliser; float16 weights for the radar CNN, see :func:`slim_copy`) to
+``usvsim/models/<setup>.pt`` and records everything in ``usvsim/models/models.json`` and the
+table in ``usvsim/models/README.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from learning.checkpoint import load_agent, load_checkpoint, save_checkpoint, slim_copy
+from learning.evaluate_cli import evaluation_row
+from learning.setups import SETUPS, get_setup
+from learning.train_cli import TrainArgs, run
+from usvsim.evaluate import evaluate, heldout_episodes, validation_episodes
+from usvsim.fileio import atomic_write_text
+
+MODELS_DIR = Path(__file__).resolve().parent.parent / "usvsim" / "models"
+
+
+def train_one(
+    name: str, seed: int, out: Path, threads: int, stop_after: int, budget_s: float
+) -> dict[str, Any]:
+    """Run the recorded command for ``name`` into ``out``; returns its ``summary.json``."""
+    args = TrainArgs(
+        setup=name,
+        seed=seed,
+        out=str(out),
+        threads=threads,
+        stop_after=stop_after,
+        time_budget_s=budget_s,
+    )
+    if run(args) != 0:
+        raise SystemExit(f"training {name} failed (see above)")
+    summary: dict[str, Any] = json.loads((out / "summary.json").read_text())
+    return summary
+
+
+def evaluate_checkpoint(path: Path) -> dict[str, Any]:
+    """Validation and held-out rows (:func:`evaluation_row`) of the checkpoint at ``path``."""
+    ckpt = load_checkpoint(path)
+    helmsman = load_agent(ckpt, path)
+    from learning.checkpoint import PolicyHelmsman
+
+    h = PolicyHelmsman(helmsman, ckpt.observation, ckpt.action)
+    kinds = {"observation": ckpt.observation, "action": ckpt.action}
+    return {
+        "validation": evaluation_row("validation", evaluate(h, validation_episodes(), **kinds)),
+        "held-out": evaluation_row("held-out", evaluate(h, heldout_episodes(), **kinds)),
+    }
+
+
+def markdown_table(results: list[dict[str, Any]]) -> str:
+    head = (
+        "| setup | first 15/15: wall-clock | env steps | iterations | study iterations "
+        "| run: iterations / wall-clock | validation | held-out (200) "
+        "| min d_pole m (min / median, held-out) |\n"
+        "|---|---|---|---|---|---|---|---|---|\n"
+    )
+    lines = []
+    for r in results:
+        first = r["summary"]["first_15_of_15"]
+        val, held = r["evaluation"]["validation"], r["evaluation"]["held-out"]
+        if first is None:
+            f_wall, f_steps, f_it = "not reached", "-", "-"
+        else:
+            f_wall = f"{first['wall_time_s']:.0f} s"
+            f_steps, f_it = f"{first['env_steps']:,}", str(first["iteration"])
+        lines.append(
+            f"| {r['setup']} | {f_wall} | {f_steps} | {f_it} | ~{r['summary']['study_iterations']} "
+            f"| {r['summary']['iterations']} / {r['summary']['wall_time_s']:.0f} s "
+            f"| {val['successes']}/15 | {held['successes']}/200 "
+            f"({100 * held['success_rate']:.1f} %) "
+            f"| {held['min_pole_distance_m']:.1f} / {held['median_pole_distance_m']:.1f} |"
+        )
+    return head + "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--setups", nargs="+", default=list(SETUPS), help="setups to train")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=2, help="torch CPU threads")
+    parser.add_argument("--stop-after", type=int, default=3, help="consecutive 15/15 to stop")
+    parser.add_argument("--time-budget-s", type=float, default=0.0, help="per setup; 0: none")
+    parser.add_argument("--out", default="usvsim-results/bench-train", help="output folder")
+    parser.add_argument("--ship", action="store_true", help="copy the models to usvsim/models")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    results = []
+    for name in args.setups:
+        setup = get_setup(name)
+        run_dir = out / name
+        summary = train_one(
+            name, args.seed, run_dir, args.threads, args.stop_after, args.time_budget_s
+        )
+        source = run_dir / "best.pt"
+        if args.ship:
+            ckpt = slim_copy(load_checkpoint(source), half=setup.observation != "positional")
+            target = MODELS_DIR / f"{name}.pt"
+            save_checkpoint(ckpt, target)
+            source = target
+        evaluation = evaluate_checkpoint(source)
+        results.append(
+            {
+                "setup": name,
+                "command": summary["command"],
+                "checkpoint": str(source),
+                "checkpoint_bytes": source.stat().st_size,
+                "summary": summary,
+                "evaluation": evaluation,
+            }
+        )
+        print(markdown_table(results[-1:]), flush=True)
+    table = markdown_table(results)
+    machine = {
+        "cpu_count": os.cpu_count(),
+        "torch_threads": args.threads,
+        "torch": torch.__version__,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+    }
+    atomic_write_text(out / "train_rl.md", table)
+    atomic_write_text(
+        out / "train_rl.json", json.dumps({"machine": machine, "results": results}, indent=2)
+    )
+    if args.ship:
+        merged = _merge_models_json(results, machine)
+        atomic_write_text(MODELS_DIR / "models.json", json.dumps(merged, indent=2) + "\n")
+    print(table)
+    return 0
+
+
+def _merge_models_json(results: list[dict[str, Any]], machine: dict[str, Any]) -> dict[str, Any]:
+    """``models.json`` with the entries of ``results`` replacing those of the same setup."""
+    path = MODELS_DIR / "models.json"
+    models: dict[str, Any] = json.loads(path.read_text())["models"] if path.is_file() else {}
+    for r in results:
+        models[r["setup"]] = {**r, "checkpoint": f"usvsim/models/{r['setup']}.pt",
+                              "machine": machine}  # fmt: skip
+    return {"models": dict(sorted(models.items()))}
+
+
+if __name__ == "__main__":
+    sys.exit(main())

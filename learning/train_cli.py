@@ -1,0 +1,388 @@
+"""``usvsim train SETUP``: TRPO on one of the study's four RL setups; validation, checkpoints.
+
+One run writes into its output folder (default ``usvsim-results/train/<setup>-seed<seed>``):
+
+================  ===========================================================================
+file              contents
+================  ===========================================================================
+``log.csv``       one row per iteration (:data:`CSV_FIELDS`); validation columns filled on
+                  validation iterations, empty otherwise
+``curve.png``     learning curve: training return and validation successes vs env steps
+``latest.pt``     the full (resumable) checkpoint at the last validation (:mod:`checkpoint`)
+``best.pt``       the checkpoint with the most validation successes (ties: higher mean return)
+``summary.json``  the run's outcome: first 15/15 (iteration, env steps, wall-clock), stop reason
+================  ===========================================================================
+
+Every ``validate_every`` iterations the deterministic policy runs the 15 validation episodes
+(:func:`usvsim.evaluate.validation_episodes`); the run stops early when it scores 15/15 at
+``stop_after`` consecutive validations. Files are written atomically: a crash, a NaN or Ctrl-C
+never leaves half a checkpoint, and a failing update (non-finite loss, gradient or data) stops
+the run with a clear message *before* anything is saved, so ``latest.pt`` and ``best.pt`` stay
+those of the last good validation. ``--resume`` continues from ``latest.pt`` with the setup and
+hyperparameters stored there.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from learning.checkpoint import (
+    Checkpoint,
+    CheckpointError,
+    PolicyHelmsman,
+    load_checkpoint,
+    save_checkpoint,
+)
+from learning.rollout import NonFiniteError
+from learning.setups import RLSetup, get_setup
+from learning.trpo import IterationStats, TRPOAgent, train
+from usvsim.evaluate import evaluate, validation_episodes
+from usvsim.fileio import atomic_savefig, atomic_write_text
+
+__all__ = ["CSV_FIELDS", "TrainArgs", "run", "validate"]
+
+VALIDATION_EPISODES = 15
+CSV_FIELDS = (
+    "iteration",
+    "env_steps",
+    "wall_time_s",
+    "episodes",
+    "mean_return",
+    "mean_length",
+    "kl",
+    "entropy",
+    "surrogate_improvement",
+    "line_search_accepted",
+    "value_loss",
+    "val_successes",
+    "val_mean_return",
+    "val_min_pole_distance_m",
+)
+
+
+@dataclass(frozen=True)
+class TrainArgs:
+    """Train a steering policy by TRPO for one RL setup (validation, checkpoints, early stop)."""
+
+    setup: str  # rl-{gaussian,categorical}-{positional,radar}
+    seed: int = 0  # seeds networks, action sampling and training episodes
+    iterations: int = 0  # TRPO iteration budget; 0: the setup's default
+    validate_every: int = 0  # validate on the 15 episodes every K iterations; 0: setup default
+    stop_after: int = 3  # stop after this many consecutive 15/15 validations; 0: never stop early
+    out: str = ""  # output folder; default usvsim-results/train/<setup>-seed<seed>
+    resume: bool = False  # continue the run in --out from its latest.pt
+    n_envs: int = 0  # boats simulated together (batch = n_envs x steps); 0: setup default
+    time_budget_s: float = 0.0  # stop after this much wall-clock, s; 0: no limit
+    threads: int = 2  # torch CPU threads
+    quiet: bool = False  # no progress bar
+
+
+def validate(agent: TRPOAgent, setup: RLSetup) -> dict[str, float]:
+    """The deterministic policy on the 15 validation episodes: successes, mean return, min d."""
+    records = evaluate(
+        PolicyHelmsman(agent, setup.observation, setup.action),
+        validation_episodes(),
+        observation=setup.observation,
+        action=setup.action,
+    )
+    returns = [float(np.sum(r.reward_pole) + np.sum(r.reward_goal)) for r in records]
+    return {
+        "successes": int(sum(r.success for r in records)),
+        "n_episodes": len(records),
+        "mean_return": float(np.mean(returns)),
+        "min_pole_distance_m": float(min(r.min_pole_distance_m for r in records)),
+    }
+
+
+def _fail(message: str) -> SystemExit:
+    return SystemExit(f"usvsim train: {message}")
+
+
+class _Run:
+    """State of one training run: files, log rows, validation history, the stopping rule."""
+
+    def __init__(self, args: TrainArgs, setup: RLSetup, out: Path, rows: list[dict[str, Any]]):
+        self.args, self.setup, self.out = args, setup, out
+        self.rows = rows
+        self.history: list[dict[str, Any]] = []
+        self.best: tuple[int, float] | None = None
+        self.consecutive = 0
+        self.first_full: dict[str, Any] | None = None
+        self.stop_reason = "iterations"
+        self.wall_offset_s = 0.0  # wall-clock of the run before a resume
+        self.last_plot = 0.0
+        self.validate_every = args.validate_every or setup.validate_every
+
+    def restore(self, history: list[dict[str, Any]]) -> None:
+        """Continue the validation bookkeeping of a resumed run from its stored history."""
+        self.history = list(history)
+        self.wall_offset_s = float(history[-1]["wall_time_s"]) if history else 0.0
+        for h in history:
+            full = h["successes"] == h["n_episodes"]
+            self.consecutive = self.consecutive + 1 if full else 0
+            if full and self.first_full is None:
+                self.first_full = dict(h)
+            key = (int(h["successes"]), float(h["mean_return"]))
+            self.best = key if self.best is None or key > self.best else self.best
+
+    def train_args(self) -> dict[str, Any]:
+        return dataclasses.asdict(self.args)
+
+    def on_iteration(self, stats: IterationStats, agent: TRPOAgent) -> bool:
+        wall = self.wall_offset_s + stats.wall_time_s
+        row: dict[str, Any] = {
+            "iteration": stats.iteration,
+            "env_steps": stats.env_steps,
+            "wall_time_s": round(wall, 3),
+            "episodes": stats.episodes,
+            "mean_return": stats.mean_return,
+            "mean_length": stats.mean_length,
+            "kl": stats.kl,
+            "entropy": stats.entropy,
+            "surrogate_improvement": stats.surrogate_improvement,
+            "line_search_accepted": int(stats.line_search_accepted),
+            "value_loss": stats.value_loss,
+        }
+        self.rows.append(row)
+        stop = False
+        if stats.iteration % self.validate_every == 0:
+            stop = self._validate(stats, agent, row, wall)
+        budget = self.args.time_budget_s
+        if not stop and budget > 0 and stats.wall_time_s >= budget:
+            self.stop_reason, stop = "time budget", True
+        return stop
+
+    def _validate(
+        self, stats: IterationStats, agent: TRPOAgent, row: dict[str, Any], wall: float
+    ) -> bool:
+        val = validate(agent, self.setup)
+        row.update(
+            val_successes=val["successes"],
+            val_mean_return=val["mean_return"],
+            val_min_pole_distance_m=val["min_pole_distance_m"],
+        )
+        record = {
+            "iteration": stats.iteration,
+            "env_steps": stats.env_steps,
+            "wall_time_s": wall,
+            **val,
+            "success_rate": val["successes"] / val["n_episodes"],
+            "kl": stats.kl,
+            "entropy": stats.entropy,
+        }
+        self.history.append(record)
+        full = val["successes"] == val["n_episodes"]
+        self.consecutive = self.consecutive + 1 if full else 0
+        if full and self.first_full is None:
+            self.first_full = dict(record)
+        ckpt = Checkpoint.from_agent(
+            agent,
+            self.setup,
+            train_args=self.train_args(),
+            validation=record,
+            history=self.history,
+        )
+        save_checkpoint(ckpt, self.out / "latest.pt")
+        key = (int(val["successes"]), float(val["mean_return"]))
+        if self.best is None or key > self.best:
+            self.best = key
+            save_checkpoint(ckpt, self.out / "best.pt")
+        self.write_log(plot=time.monotonic() - self.last_plot > 30.0)
+        if self.args.stop_after > 0 and self.consecutive >= self.args.stop_after:
+            self.stop_reason = f"{self.args.stop_after} consecutive 15/15 validations"
+            return True
+        return False
+
+    def write_log(self, plot: bool = True) -> None:
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=CSV_FIELDS, restval="")
+        writer.writeheader()
+        writer.writerows(self.rows)
+        atomic_write_text(self.out / "log.csv", buf.getvalue())
+        if plot:
+            self.last_plot = time.monotonic()
+            plot_learning_curve(self.rows, self.out / "curve.png", self.setup.name)
+
+    def write_summary(self, agent: TRPOAgent, wall_s: float, error: str | None) -> None:
+        summary = {
+            "setup": self.setup.name,
+            "seed": self.args.seed,
+            "command": "usvsim train " + " ".join(_argv(self.args)),
+            "iterations": agent.iteration,
+            "env_steps": agent.env_steps,
+            "wall_time_s": wall_s,
+            "stop_reason": error or self.stop_reason,
+            "first_15_of_15": self.first_full,
+            "best": None
+            if self.best is None
+            else {"successes": self.best[0], "mean_return": self.best[1]},
+            "study_iterations": self.setup.study_iterations,
+            "threads": torch.get_num_threads(),
+        }
+        atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
+
+
+def _argv(args: TrainArgs) -> list[str]:
+    """The command-line options that reproduce ``args`` (non-default ones only)."""
+    out = [args.setup]
+    for f in dataclasses.fields(args):
+        value = getattr(args, f.name)
+        if f.name == "setup" or value == f.default:
+            continue
+        flag = "--" + f.name.replace("_", "-")
+        out += [flag] if isinstance(value, bool) else [flag, str(value)]
+    return out
+
+
+def plot_learning_curve(rows: list[dict[str, Any]], path: Path, title: str) -> None:
+    """Training return and validation successes against environment steps (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    steps = np.array([r["env_steps"] for r in rows], dtype=float)
+    ret = np.array([r["mean_return"] for r in rows], dtype=float)
+    val = [
+        (r["env_steps"], r["val_successes"])
+        for r in rows
+        if r.get("val_successes") != "" and "val_successes" in r
+    ]
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    ax1.plot(steps, ret, lw=1)
+    ax1.set_ylabel("training return\n(fixed-horizon)")
+    ax1.set_title(title)
+    ax1.grid(alpha=0.3)
+    if val:
+        vx, vy = zip(*val, strict=True)
+        ax2.plot(vx, vy, "o-", ms=3)
+    ax2.axhline(VALIDATION_EPISODES, color="g", ls="--", lw=1)
+    ax2.set_ylim(-0.5, VALIDATION_EPISODES + 0.5)
+    ax2.set_ylabel("validation successes / 15")
+    ax2.set_xlabel("environment steps (decisions)")
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    atomic_savefig(fig, path, dpi=100)
+    plt.close(fig)
+
+
+def _read_rows(path: Path, up_to_iteration: int) -> list[dict[str, Any]]:
+    if not path.is_file():
+        return []
+    with path.open(newline="") as handle:
+        rows = [dict(r) for r in csv.DictReader(handle)]
+    kept = []
+    for r in rows:
+        if int(r["iteration"]) > up_to_iteration:
+            break
+        for key in ("iteration", "env_steps", "episodes", "line_search_accepted"):
+            r[key] = int(r[key])
+        if r.get("val_successes"):
+            r["val_successes"] = int(r["val_successes"])
+        kept.append(r)
+    return kept
+
+
+def run(args: TrainArgs) -> int:
+    """Run ``usvsim train`` (module docstring); 0 on success, 1 on a non-finite loss."""
+    torch.set_num_threads(max(1, args.threads))
+    try:
+        setup = get_setup(args.setup)
+    except ValueError as err:
+        raise _fail(str(err)) from None
+    for name in ("iterations", "validate_every", "stop_after", "n_envs"):
+        if getattr(args, name) < 0:
+            raise _fail(f"--{name.replace('_', '-')} must be >= 0")
+    out = Path(args.out or f"usvsim-results/train/{setup.name}-seed{args.seed}")
+    state: dict[str, Any] | None = None
+    rows: list[dict[str, Any]] = []
+    history: list[dict[str, Any]] = []
+    if args.resume:
+        try:
+            ckpt = load_checkpoint(out / "latest.pt", expected_setup=setup)
+        except CheckpointError as err:
+            raise _fail(f"cannot resume: {err}") from None
+        if ckpt.slim:
+            raise _fail(f"cannot resume from {out / 'latest.pt'}: slim checkpoint (no critic)")
+        setup = setup.replace(**{k: v for k, v in ckpt.setup_params.items() if k != "name"})
+        state, history = ckpt.agent, ckpt.history
+        rows = _read_rows(out / "log.csv", int(state["iteration"]))
+    elif (out / "latest.pt").exists():
+        raise _fail(f"{out / 'latest.pt'} exists: use --resume, or another --out")
+    if args.n_envs and state is None:
+        setup = setup.replace(num_envs=args.n_envs)
+    config = setup.trpo_config(args.seed, args.iterations or None)
+    if state is not None:
+        config = dataclasses.replace(config, seed=int(state["config"]["seed"]))
+    out.mkdir(parents=True, exist_ok=True)
+    r = _Run(args, setup, out, rows)
+    r.restore(history)
+
+    from tqdm import tqdm
+
+    start_iteration = int(state["iteration"]) if state is not None else 0
+    bar = tqdm(
+        total=config.iterations,
+        initial=start_iteration,
+        desc=setup.name,
+        unit="it",
+        file=sys.stderr,
+        disable=args.quiet,
+    )
+
+    def callback(stats: IterationStats, agent: TRPOAgent) -> bool:
+        stop = r.on_iteration(stats, agent)
+        last = r.history[-1] if r.history else None
+        bar.set_postfix(
+            ret=f"{stats.mean_return:.1f}",
+            kl=f"{stats.kl:.4f}",
+            val="-" if last is None else f"{last['successes']}/15",
+            refresh=False,
+        )
+        bar.update(1)
+        return stop
+
+    t0 = time.perf_counter()
+    agent: TRPOAgent | None = None
+    error: str | None = None
+    try:
+        agent = train(config, setup.make_vector_env, callback=callback, state=state)
+    except NonFiniteError as err:
+        error = f"non-finite value in training ({err}); stopped at iteration {len(r.rows) + 1}"
+    finally:
+        bar.close()
+    wall = r.wall_offset_s + time.perf_counter() - t0
+    r.write_log()
+    if error is not None:
+        print(
+            f"usvsim train: {error}. Checkpoints in {out} are those of the last good validation "
+            "(nothing was saved after the failure).",
+            file=sys.stderr,
+        )
+        return 1
+    assert agent is not None
+    r.write_summary(agent, wall, None)
+    first = r.first_full
+    print(
+        f"{setup.name}: {agent.iteration} iterations, {agent.env_steps:,} env steps, "
+        f"{wall:.0f} s; stopped: {r.stop_reason}; first 15/15: "
+        + (
+            "never"
+            if first is None
+            else f"iteration {first['iteration']} ({first['env_steps']:,} steps, "
+            f"{first['wall_time_s']:.0f} s)"
+        )
+        + f"; files in {out}"
+    )
+    return 0

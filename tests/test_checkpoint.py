@@ -1,0 +1,180 @@
+"""Checkpoints: round trip, slim/half copies, precise errors, the helmsman wrapper."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import torch
+
+from learning.checkpoint import (
+    FORMAT,
+    VERSION,
+    Checkpoint,
+    CheckpointError,
+    PolicyHelmsman,
+    load_agent,
+    load_checkpoint,
+    load_helmsman,
+    save_checkpoint,
+    slim_copy,
+)
+from learning.setups import get_setup
+from learning.trpo import TRPOAgent
+from usvsim.evaluate import Helmsman
+from usvsim.helmsmen import helmsman_kinds
+from usvsim.observations import observation_space
+from usvsim.vector_env import PoleAvoidanceVectorEnv, action_space
+
+
+def _agent(setup_name: str, seed: int = 3) -> tuple[TRPOAgent, Checkpoint]:
+    setup = get_setup(setup_name)
+    agent = TRPOAgent(
+        observation_space(setup.observation), action_space(setup.action), setup.trpo_config(seed)
+    )
+    env = PoleAvoidanceVectorEnv(8, observation=setup.observation, action=setup.action)
+    obs, _ = env.reset(seed=0)
+    agent.normalizer.update(obs)  # non-trivial statistics to round-trip
+    ckpt = Checkpoint.from_agent(
+        agent, setup, train_args={"seed": seed}, validation={"iteration": 0, "successes": 2}
+    )
+    return agent, ckpt
+
+
+def _obs(setup_name: str, n: int = 6) -> Any:
+    setup = get_setup(setup_name)
+    env = PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
+    return env.reset(seed=11)[0]
+
+
+@pytest.mark.parametrize("name", ["rl-gaussian-positional", "rl-categorical-radar"])
+def test_round_trip_gives_identical_actions(tmp_path: Path, name: str) -> None:
+    agent, ckpt = _agent(name)
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    loaded = load_checkpoint(tmp_path / "a.pt", expected_setup=name)
+    assert (loaded.setup, loaded.slim, loaded.weights_dtype) == (name, False, "float32")
+    assert loaded.validation == {"iteration": 0, "successes": 2}
+    assert loaded.git_revision != ""
+    again = load_agent(loaded)
+    obs = _obs(name)
+    np.testing.assert_array_equal(again.act(obs), agent.act(obs))
+    np.testing.assert_array_equal(again.values(obs), agent.values(obs))
+    raw = torch.load(tmp_path / "a.pt", weights_only=True)
+    assert (raw["format"], raw["version"]) == (FORMAT, VERSION)
+
+
+def test_slim_copy_acts_the_same_and_is_smaller(tmp_path: Path) -> None:
+    name = "rl-categorical-positional"
+    agent, ckpt = _agent(name)
+    save_checkpoint(ckpt, tmp_path / "full.pt")
+    save_checkpoint(slim_copy(ckpt), tmp_path / "slim.pt")
+    full_size = (tmp_path / "full.pt").stat().st_size
+    slim_size = (tmp_path / "slim.pt").stat().st_size
+    assert slim_size < 0.6 * full_size  # no critic (Adam's moments are still empty here)
+    slim = load_agent(load_checkpoint(tmp_path / "slim.pt"))
+    obs = _obs(name)
+    np.testing.assert_array_equal(slim.act(obs), agent.act(obs))
+
+
+def test_half_precision_copy_halves_the_policy(tmp_path: Path) -> None:
+    name = "rl-gaussian-radar"
+    agent, ckpt = _agent(name)
+    save_checkpoint(slim_copy(ckpt), tmp_path / "f32.pt")
+    save_checkpoint(slim_copy(ckpt, half=True), tmp_path / "f16.pt")
+    ratio = (tmp_path / "f16.pt").stat().st_size / (tmp_path / "f32.pt").stat().st_size
+    assert 0.45 < ratio < 0.55
+    half = load_checkpoint(tmp_path / "f16.pt")
+    assert half.weights_dtype == "float16"
+    restored = load_agent(half)
+    assert all(p.dtype == torch.float32 for p in restored.policy.parameters())
+    obs = _obs(name)
+    np.testing.assert_allclose(restored.act(obs), agent.act(obs), atol=2e-3)
+
+
+def test_helmsman_declares_its_kinds(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-categorical-radar")
+    save_checkpoint(slim_copy(ckpt), tmp_path / "my-policy.pt")
+    helmsman = load_helmsman(tmp_path / "my-policy.pt")
+    assert isinstance(helmsman, PolicyHelmsman) and isinstance(helmsman, Helmsman)
+    assert helmsman_kinds(helmsman) == ("radar+goal", "categorical")
+    assert helmsman.name == "my-policy"
+    helmsman.reset(6)
+    actions = helmsman.act(_obs("rl-categorical-radar"))
+    assert actions.shape == (6,) and actions.dtype.kind in "iu"
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(CheckpointError, match="no such checkpoint file"):
+        load_checkpoint(tmp_path / "nope.pt")
+
+
+def test_truncated_file_is_reported_as_corrupt(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-gaussian-positional")
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    data = (tmp_path / "a.pt").read_bytes()
+    (tmp_path / "a.pt").write_bytes(data[: len(data) // 2])
+    with pytest.raises(CheckpointError, match="corrupt or truncated"):
+        load_checkpoint(tmp_path / "a.pt")
+
+
+def test_garbage_file_is_reported_as_corrupt(tmp_path: Path) -> None:
+    (tmp_path / "a.pt").write_bytes(b"this is not a checkpoint at all")
+    with pytest.raises(CheckpointError, match="not a readable checkpoint"):
+        load_checkpoint(tmp_path / "a.pt")
+
+
+def test_foreign_torch_file_is_not_a_checkpoint(tmp_path: Path) -> None:
+    torch.save({"weights": torch.zeros(3)}, tmp_path / "a.pt")
+    with pytest.raises(CheckpointError, match="not a usvsim checkpoint"):
+        load_checkpoint(tmp_path / "a.pt")
+
+
+def test_newer_version_is_refused(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-gaussian-positional")
+    data = ckpt.to_dict()
+    data["version"] = VERSION + 1
+    torch.save(data, tmp_path / "a.pt")
+    with pytest.raises(CheckpointError, match=f"version {VERSION + 1} is not supported"):
+        load_checkpoint(tmp_path / "a.pt")
+
+
+def test_wrong_setup_names_both_observation_kinds(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-gaussian-radar")
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    with pytest.raises(
+        CheckpointError, match=r"observation 'radar\+goal'.*expected .*'positional'"
+    ):
+        load_checkpoint(tmp_path / "a.pt", expected_setup="rl-gaussian-positional")
+
+
+def test_observation_kind_that_does_not_match_the_weights(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-gaussian-positional")
+    ckpt.observation = "radar+goal"  # a file claiming another observation than its network's
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    with pytest.raises(CheckpointError, match="observation space does not match"):
+        load_checkpoint(tmp_path / "a.pt")
+
+
+def test_weights_of_the_wrong_shape(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-gaussian-positional")
+    policy = dict(ckpt.agent["policy"])
+    policy["head.weight"] = torch.zeros(3, 3)
+    ckpt.agent = {**ckpt.agent, "policy": policy}
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    with pytest.raises(CheckpointError, match="weights do not fit"):
+        load_agent(load_checkpoint(tmp_path / "a.pt"), tmp_path / "a.pt")
+
+
+def test_non_finite_policy_is_never_saved_and_old_file_survives(tmp_path: Path) -> None:
+    _, ckpt = _agent("rl-gaussian-positional")
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    before = (tmp_path / "a.pt").read_bytes()
+    policy = dict(ckpt.agent["policy"])
+    policy["head.bias"] = torch.full_like(policy["head.bias"], float("nan"))
+    ckpt.agent = {**ckpt.agent, "policy": policy}
+    with pytest.raises(ValueError, match="non-finite weights"):
+        save_checkpoint(ckpt, tmp_path / "a.pt")
+    assert (tmp_path / "a.pt").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.pt"]  # no temporary left over

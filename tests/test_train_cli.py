@@ -1,0 +1,153 @@
+"""``usvsim train`` / ``usvsim evaluate``: files written, resume, early stop, bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import learning.trpo
+from learning.checkpoint import load_checkpoint
+from learning.evaluate_cli import EvaluateArgs
+from learning.evaluate_cli import run as run_evaluate
+from learning.setups import FixedHorizonReturn, get_setup
+from learning.train_cli import TrainArgs, run
+
+SETUP = "rl-categorical-positional"
+
+
+def _args(out: Path, **kw: object) -> TrainArgs:
+    base: dict[str, object] = dict(
+        setup=SETUP, iterations=2, validate_every=1, n_envs=4, out=str(out), quiet=True
+    )
+    base.update(kw)
+    return TrainArgs(**base)  # type: ignore[arg-type]
+
+
+def _csv(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_two_iterations_write_checkpoints_log_curve_and_summary(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    assert {p.name for p in tmp_path.iterdir()} >= {
+        "latest.pt", "best.pt", "log.csv", "curve.png", "summary.json",
+    }  # fmt: skip
+    rows = _csv(tmp_path / "log.csv")
+    assert [int(r["iteration"]) for r in rows] == [1, 2]
+    assert all(r["val_successes"] != "" for r in rows)
+    ckpt = load_checkpoint(tmp_path / "latest.pt", expected_setup=SETUP)
+    assert ckpt.agent["iteration"] == 2 and ckpt.agent["env_steps"] == 2 * 4 * 64
+    assert [h["iteration"] for h in ckpt.history] == [1, 2]
+    assert ckpt.train_args["seed"] == 0 and not ckpt.slim
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["iterations"] == 2 and summary["stop_reason"] == "iterations"
+    assert (tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_resume_continues_the_run(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    assert run(_args(tmp_path, iterations=3, resume=True)) == 0
+    rows = _csv(tmp_path / "log.csv")
+    assert [int(r["iteration"]) for r in rows] == [1, 2, 3]
+    ckpt = load_checkpoint(tmp_path / "latest.pt")
+    assert ckpt.agent["iteration"] == 3 and ckpt.agent["env_steps"] == 3 * 4 * 64
+    assert [h["iteration"] for h in ckpt.history] == [1, 2, 3]
+
+
+def test_existing_run_is_not_overwritten_without_resume(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    with pytest.raises(SystemExit, match="exists: use --resume"):
+        run(_args(tmp_path))
+
+
+def test_resume_with_another_setup_names_the_mismatch(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    with pytest.raises(SystemExit, match=r"cannot resume.*expected 'rl-categorical-radar'"):
+        run(_args(tmp_path, setup="rl-categorical-radar", resume=True))
+
+
+def test_resume_from_a_corrupt_checkpoint(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    (tmp_path / "latest.pt").write_bytes(b"\x00" * 100)
+    with pytest.raises(SystemExit, match="corrupt or truncated"):
+        run(_args(tmp_path, iterations=3, resume=True))
+
+
+def test_unknown_setup(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match=r"unknown setup 'rl-banana'.*rl-gaussian-positional"):
+        run(_args(tmp_path, setup="rl-banana"))
+    assert not tmp_path.joinpath("latest.pt").exists()
+
+
+def test_nan_in_the_loss_stops_with_an_error_and_keeps_the_checkpoint(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run(_args(tmp_path)) == 0
+    before = {name: (tmp_path / name).read_bytes() for name in ("latest.pt", "best.pt")}
+    real_gae = learning.trpo.gae
+
+    def nan_gae(*a: object, **kw: object) -> tuple[np.ndarray, np.ndarray]:
+        adv, ret = real_gae(*a, **kw)  # type: ignore[arg-type]
+        return adv * np.nan, ret
+
+    monkeypatch.setattr(learning.trpo, "gae", nan_gae)
+    assert run(_args(tmp_path, iterations=4, resume=True)) == 1
+    assert "non-finite" in capsys.readouterr().err
+    for name, data in before.items():
+        assert (tmp_path / name).read_bytes() == data
+    assert load_checkpoint(tmp_path / "latest.pt").agent["iteration"] == 2
+
+
+def test_early_stop_after_consecutive_full_validations(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import learning.train_cli as cli
+
+    full = {"successes": 15, "n_episodes": 15, "mean_return": -10.0, "min_pole_distance_m": 20.0}
+    monkeypatch.setattr(cli, "validate", lambda agent, setup: dict(full))
+    assert run(_args(tmp_path, iterations=10, stop_after=2)) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["iterations"] == 2
+    assert summary["stop_reason"] == "2 consecutive 15/15 validations"
+    assert summary["first_15_of_15"]["iteration"] == 1
+
+
+def test_fixed_horizon_return_adds_the_remaining_discounted_reward() -> None:
+    setup = get_setup(SETUP)
+    env = setup.make_vector_env(2)
+    assert isinstance(env, FixedHorizonReturn)
+    gamma, K = setup.gamma, env.max_decisions
+    env.reset(seed=0)
+    straight = np.full(2, 20)  # 0°: straight at the pole → collision
+    for _ in range(K):
+        _, reward, terminated, _, info = env.step(straight)
+        if terminated.any():
+            break
+    assert np.array_equal(terminated, info["collision"]) and terminated.any()
+    m = K - np.rint(info["time_s"] / 2.0)
+    plain = info["reward_pole"] + info["reward_goal"]
+    expected = np.where(terminated, plain * (1 + gamma * (1 - gamma**m) / (1 - gamma)), plain)
+    np.testing.assert_allclose(reward, expected)
+    assert (reward[terminated] < -40).all()  # ~ -2.5 for each decision left
+
+
+def test_evaluate_prints_the_table(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert run(_args(tmp_path, iterations=1)) == 0
+    out_json = tmp_path / "eval.json"
+    args = EvaluateArgs(str(tmp_path / "latest.pt"), heldout=4, json=str(out_json))
+    assert run_evaluate(args) == 0
+    text = capsys.readouterr().out
+    assert "validation" in text and "held-out" in text
+    rows = json.loads(out_json.read_text())["rows"]
+    assert [(r["set"], r["episodes"]) for r in rows] == [("validation", 15), ("held-out", 4)]
+
+
+def test_evaluate_bad_checkpoint(tmp_path: Path) -> None:
+    (tmp_path / "x.pt").write_text("garbage")
+    with pytest.raises(SystemExit, match="not a readable checkpoint"):
+        run_evaluate(EvaluateArgs(str(tmp_path / "x.pt")))
