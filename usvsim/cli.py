@@ -105,33 +105,29 @@ def run_perf(args: PerfArgs) -> int:
     return 0
 
 
-def _lazy(module: str) -> Callable[[Any], int]:
-    """``module.run``, imported when the command runs (keeps ``usvsim --help`` fast)."""
+# name -> (module, options dataclass, one-line help); modules are imported only when their
+# command is chosen, so `usvsim --help` does not pay for torch or pymavlink
+COMMANDS: dict[str, tuple[str, str, str]] = {
+    "bench": ("usvsim.bench", "BenchArgs", "compare every helmsman on validation and held-out"),
+    "demo": ("usvsim.cli", "DemoArgs", "vessel and autopilot design, plant plots (PNG)"),
+    "perf": ("usvsim.cli", "PerfArgs", "throughput of the plant and the environments"),
+    "train": ("learning.train_cli", "TrainArgs", "train a policy (rl-* by TRPO, il-* by GAIL)"),
+    "evaluate": ("learning.evaluate_cli", "EvaluateArgs", "evaluate a trained checkpoint"),
+    "sitl": ("usvsim.sitl", "SitlArgs", "the usvsim plant as a MAVLink (Rover boat) vehicle"),
+    "sitl-physics": ("usvsim.sitl_physics", "SitlPhysicsArgs", "physics backend for ArduPilot SITL"),
+    "bridge": ("usvsim.bridge", "BridgeArgs", "a helmsman steers an ArduPilot boat over MAVLink"),
+}
+_LOCAL_RUNNERS: dict[str, Callable[[Any], int]] = {"demo": run_demo, "perf": run_perf}
 
-    def run(args: Any) -> int:
-        import importlib
 
-        result: int = importlib.import_module(module).run(args)
-        return result
+def _command(name: str) -> tuple[type, Callable[[Any], int]]:
+    """The options dataclass and the run function of command ``name``."""
+    import importlib
 
-    return run
-
-
-def _commands() -> dict[str, tuple[type, Callable[[Any], int]]]:
-    from usvsim.bench import BenchArgs
-    from usvsim.bridge import BridgeArgs
-    from usvsim.sitl import SitlArgs
-    from usvsim.sitl_physics import SitlPhysicsArgs
-
-    commands: dict[str, tuple[type, Callable[[Any], int]]] = {
-        "bench": (BenchArgs, _lazy("usvsim.bench")),
-        "demo": (DemoArgs, run_demo),
-        "perf": (PerfArgs, run_perf),
-        "sitl": (SitlArgs, _lazy("usvsim.sitl")),
-        "sitl-physics": (SitlPhysicsArgs, _lazy("usvsim.sitl_physics")),
-        "bridge": (BridgeArgs, _lazy("usvsim.bridge")),
-    }
-    return commands
+    module_name, cls_name, _ = COMMANDS[name]
+    module = importlib.import_module(module_name)
+    run = _LOCAL_RUNNERS.get(name) or module.run
+    return getattr(module, cls_name), run
 
 
 def _add_dataclass_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
@@ -166,25 +162,32 @@ def _field_comments(cls: type) -> dict[str, str]:
     return out
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
+    """The parser; only the ``chosen`` command's options are built (its module imported)."""
     parser = argparse.ArgumentParser(
         prog="usvsim",
         description="usvsim: learn and test steering policies for unmanned surface vehicles.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name, (cls, _) in _commands().items():
-        doc = (cls.__doc__ or "").strip().splitlines()[0]
-        _add_dataclass_arguments(sub.add_parser(name, help=doc, description=doc), cls)
+    for name, (_, _, summary) in COMMANDS.items():
+        if name == chosen:
+            cls, _ = _command(name)
+            doc = (cls.__doc__ or summary).strip().splitlines()[0]
+            _add_dataclass_arguments(sub.add_parser(name, help=summary, description=doc), cls)
+        else:
+            sub.add_parser(name, help=summary, add_help=False)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    ns = parser.parse_args(argv)
+    args = list(sys.argv[1:] if argv is None else argv)
+    chosen = next((a for a in args if not a.startswith("-")), None)
+    parser = build_parser(chosen if chosen in COMMANDS else None)
+    ns = parser.parse_args(args)
     if ns.command is None:
         parser.print_help()
         return 0
-    cls, run = _commands()[ns.command]
+    cls, run = _command(ns.command)
     values = {k: v for k, v in vars(ns).items() if k != "command"}
     return run(cls(**values))
 
