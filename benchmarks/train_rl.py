@@ -41,7 +41,13 @@ MODELS_DIR = Path(__file__).resolve().parent.parent / "usvsim" / "models"
 
 
 def train_one(
-    name: str, seed: int, out: Path, threads: int, stop_after: int, budget_s: float
+    name: str,
+    seed: int,
+    out: Path,
+    threads: int,
+    stop_after: int,
+    budget_s: float,
+    resume: bool = False,
 ) -> dict[str, Any]:
     """Run the recorded command for ``name`` into ``out``; returns its ``summary.json``."""
     args = TrainArgs(
@@ -51,6 +57,7 @@ def train_one(
         threads=threads,
         stop_after=stop_after,
         time_budget_s=budget_s,
+        resume=resume,
     )
     if run(args) != 0:
         raise SystemExit(f"training {name} failed (see above)")
@@ -104,6 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threads", type=int, default=2, help="torch CPU threads")
     parser.add_argument("--stop-after", type=int, default=3, help="consecutive 15/15 to stop")
+    parser.add_argument("--resume", action="store_true", help="continue the runs in --out")
     parser.add_argument("--time-budget-s", type=float, default=0.0, help="per setup; 0: none")
     parser.add_argument("--out", default="usvsim-results/bench-train", help="output folder")
     parser.add_argument("--ship", action="store_true", help="copy the models to usvsim/models")
@@ -114,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
         setup = get_setup(name)
         run_dir = out / name
         summary = train_one(
-            name, args.seed, run_dir, args.threads, args.stop_after, args.time_budget_s
+            name, args.seed, run_dir, args.threads, args.stop_after, args.time_budget_s, args.resume
         )
         source = run_dir / "best.pt"
         if args.ship:
@@ -149,8 +157,20 @@ def main(argv: list[str] | None = None) -> int:
     if args.ship:
         merged = _merge_models_json(results, machine)
         atomic_write_text(MODELS_DIR / "models.json", json.dumps(merged, indent=2) + "\n")
+        write_readme_table(list(merged["models"].values()))
     print(table)
     return 0
+
+
+def write_readme_table(results: list[dict[str, Any]]) -> None:
+    """Replace the RL table in ``usvsim/models/README.md`` (between its ``rl-table`` markers)."""
+    path = MODELS_DIR / "README.md"
+    text = path.read_text()
+    start, end = "<!-- rl-table: written by benchmarks/train_rl.py --ship -->", "<!-- /rl-table -->"
+    i, j = text.index(start) + len(start), text.index(end)
+    commands = "\n".join(f"- `{r['setup']}`: `{r['command']}`" for r in results)
+    body = f"\n{markdown_table(results)}\nCommands (seed 0):\n\n{commands}\n"
+    atomic_write_text(path, text[:i] + body + text[j:])
 
 
 def _merge_models_json(results: list[dict[str, Any]], machine: dict[str, Any]) -> dict[str, Any]:

@@ -82,9 +82,9 @@ class TrainArgs:
     stop_after: int = 3  # stop after this many consecutive 15/15 validations; 0: never stop early
     out: str = ""  # output folder; default usvsim-results/train/<setup>-seed<seed>
     resume: bool = False  # continue the run in --out from its latest.pt
-    n_envs: int = 0  # boats simulated together (batch = n_envs x steps); 0: setup default
+    n_envs: int = 0  # boats per batch (batch = n_envs x 64 decisions); 0: setup default
     time_budget_s: float = 0.0  # stop after this much wall-clock, s; 0: no limit
-    threads: int = 2  # torch CPU threads
+    threads: int = 2  # torch CPU threads (1 is faster when other jobs load the CPU)
     quiet: bool = False  # no progress bar
 
 

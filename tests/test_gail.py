@@ -186,6 +186,7 @@ def test_cloned_cnn_policy_keeps_its_batchnorm_statistics() -> None:
     np.testing.assert_allclose(agent.act(data.obs), before, atol=0.02)
 
 
+@pytest.mark.slow
 def test_il_run_validates_checkpoints_and_resumes(tmp_path) -> None:  # type: ignore[no-untyped-def]
     from learning.checkpoint import load_checkpoint, load_helmsman
     from learning.il_setups import get_il_setup, train_il

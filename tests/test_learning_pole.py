@@ -18,16 +18,25 @@ def _curve(stats: list[IterationStats]) -> list[dict[str, object]]:
     return [{k: v for k, v in dataclasses.asdict(s).items() if k not in TIMES} for s in stats]
 
 
-def _train(name: str, iterations: int, seed: int = 0) -> tuple[TRPOAgent, list[IterationStats]]:
+def _train(
+    name: str, iterations: int, seed: int = 0, target_successes: int | None = None
+) -> tuple[TRPOAgent, list[IterationStats]]:
+    """Train ``name``; with ``target_successes`` validate every 5 iterations and stop there."""
     setup = get_setup(name)
     stats: list[IterationStats] = []
 
     def record(s: IterationStats, agent: TRPOAgent) -> bool:
         stats.append(s)
-        return False
+        if target_successes is None or s.iteration % 5:
+            return False
+        return validate(agent, setup)["successes"] >= target_successes
 
-    torch.set_num_threads(2)
-    agent = train(setup.trpo_config(seed, iterations), setup.make_vector_env, callback=record)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # 2 threads crawl on a shared, loaded 2-core CI machine
+    try:
+        agent = train(setup.trpo_config(seed, iterations), setup.make_vector_env, callback=record)
+    finally:
+        torch.set_num_threads(threads)
     return agent, stats
 
 
@@ -40,11 +49,11 @@ def test_short_positional_run_beats_the_random_policy() -> None:
         action=setup.action,
     )
     random_successes = sum(r.success for r in random_records)
-    # 12 iterations x 2048 decisions: ~5 s on 2 cores; measured 15/15 from iteration 10 (seed 0)
-    agent, stats = _train(setup.name, 12)
+    # ≤ 30 iterations x 2048 decisions; measured: 15/15 first at iteration 20 (seed 0), ~10 s
+    agent, stats = _train(setup.name, 30, target_successes=12)
     learned = validate(agent, setup)
     assert random_successes <= 3
-    assert learned["successes"] >= random_successes + 9
+    assert learned["successes"] >= max(12, random_successes + 9)
     assert stats[-1].mean_return > stats[0].mean_return
 
 

@@ -21,7 +21,7 @@ SETUP = "rl-categorical-positional"
 
 def _args(out: Path, **kw: object) -> TrainArgs:
     base: dict[str, object] = dict(
-        setup=SETUP, iterations=2, validate_every=1, n_envs=4, out=str(out), quiet=True
+        setup=SETUP, iterations=2, validate_every=1, n_envs=4, out=str(out), quiet=True, threads=1
     )
     base.update(kw)
     return TrainArgs(**base)  # type: ignore[arg-type]
