@@ -66,6 +66,7 @@ __all__ = [
     "VERSION",
     "Checkpoint",
     "CheckpointError",
+    "NonFiniteWeightsError",
     "PolicyHelmsman",
     "git_revision",
     "load_agent",
@@ -82,6 +83,10 @@ _REQUIRED = ("setup", "observation", "action", "setup_params", "agent", "slim", 
 
 class CheckpointError(ValueError):
     """A checkpoint file that cannot be used: unreadable, not a checkpoint, or mismatched."""
+
+
+class NonFiniteWeightsError(ValueError):
+    """Refused to save a policy holding NaN or ±inf (the file on disk is left as it was)."""
 
 
 def git_revision(repo: str | os.PathLike[str] | None = None) -> str:
@@ -208,12 +213,14 @@ def _config_from_state(state: dict[str, Any]) -> TRPOConfig:
 def save_checkpoint(checkpoint: Checkpoint, path: str | os.PathLike[str]) -> None:
     """Write ``checkpoint`` to ``path`` atomically (the old file stays whole if this fails).
 
-    Refuses (``ValueError``, nothing written) a checkpoint whose policy holds NaN or ±inf.
+    Refuses (:class:`NonFiniteWeightsError`, nothing written) a policy holding NaN or ±inf.
     """
     for name, tensor in checkpoint.agent["policy"].items():
         if isinstance(tensor, torch.Tensor) and tensor.is_floating_point():
             if not bool(torch.isfinite(tensor).all()):
-                raise ValueError(f"refusing to save a policy with non-finite weights ({name})")
+                raise NonFiniteWeightsError(
+                    f"refusing to save a policy with non-finite weights ({name})"
+                )
     with atomic_open(path, "wb") as handle:
         torch.save(checkpoint.to_dict(), handle)
 

@@ -40,6 +40,7 @@ import torch
 from learning.checkpoint import (
     Checkpoint,
     CheckpointError,
+    NonFiniteWeightsError,
     PolicyHelmsman,
     load_checkpoint,
     save_checkpoint,
@@ -358,7 +359,7 @@ def run(args: TrainArgs) -> int:
     error: str | None = None
     try:
         agent = train(config, setup.make_vector_env, callback=callback, state=state)
-    except NonFiniteError as err:
+    except (NonFiniteError, NonFiniteWeightsError) as err:
         error = f"non-finite value in training ({err}); stopped at iteration {len(r.rows) + 1}"
     finally:
         bar.close()

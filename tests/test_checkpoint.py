@@ -14,6 +14,7 @@ from learning.checkpoint import (
     VERSION,
     Checkpoint,
     CheckpointError,
+    NonFiniteWeightsError,
     PolicyHelmsman,
     load_agent,
     load_checkpoint,
@@ -174,7 +175,32 @@ def test_non_finite_policy_is_never_saved_and_old_file_survives(tmp_path: Path) 
     policy = dict(ckpt.agent["policy"])
     policy["head.bias"] = torch.full_like(policy["head.bias"], float("nan"))
     ckpt.agent = {**ckpt.agent, "policy": policy}
-    with pytest.raises(ValueError, match="non-finite weights"):
+    with pytest.raises(NonFiniteWeightsError, match="non-finite weights"):
         save_checkpoint(ckpt, tmp_path / "a.pt")
     assert (tmp_path / "a.pt").read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.pt"]  # no temporary left over
+
+
+MODELS = Path(__file__).resolve().parent.parent / "usvsim" / "models"
+SHIPPED = sorted(MODELS.glob("rl-*.pt"))
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_shipped_model_reproduces_its_recorded_validation(path: Path) -> None:
+    import json
+
+    from usvsim.evaluate import evaluate, validation_episodes
+
+    ckpt = load_checkpoint(path, expected_setup=path.stem)
+    assert ckpt.slim and path.stat().st_size < 3_500_000
+    recorded = json.loads((MODELS / "models.json").read_text())["models"][path.stem]
+    helmsman = load_helmsman(path)
+    records = evaluate(
+        helmsman, validation_episodes(), observation=ckpt.observation, action=ckpt.action
+    )
+    expected = recorded["evaluation"]["validation"]
+    assert sum(r.success for r in records) == expected["successes"]
+    # float32 sums differ in the last bits with the thread count: centimetres, not outcomes
+    assert min(r.min_pole_distance_m for r in records) == pytest.approx(
+        expected["min_pole_distance_m"], abs=0.01
+    )

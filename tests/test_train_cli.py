@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 
 import learning.trpo
 from learning.checkpoint import load_checkpoint
@@ -151,3 +152,23 @@ def test_evaluate_bad_checkpoint(tmp_path: Path) -> None:
     (tmp_path / "x.pt").write_text("garbage")
     with pytest.raises(SystemExit, match="not a readable checkpoint"):
         run_evaluate(EvaluateArgs(str(tmp_path / "x.pt")))
+
+
+def test_nan_weights_after_an_update_are_never_saved(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run(_args(tmp_path)) == 0
+    before = {name: (tmp_path / name).read_bytes() for name in ("latest.pt", "best.pt")}
+    real_step = learning.trpo.trpo_step
+
+    def poisoned_step(policy, *a, **kw):
+        stats = real_step(policy, *a, **kw)
+        with torch.no_grad():
+            policy.head.bias.fill_(float("nan"))
+        return stats
+
+    monkeypatch.setattr(learning.trpo, "trpo_step", poisoned_step)
+    assert run(_args(tmp_path, iterations=4, resume=True)) == 1
+    assert "non-finite weights" in capsys.readouterr().err
+    for name, data in before.items():
+        assert (tmp_path / name).read_bytes() == data
