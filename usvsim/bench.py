@@ -33,7 +33,7 @@ import math
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -72,6 +72,7 @@ class BenchArgs:
     out: str = "usvsim-results/bench"  # results folder: Markdown, CSV and path plots
     json: bool = False  # print JSON only (stdout)
     no_plots: bool = False  # skip the path plots
+    no_likeness: bool = False  # skip the expert-likeness columns (validation, pole scenario)
 
 
 class _Record(Protocol):
@@ -105,6 +106,10 @@ class BenchRow:
     path_length_mean_m: float  # successful episodes; NaN if none
     smoothness_mean_deg: float  # successful episodes; NaN if none
     wall_s: float  # evaluation time of the set (s)
+    # expert-likeness (learning.likeness) on the validation set of the pole scenario, else NaN:
+    expert_path_distance_m: float = math.nan  # mean distance to the nearest expert path, m
+    expert_side_agreement: float = math.nan  # fraction of expert samples passing the same side
+    expert_action_distance_deg: float = math.nan  # Wasserstein distance of 2 s heading changes
 
     def flat(self) -> dict[str, Any]:
         """Flat dict for CSV and JSON (the proportion spread into columns)."""
@@ -187,6 +192,7 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
         raise SystemExit(f"usvsim bench: unknown helmsmen {unknown}; available: {list(factories)}")
     sets = _episode_sets(args.scenario, args.heldout)
     start = time.perf_counter()
+    reference = _expert_reference(args, sets["validation"])
     rows, records = [], {}
     jobs = [(name, set_name) for name in names for set_name in sets]
     bar = tqdm(jobs, desc="bench", unit="set", file=sys.stderr, disable=not progress)
@@ -197,9 +203,35 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
         t0 = time.perf_counter()
         evaluator = evaluate if args.scenario == "pole" else evaluate_waypoints
         recs = evaluator(helmsman, sets[set_name], observation=obs_kind, action=act_kind)
-        rows.append(summarise_set(name, set_name, recs, time.perf_counter() - t0))
+        row = summarise_set(name, set_name, recs, time.perf_counter() - t0)
+        if reference is not None and set_name == "validation":
+            row = _with_likeness(row, recs, reference)
+        rows.append(row)
         records[(name, set_name)] = recs
     return BenchResult(args.scenario, tuple(rows), records, time.perf_counter() - start)
+
+
+def _expert_reference(args: BenchArgs, specs: Sequence[Any]) -> Any:
+    """The expert model's paths on the validation starts, or None where it does not apply."""
+    if args.no_likeness or args.scenario != "pole":
+        return None
+    try:
+        from learning.likeness import expert_reference
+    except ImportError:  # the learning package is optional for the bench
+        return None
+    return expert_reference(specs)
+
+
+def _with_likeness(row: BenchRow, records: Sequence[Any], reference: Any) -> BenchRow:
+    from learning.likeness import likeness
+
+    score = likeness(records, reference)
+    return replace(
+        row,
+        expert_path_distance_m=score.path_distance_m,
+        expert_side_agreement=score.side_agreement,
+        expert_action_distance_deg=score.action_distance_deg,
+    )
 
 
 def _num(x: float, fmt: str) -> str:
@@ -215,6 +247,8 @@ _HEADER = (
     "t_goal (s)",
     "path (m)",
     "Σ|ΔΔψ| (°)",
+    "to expert (m)",
+    "same side",
 )
 
 
@@ -228,6 +262,8 @@ def _cells(row: BenchRow) -> tuple[str, ...]:
         _num(row.time_to_goal_mean_s, ".1f"),
         _num(row.path_length_mean_m, ".1f"),
         _num(row.smoothness_mean_deg, ".0f"),
+        _num(row.expert_path_distance_m, ".1f"),
+        _num(row.expert_side_agreement, ".2f"),
     )
 
 
@@ -251,7 +287,10 @@ def to_markdown(result: BenchResult) -> str:
         "",
         "success: strict (goal reached, never closer than 10 m to a pole), Wilson 95 % interval; "
         "min d_pole over all episodes; t_goal, path and Σ|ΔΔψ| are means over successful "
-        f"episodes. Evaluation wall time {result.wall_s:.1f} s.",
+        "episodes. to expert / same side: expert-likeness on the validation starts "
+        "(mean distance to the nearest of 8 expert paths; fraction of expert runs passing the "
+        "pole on the same side). "
+        f"Evaluation wall time {result.wall_s:.1f} s.",
         "",
     ]
     return "\n".join(lines)
