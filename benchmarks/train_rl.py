@@ -30,7 +30,13 @@ from typing import Any
 
 import torch
 
-from learning.checkpoint import load_agent, load_checkpoint, save_checkpoint, slim_copy
+from learning.checkpoint import (
+    PolicyHelmsman,
+    load_agent,
+    load_checkpoint,
+    save_checkpoint,
+    slim_copy,
+)
 from learning.evaluate_cli import evaluation_row
 from learning.setups import SETUPS, get_setup
 from learning.train_cli import TrainArgs, run
@@ -68,10 +74,7 @@ def train_one(
 def evaluate_checkpoint(path: Path) -> dict[str, Any]:
     """Validation and held-out rows (:func:`evaluation_row`) of the checkpoint at ``path``."""
     ckpt = load_checkpoint(path)
-    helmsman = load_agent(ckpt, path)
-    from learning.checkpoint import PolicyHelmsman
-
-    h = PolicyHelmsman(helmsman, ckpt.observation, ckpt.action)
+    h = PolicyHelmsman(load_agent(ckpt, path), ckpt.observation, ckpt.action)
     kinds = {"observation": ckpt.observation, "action": ckpt.action}
     return {
         "validation": evaluation_row("validation", evaluate(h, validation_episodes(), **kinds)),
