@@ -76,7 +76,7 @@ CSV_FIELDS = (
 class TrainArgs:
     """Train a steering policy by TRPO for one RL setup (validation, checkpoints, early stop)."""
 
-    setup: str  # rl-{gaussian,categorical}-{positional,radar}
+    setup: str  # rl-* (TRPO) or il-* (GAIL): {rl,il}-{gaussian,categorical}-{positional,radar}
     seed: int = 0  # seeds networks, action sampling and training episodes
     iterations: int = 0  # TRPO iteration budget; 0: the setup's default
     validate_every: int = 0  # validate on the 15 episodes every K iterations; 0: setup default
@@ -295,9 +295,31 @@ def _read_rows(path: Path, up_to_iteration: int) -> list[dict[str, Any]]:
     return kept
 
 
+def _run_il(args: TrainArgs) -> int:
+    """``usvsim train il-*``: GAIL from the shipped demonstrations (learning.il_setups)."""
+    from learning.il_setups import get_il_setup, train_il
+
+    try:
+        setup = get_il_setup(args.setup)
+    except ValueError as err:
+        raise _fail(str(err)) from None
+    out = Path(args.out or f"usvsim-results/train/{setup.name}-seed{args.seed}")
+    train_il(
+        setup,
+        out,
+        seed=args.seed,
+        iterations=args.iterations or None,
+        resume=args.resume,
+        threads=args.threads,
+    )
+    return 0
+
+
 def run(args: TrainArgs) -> int:
     """Run ``usvsim train`` (module docstring); 0 on success, 1 on a non-finite loss."""
     torch.set_num_threads(max(1, args.threads))
+    if args.setup.startswith("il-"):
+        return _run_il(args)
     try:
         setup = get_setup(args.setup)
     except ValueError as err:
