@@ -26,6 +26,7 @@ Shapes inside: one boat, arrays of shape (1, ...), as the simulator's batched bu
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 import statistics
 import time
@@ -105,23 +106,36 @@ class BridgeArgs:
 
 
 def load_helmsman(name: str, action: str = "gaussian") -> Helmsman:
-    """A helmsman by baseline name (``straight``, ``random``).
+    """A helmsman: ``straight``, ``random``, a name from :func:`usvsim.helmsmen.available_helmsmen`
+    (baselines and shipped models, e.g. ``los-avoid``, ``rl-gaussian-positional``) or the path of
+    a checkpoint (``.pt``).
 
     Raises
     ------
     ValueError
-        For other names; checkpoints need the learning package's loader (not wired yet).
+        For unknown names and unreadable checkpoints.
     """
+    from usvsim.helmsmen import available_helmsmen
+
     if name == "straight":
         return StraightAheadHelmsman(action=action)
     if name == "random":
         return RandomHelmsman(action=action)
+    registry = available_helmsmen()
+    if name in registry:
+        return registry[name]()
     if Path(name).exists():
-        raise ValueError(
-            f"checkpoint {name!r}: loading trained models is not wired into the "
-            "bridge yet; pass a Helmsman object to Bridge() from Python"
-        )
-    raise ValueError(f"unknown helmsman {name!r}; choose straight, random or a checkpoint")
+        from learning.checkpoint import CheckpointError
+        from learning.checkpoint import load_helmsman as load_checkpoint_helmsman
+
+        try:
+            return load_checkpoint_helmsman(name)
+        except CheckpointError as err:
+            raise ValueError(str(err)) from None
+    raise ValueError(
+        f"unknown helmsman {name!r}; choose straight, random, {', '.join(registry)} "
+        "or a checkpoint file"
+    )
 
 
 class TelemetryEstimator:
@@ -516,6 +530,12 @@ def run(args: BridgeArgs) -> int:
         helmsman = load_helmsman(args.helmsman, args.action)
     except ValueError as err:
         raise SystemExit(f"usvsim bridge: {err}") from None
+    # a trained policy or baseline declares the observation and action it was made for
+    args = dataclasses.replace(
+        args,
+        observation=str(getattr(helmsman, "observation", args.observation)),
+        action=str(getattr(helmsman, "action", args.action)),
+    )
     bridge = Bridge(args, mission, helmsman)
     try:
         result = bridge.run()
