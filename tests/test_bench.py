@@ -53,7 +53,15 @@ def test_registry_loads_models_with_the_checkpoint_module(
 
 def test_bench_args_follow_the_cli_conventions() -> None:
     comments = _field_comments(BenchArgs)
-    assert set(comments) == {"scenario", "helmsmen", "heldout", "out", "json", "no_plots"}
+    assert set(comments) == {
+        "scenario",
+        "helmsmen",
+        "heldout",
+        "out",
+        "json",
+        "no_plots",
+        "no_likeness",
+    }
     assert all(comments.values())
     parser = argparse.ArgumentParser()
     _add_dataclass_arguments(parser, BenchArgs)
