@@ -45,8 +45,8 @@ from learning.checkpoint import Checkpoint, PolicyHelmsman, load_checkpoint, sav
 from learning.demonstrations import DEMOS_DIR, load_recordings, quality_check
 from learning.gail import GAILConfig, GAILStats, GAILTrainer, train_gail
 from learning.likeness import expert_reference, likeness
-from learning.networks import NetworkConfig
 from learning.preprocess import expert_data
+from learning.setups import trpo_config_of
 from learning.trpo import TRPOAgent, TRPOConfig
 from usvsim.evaluate import evaluate, validation_episodes
 from usvsim.fileio import atomic_open
@@ -91,22 +91,7 @@ class ILSetup:
     study_iterations: int = 0  # the study's iterations to it
 
     def trpo_config(self, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
-        return TRPOConfig(
-            seed=seed,
-            iterations=self.iterations if iterations is None else iterations,
-            num_envs=self.num_envs,
-            steps_per_env=self.steps_per_env,
-            gamma=self.gamma,
-            gae_lambda=self.gae_lambda,
-            max_kl=self.max_kl,
-            cg_iters=self.cg_iters,
-            cg_damping=self.cg_damping,
-            fvp_fraction=self.fvp_fraction,
-            critic_lr=self.critic_lr,
-            critic_epochs=self.critic_epochs,
-            critic_minibatch=self.critic_minibatch,
-            network=NetworkConfig(init_std_fraction=self.init_std_fraction),
-        )
+        return trpo_config_of(self, seed, iterations)
 
     def gail_config(self) -> GAILConfig:
         return GAILConfig(

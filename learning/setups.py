@@ -111,22 +111,7 @@ class RLSetup:
 
     def trpo_config(self, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
         """The :class:`TRPOConfig` of a run of this setup."""
-        return TRPOConfig(
-            seed=seed,
-            iterations=self.iterations if iterations is None else iterations,
-            num_envs=self.num_envs,
-            steps_per_env=self.steps_per_env,
-            gamma=self.gamma,
-            gae_lambda=self.gae_lambda,
-            max_kl=self.max_kl,
-            cg_iters=self.cg_iters,
-            cg_damping=self.cg_damping,
-            fvp_fraction=self.fvp_fraction,
-            critic_lr=self.critic_lr,
-            critic_epochs=self.critic_epochs,
-            critic_minibatch=self.critic_minibatch,
-            network=NetworkConfig(init_std_fraction=self.init_std_fraction),
-        )
+        return trpo_config_of(self, seed, iterations)
 
     def make_vector_env(self, num_envs: int, **env_kwargs: Any) -> VectorEnv:
         """The training environment: ``num_envs`` boats with :class:`FixedHorizonReturn`."""
@@ -204,3 +189,23 @@ def get_setup(name: str) -> RLSetup:
         return SETUPS[name]
     except KeyError:
         raise ValueError(f"unknown setup {name!r}; known setups: {', '.join(SETUPS)}") from None
+
+
+def trpo_config_of(setup: Any, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
+    """The :class:`TRPOConfig` of a setup (RL or IL) that has the TRPO hyperparameter fields."""
+    return TRPOConfig(
+        seed=seed,
+        iterations=setup.iterations if iterations is None else iterations,
+        num_envs=setup.num_envs,
+        steps_per_env=setup.steps_per_env,
+        gamma=setup.gamma,
+        gae_lambda=setup.gae_lambda,
+        max_kl=setup.max_kl,
+        cg_iters=setup.cg_iters,
+        cg_damping=setup.cg_damping,
+        fvp_fraction=setup.fvp_fraction,
+        critic_lr=setup.critic_lr,
+        critic_epochs=setup.critic_epochs,
+        critic_minibatch=setup.critic_minibatch,
+        network=NetworkConfig(init_std_fraction=setup.init_std_fraction),
+    )
