@@ -77,15 +77,8 @@ def sitl_running(**kw: Any) -> Iterator[RoverSitl]:
         **{"speedup": SPEEDUP, **kw},
     )
     sitl = RoverSitl(args, start_eta=start, noise_seed=SPEC.noise_seed)
-    stop = threading.Event()
-    thread = threading.Thread(target=sitl.serve, args=(stop, 60.0), daemon=True)
-    thread.start()
-    try:
+    with sitl.serving_in_background(60.0):
         yield sitl
-    finally:
-        stop.set()
-        thread.join(5.0)
-        sitl.link.close()
 
 
 def bridge_args(sitl: RoverSitl, tmp_path: Path, **kw: Any) -> BridgeArgs:

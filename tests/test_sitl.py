@@ -1,7 +1,6 @@
 """The Rover-like MAVLink endpoint (usvsim.sitl) on loopback, faster than real time."""
 
 import math
-import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -28,15 +27,8 @@ KEY = bytes(range(1, 33))
 @contextmanager
 def running(args: SitlArgs) -> Iterator[RoverSitl]:
     sitl = RoverSitl(args)
-    stop = threading.Event()
-    thread = threading.Thread(target=sitl.serve, args=(stop, 60.0), daemon=True)
-    thread.start()
-    try:
+    with sitl.serving_in_background(60.0):
         yield sitl
-    finally:
-        stop.set()
-        thread.join(5.0)
-        sitl.link.close()
 
 
 def sitl_args(**kw: object) -> SitlArgs:

@@ -33,8 +33,11 @@ ArduPilot equivalents for the same bridge::
 
 from __future__ import annotations
 
+import contextlib
 import math
+import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import cast
 
@@ -378,6 +381,19 @@ class RoverSitl:
             )
         if "SYS_STATUS" in due:
             self.link.send_sys_status(SysStatus(12.6))
+
+    @contextlib.contextmanager
+    def serving_in_background(self, max_wall_s: float = 60.0) -> Iterator[RoverSitl]:
+        """Run :meth:`serve` in a daemon thread for the ``with`` block, then stop and close."""
+        stop = threading.Event()
+        thread = threading.Thread(target=self.serve, args=(stop, max_wall_s), daemon=True)
+        thread.start()
+        try:
+            yield self
+        finally:
+            stop.set()
+            thread.join(5.0)
+            self.link.close()
 
     def serve(self, should_stop: object = None, max_wall_s: float = math.inf) -> None:
         """Run the loop (incoming → step → telemetry), paced at ``speedup``.
