@@ -108,15 +108,44 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
     return head + "\n".join(lines) + "\n"
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--setups", nargs="+", default=list(SETUPS), help="setups to train")
+def run_options(
+    description: str, setups: list[str], out: str, threads: int
+) -> argparse.ArgumentParser:
+    """The options of a training benchmark (this one and ``train_il.py``)."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--setups", nargs="+", default=setups, help="setups to train")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--threads", type=int, default=2, help="torch CPU threads")
+    parser.add_argument("--threads", type=int, default=threads, help="torch CPU threads")
     parser.add_argument("--stop-after", type=int, default=3, help="consecutive 15/15 to stop")
     parser.add_argument("--resume", action="store_true", help="continue the runs in --out")
     parser.add_argument("--time-budget-s", type=float, default=0.0, help="per setup; 0: none")
-    parser.add_argument("--out", default="usvsim-results/bench-train", help="output folder")
+    parser.add_argument("--out", default=out, help="output folder")
+    return parser
+
+
+def write_results(
+    out: Path, name: str, table: str, threads: int, results: list[dict[str, Any]]
+) -> dict[str, Any]:
+    """``<name>.md`` (the table) and ``<name>.json`` (this machine and ``results``) in ``out``;
+    returns the machine's description."""
+    machine = {
+        "cpu_count": os.cpu_count(),
+        "torch_threads": threads,
+        "torch": torch.__version__,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+    }
+    atomic_write_text(out / f"{name}.md", table)
+    atomic_write_text(
+        out / f"{name}.json", json.dumps({"machine": machine, "results": results}, indent=2)
+    )
+    return machine
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = run_options(
+        __doc__.splitlines()[0], list(SETUPS), "usvsim-results/bench-train", threads=2
+    )
     parser.add_argument("--ship", action="store_true", help="copy the models to usvsim/models")
     args = parser.parse_args(argv)
     out = Path(args.out)
@@ -146,17 +175,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         print(markdown_table(results[-1:]), flush=True)
     table = markdown_table(results)
-    machine = {
-        "cpu_count": os.cpu_count(),
-        "torch_threads": args.threads,
-        "torch": torch.__version__,
-        "python": platform.python_version(),
-        "machine": platform.machine(),
-    }
-    atomic_write_text(out / "train_rl.md", table)
-    atomic_write_text(
-        out / "train_rl.json", json.dumps({"machine": machine, "results": results}, indent=2)
-    )
+    machine = write_results(out, "train_rl", table, args.threads, results)
     if args.ship:
         merged = _merge_models_json(results, machine)
         atomic_write_text(MODELS_DIR / "models.json", json.dumps(merged, indent=2) + "\n")

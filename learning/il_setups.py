@@ -27,32 +27,62 @@ What differs from the study, and why (measured in this repository, see the final
 preprocess them (:mod:`learning.preprocess`), GAIL (:func:`learning.gail.train_gail`), validate
 on the 15 episodes every ``validate_every`` iterations, keep the best checkpoint
 (:mod:`learning.checkpoint` format; the discriminator in a ``latest.gail.pt`` sidecar for
-resuming). ``python -m learning.il_setups SETUP`` runs it from the command line.
+resuming), and write ``log.csv`` (:data:`IL_CSV_FIELDS`), ``curve.png`` and ``summary.json`` as
+an RL run does (:mod:`learning.train_cli`). ``usvsim train SETUP`` (or, the same,
+``python -m learning.il_setups SETUP``) runs it with the options of an RL run: ``--stop-after``
+(default 3 consecutive 15/15 validations, as RL; 0 runs the whole budget), ``--time-budget-s``,
+``--validate-every``, ``--n-envs``, ``--resume``, ``--quiet``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import torch
 
-from learning.checkpoint import Checkpoint, PolicyHelmsman, load_checkpoint, save_checkpoint
+from learning.checkpoint import (
+    Checkpoint,
+    CheckpointError,
+    PolicyHelmsman,
+    load_checkpoint,
+    save_checkpoint,
+)
 from learning.demonstrations import DEMOS_DIR, load_recordings, quality_check
 from learning.gail import GAILConfig, GAILStats, GAILTrainer, train_gail
-from learning.likeness import expert_reference, likeness
-from learning.preprocess import expert_data
+from learning.likeness import ExpertReference, expert_reference, likeness
+from learning.preprocess import ExpertData, expert_data
 from learning.setups import trpo_config_of
+from learning.train_cli import (
+    Milestones,
+    RunLog,
+    advance,
+    progress_bar,
+    read_log_rows,
+    validation_record,
+    validation_summary,
+)
 from learning.trpo import TRPOAgent, TRPOConfig
 from usvsim.evaluate import evaluate, validation_episodes
-from usvsim.fileio import atomic_open
+from usvsim.fileio import atomic_open, atomic_write_text
+from usvsim.scenario import EpisodeSpec
 from usvsim.vector_env import PoleAvoidanceVectorEnv
 
-__all__ = ["IL_SETUPS", "ILRunResult", "ILSetup", "get_il_setup", "train_il"]
+__all__ = [
+    "IL_CSV_FIELDS",
+    "IL_SETUPS",
+    "ILRunResult",
+    "ILSetup",
+    "get_il_setup",
+    "train_il",
+    "validate_il",
+]
 
 
 @dataclass(frozen=True)
@@ -169,14 +199,49 @@ def get_il_setup(name: str) -> ILSetup:
         raise ValueError(f"unknown IL setup {name!r}; known: {', '.join(IL_SETUPS)}") from None
 
 
+IL_CSV_FIELDS = (
+    "iteration",
+    "env_steps",
+    "wall_time_s",
+    "episodes",
+    "env_return",
+    "goal_rate",
+    "kl",
+    "entropy",
+    "line_search_accepted",
+    "mean_reward",
+    "disc_loss",
+    "expert_accuracy",
+    "policy_accuracy",
+    "mean_d_expert",
+    "mean_d_policy",
+    "val_successes",
+    "val_mean_return",
+    "val_min_pole_distance_m",
+    "val_path_distance_m",
+)
+"""Columns of an IL run's ``log.csv``: :class:`learning.gail.GAILStats` (``env_return`` the
+handcrafted return of the finished training episodes, a diagnostic; ``mean_reward`` the mean
+imitation reward; ``disc_*``, ``*_accuracy``, ``mean_d_*`` the discriminator's last Adam step),
+then the validation's (filled on validation iterations): successes /15, mean handcrafted return,
+closest pole approach (m) and path distance to the expert's paths (m, :mod:`learning.likeness`).
+``wall_time_s`` counts from the start of GAIL (behavioural cloning included) and continues
+across ``--resume``."""
+
+
 @dataclass
 class ILRunResult:
-    """The best validation record, every record, and where the checkpoints are."""
+    """The outcome of :func:`train_il`: validation records, checkpoints, where and why it ended."""
 
     best: dict[str, Any] | None
     history: list[dict[str, Any]]
     best_path: Path
     last_path: Path
+    iterations: int
+    env_steps: int
+    wall_time_s: float
+    stop_reason: str
+    first_full: dict[str, Any] | None  # the first 15/15 validation record
 
 
 def _checkpoint(agent: TRPOAgent, setup: ILSetup, args: dict[str, Any], rec: Any, hist: Any) -> Any:
@@ -191,6 +256,143 @@ def _checkpoint(agent: TRPOAgent, setup: ILSetup, args: dict[str, Any], rec: Any
     )
 
 
+def validate_il(
+    agent: TRPOAgent, setup: ILSetup, specs: Sequence[EpisodeSpec], reference: ExpertReference
+) -> dict[str, float]:
+    """The deterministic policy on ``specs`` (the 15 validation episodes):
+    :func:`learning.train_cli.validation_summary` and the path distance to the expert (m)."""
+    helm = PolicyHelmsman(agent, setup.observation, setup.action)
+    recs = evaluate(helm, specs, observation=setup.observation, action=setup.action)
+    return {
+        **validation_summary(recs),
+        "path_distance_m": likeness(recs, reference).path_distance_m,
+    }
+
+
+class _ILRun:
+    """One GAIL run's bookkeeping: log rows, validations, checkpoints, milestones, stopping."""
+
+    def __init__(
+        self,
+        setup: ILSetup,
+        out: Path,
+        *,
+        train_args: dict[str, Any],
+        last_iteration: int,
+        validate_every: int,
+        stop_after: int,
+        time_budget_s: float,
+        rows: list[dict[str, Any]],
+        history: list[dict[str, Any]],
+        say: Callable[[str], None],
+    ) -> None:
+        """``train_args`` go into the checkpoints and ``summary.json``; the rest: train_il's."""
+        self.setup, self.out, self.train_args, self.say = setup, out, train_args, say
+        self.validate_every = validate_every or setup.validate_every
+        self.last_iteration, self.stop_after = last_iteration, stop_after
+        self.time_budget_s = time_budget_s
+        self.log = RunLog(
+            out,
+            IL_CSV_FIELDS,
+            setup.name,
+            rows,
+            "env_return",
+            "env return (handcrafted,\nfinished episodes)",
+        )
+        self.history = list(history)
+        self.milestones = Milestones()
+        for h in history:
+            self.milestones.add(h)
+        self.best = max(history, key=_rank) if history else None
+        self.wall_offset_s = float(history[-1]["wall_time_s"]) if history else 0.0
+        self.start = time.perf_counter()
+        self.stop_reason = "iterations"
+        self.specs = validation_episodes()
+        self.reference = expert_reference(self.specs)
+
+    def session_s(self) -> float:
+        return time.perf_counter() - self.start
+
+    def on_iteration(self, s: GAILStats, agent: TRPOAgent, gail: GAILTrainer) -> bool:
+        wall = self.wall_offset_s + self.session_s()
+        row = {f: getattr(s, f) for f in IL_CSV_FIELDS if hasattr(s, f)}
+        row["wall_time_s"] = round(wall, 3)
+        row["line_search_accepted"] = int(s.line_search_accepted)
+        self.log.rows.append(row)
+        stop = False
+        if s.iteration % self.validate_every == 0 or s.iteration == self.last_iteration:
+            stop = self._validate(s, agent, gail, row, wall)
+        if not stop and 0 < self.time_budget_s <= self.session_s():
+            self.stop_reason, stop = "time budget", True
+        return stop
+
+    def _validate(
+        self, s: GAILStats, agent: TRPOAgent, gail: GAILTrainer, row: dict[str, Any], wall: float
+    ) -> bool:
+        val = validate_il(agent, self.setup, self.specs, self.reference)
+        rec = validation_record(
+            row,
+            wall,
+            val,
+            env_return=s.env_return,
+            kl=s.kl,
+            entropy=s.entropy,
+            expert_accuracy=s.expert_accuracy,
+            policy_accuracy=s.policy_accuracy,
+            goal_rate=s.goal_rate,
+        )
+        self.history.append(rec)
+        self.milestones.add(rec)
+        self.say(
+            f"it {s.iteration:4d} {rec['wall_time_s']:6.0f}s val {rec['successes']:2d}/15 "
+            f"min d_pole {rec['min_pole_distance_m']:5.1f} m  D acc E/π "
+            f"{s.expert_accuracy:.2f}/{s.policy_accuracy:.2f}  goal {s.goal_rate:.2f}  "
+            f"path-to-expert {rec['path_distance_m']:4.1f} m"
+        )
+        ck = _checkpoint(agent, self.setup, self.train_args, rec, self.history)
+        if self.best is None or _rank(rec) > _rank(self.best):
+            self.best = rec
+            save_checkpoint(ck, self.out / "best.pt")
+        save_checkpoint(ck, self.out / "latest.pt")
+        with atomic_open(self.out / "latest.gail.pt", "wb") as handle:
+            torch.save(gail.state_dict(), handle)
+        self.log.write(plot=self.log.plot_due())
+        reason = self.milestones.stop_reason(self.stop_after)
+        self.stop_reason = reason or self.stop_reason
+        return bool(reason)
+
+    def result(self, agent: TRPOAgent, wall_s: float) -> ILRunResult:
+        """Write ``summary.json``; the run's :class:`ILRunResult`."""
+        summary = {
+            "setup": self.setup.name,
+            "seed": self.train_args["seed"],
+            "command": self.train_args["command"],
+            "iterations": agent.iteration,
+            "env_steps": agent.env_steps,
+            "wall_time_s": wall_s,
+            "stop_reason": self.stop_reason,
+            "first_14_of_15": self.milestones.first_14_of_15,
+            "first_15_of_15": self.milestones.first_full,
+            "best": self.best,
+            "study_success": self.setup.study_success,
+            "study_iterations": self.setup.study_iterations,
+            "threads": torch.get_num_threads(),
+            "demonstrations": self.train_args["demos"],
+        }
+        atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        return ILRunResult(
+            self.best,
+            self.history,
+            self.out / "best.pt",
+            self.out / "latest.pt",
+            agent.iteration,
+            agent.env_steps,
+            wall_s,
+            self.stop_reason,
+            self.milestones.first_full,
+        )
+
+
 def train_il(
     setup: ILSetup,
     out_dir: str | Path,
@@ -199,87 +401,124 @@ def train_il(
     iterations: int | None = None,
     resume: bool = False,
     threads: int = 1,
+    validate_every: int = 0,
+    stop_after: int = 0,
+    time_budget_s: float = 0.0,
+    quiet: bool = True,
+    command: str = "",
     demos_dir: str | Path = DEMOS_DIR,
     log: Callable[[str], None] = print,
 ) -> ILRunResult:
-    """Train ``setup`` by GAIL, writing into ``out_dir`` (the layout of ``usvsim train``):
+    """Train ``setup`` by GAIL, writing into ``out_dir`` the files of ``usvsim train``
+    (:mod:`learning.train_cli`; ``log.csv`` columns :data:`IL_CSV_FIELDS`).
 
-    ``best.pt`` the best validation checkpoint (most successes, then the smallest path
+    ``best.pt`` is the best validation checkpoint (most successes, then the smallest path
     distance to the expert, :mod:`learning.likeness`), ``latest.pt`` the last one and
-    ``latest.gail.pt`` its discriminator state; ``resume`` continues from those two.
-    ``threads``: torch CPU threads (on 2 shared cores, 2 threads made an iteration 20× slower
-    than 1 when measured)."""
+    ``latest.gail.pt`` its discriminator state; ``resume`` continues from those two with the
+    setup, hyperparameters and seed stored there, and keeps ``log.csv`` up to their iteration.
+    Validation every ``validate_every`` iterations (0: the setup's) and at the last one; the
+    run stops after ``stop_after`` consecutive 15/15 validations (0: never) or once this
+    session has run ``time_budget_s`` (0: no limit). ``quiet``: no progress bar; ``log``
+    prints one line per validation. ``threads``: torch CPU threads (on 2 shared cores, 2
+    threads made an iteration 20× slower than 1 when measured).
+
+    Raises ``CheckpointError`` when ``resume`` finds no usable checkpoint of ``setup``, and
+    ``NonFiniteError`` / ``NonFiniteWeightsError`` (after writing ``log.csv``) when an update
+    goes non-finite; nothing is saved after such a failure.
+    """
     torch.set_num_threads(max(1, threads))
     out = Path(out_dir)
+    state: dict[str, Any] | None = None
+    history: list[dict[str, Any]] = []
+    rows: list[dict[str, Any]] = []
+    if resume:
+        setup, state, history = _resume_state(setup, out / "latest.pt")
+        seed = int(state["agent"]["config"]["seed"])
+        rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
     out.mkdir(parents=True, exist_ok=True)
-    best_path, last_path = out / "best.pt", out / "latest.pt"
+    data, n_demos = _expert_pairs(setup, demos_dir, log)
+    cfg = setup.trpo_config(seed, iterations)
+    train_args = {
+        "seed": seed,
+        "iterations": iterations,
+        "demos": n_demos,
+        "validate_every": validate_every,
+        "stop_after": stop_after,
+        "time_budget_s": time_budget_s,
+        "command": command or f"learning.il_setups.train_il({setup.name!r}, seed={seed})",
+    }
+    start_iteration = int(state["agent"]["iteration"]) if state is not None else 0
+    bar = progress_bar(cfg.iterations, start_iteration, setup.name, quiet)
+
+    def say(message: str) -> None:
+        with bar.external_write_mode():
+            log(message)
+
+    run = _ILRun(
+        setup,
+        out,
+        train_args=train_args,
+        last_iteration=cfg.iterations,
+        validate_every=validate_every,
+        stop_after=stop_after,
+        time_budget_s=time_budget_s,
+        rows=rows,
+        history=history,
+        say=say,
+    )
+
+    def callback(s: GAILStats, agent: TRPOAgent, gail: GAILTrainer) -> bool:
+        stop = run.on_iteration(s, agent, gail)
+        advance(bar, s.env_return, s.kl, run.history[-1] if run.history else None)
+        return stop
+
+    env_kwargs = {"observation": setup.observation, "action": setup.action}
+    run.start = time.perf_counter()  # the clock counts GAIL, warm start included
+    try:
+        agent, _ = train_gail(
+            setup.gail_config(),
+            cfg,
+            lambda n: PoleAvoidanceVectorEnv(n, **env_kwargs),
+            data,
+            callback=callback,
+            state=state,
+        )
+    finally:
+        bar.close()
+        run.log.write()
+    return run.result(agent, run.wall_offset_s + run.session_s())
+
+
+def _expert_pairs(
+    setup: ILSetup, demos_dir: str | Path, log: Callable[[str], None]
+) -> tuple[ExpertData, int]:
+    """The (s, a) pairs of the demonstrations in ``demos_dir`` that pass the quality check, in
+    ``setup``'s observation and action kinds; and how many demonstrations that is."""
     report = load_recordings(demos_dir)
     for path, why in report.errors.items():
         log(f"skipping {path}: {why}")
     kept = [r for r in report.recordings if not quality_check(r)]
     data = expert_data(kept, setup.observation, setup.action)
     log(f"{setup.name}: {len(kept)}/{len(report.recordings)} demonstrations, {len(data)} pairs")
-    args = {"seed": seed, "iterations": iterations, "demos": len(kept)}
-    history: list[dict[str, Any]] = []
-    best: dict[str, Any] | None = None
-    state = None
-    if resume:
-        ck = load_checkpoint(last_path)
-        gail_state = torch.load(last_path.with_suffix(".gail.pt"), weights_only=True)
-        state, history = {"agent": ck.agent, "gail": gail_state}, ck.history
-        best = max(history, key=_rank) if history else None
-    specs = validation_episodes()
-    reference = expert_reference(specs)
+    return data, len(kept)
 
-    def callback(s: GAILStats, agent: TRPOAgent, gail: GAILTrainer) -> bool:
-        nonlocal best
-        if s.iteration % setup.validate_every and s.iteration != cfg.iterations:
-            return False
-        helm = PolicyHelmsman(agent, setup.observation, setup.action)
-        recs = evaluate(helm, specs, observation=setup.observation, action=setup.action)
-        rec = {
-            "iteration": s.iteration,
-            "env_steps": s.env_steps,
-            "wall_time_s": s.wall_time_s,
-            "successes": sum(r.success for r in recs),
-            "n_episodes": len(recs),
-            "success_rate": sum(r.success for r in recs) / len(recs),
-            "mean_return": s.env_return,
-            "min_pole_distance_m": min(r.min_pole_distance_m for r in recs),
-            "kl": s.kl,
-            "entropy": s.entropy,
-            "expert_accuracy": s.expert_accuracy,
-            "policy_accuracy": s.policy_accuracy,
-            "goal_rate": s.goal_rate,
-            "path_distance_m": likeness(recs, reference).path_distance_m,
-        }
-        history.append(rec)
-        log(
-            f"it {s.iteration:4d} {s.wall_time_s:6.0f}s val {rec['successes']:2d}/15 "
-            f"min d_pole {rec['min_pole_distance_m']:5.1f} m  D acc E/π "
-            f"{s.expert_accuracy:.2f}/{s.policy_accuracy:.2f}  goal {s.goal_rate:.2f}  "
-            f"path-to-expert {rec['path_distance_m']:4.1f} m"
+
+def _resume_state(
+    setup: ILSetup, path: Path
+) -> tuple[ILSetup, dict[str, Any], list[dict[str, Any]]]:
+    """The setup stored in ``path`` (a ``latest.pt`` of ``setup``), the agent and
+    discriminator state to resume, and the validation history."""
+    ck = load_checkpoint(path)
+    if ck.setup != setup.name:
+        raise CheckpointError(
+            f"{path}: checkpoint is for setup {ck.setup!r}, expected {setup.name!r}"
         )
-        ck = _checkpoint(agent, setup, args, rec, history)
-        if best is None or _rank(rec) > _rank(best):
-            best = rec
-            save_checkpoint(ck, best_path)
-        save_checkpoint(ck, last_path)
-        with atomic_open(last_path.with_suffix(".gail.pt"), "wb") as handle:
-            torch.save(gail.state_dict(), handle)
-        return False
-
-    cfg = setup.trpo_config(seed, iterations)
-    env_kwargs = {"observation": setup.observation, "action": setup.action}
-    train_gail(
-        setup.gail_config(),
-        cfg,
-        lambda n: PoleAvoidanceVectorEnv(n, **env_kwargs),
-        data,
-        callback=callback,
-        state=state,
-    )
-    return ILRunResult(best, history, best_path, last_path)
+    gail_path = path.with_suffix(".gail.pt")
+    if not gail_path.is_file():
+        raise CheckpointError(f"{gail_path} is missing (the discriminator of {path.name})")
+    stored = setup.replace(**{k: v for k, v in ck.setup_params.items() if k != "name"})
+    gail_state = torch.load(gail_path, weights_only=True)
+    return stored, {"agent": ck.agent, "gail": gail_state}, ck.history
 
 
 def _rank(rec: dict[str, Any]) -> tuple[int, float]:
@@ -289,27 +528,12 @@ def _rank(rec: dict[str, Any]) -> tuple[int, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m learning.il_setups SETUP [--out DIR] [--seed S] [--iterations K]``."""
-    import argparse
+    """``python -m learning.il_setups SETUP [OPTIONS]``: the same as ``usvsim train SETUP``."""
+    import sys
 
-    parser = argparse.ArgumentParser(prog="python -m learning.il_setups", description=__doc__)
-    parser.add_argument("setup", choices=sorted(IL_SETUPS))
-    parser.add_argument("--out", default="")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--iterations", type=int, default=None)
-    parser.add_argument("--resume", action="store_true")
-    parser.add_argument("--threads", type=int, default=1)
-    a = parser.parse_args(argv)
-    res = train_il(
-        get_il_setup(a.setup),
-        a.out or f"usvsim-results/train/{a.setup}-seed{a.seed}",
-        seed=a.seed,
-        iterations=a.iterations,
-        resume=a.resume,
-        threads=a.threads,
-    )
-    print(f"best: {res.best}; checkpoint {res.best_path}")
-    return 0
+    from usvsim.cli import main as usvsim_main
+
+    return usvsim_main(["train", *(sys.argv[1:] if argv is None else argv)])
 
 
 if __name__ == "__main__":

@@ -1,16 +1,21 @@
-"""``usvsim train SETUP``: TRPO on one of the study's four RL setups; validation, checkpoints.
+"""``usvsim train SETUP``: TRPO on one of the study's four RL setups (GAIL on one of its four
+IL setups, :mod:`learning.il_setups`); validation, checkpoints.
 
-One run writes into its output folder (default ``usvsim-results/train/<setup>-seed<seed>``):
+One run (RL or IL) writes into its output folder (default
+``usvsim-results/train/<setup>-seed<seed>``):
 
 ================  ===========================================================================
 file              contents
 ================  ===========================================================================
-``log.csv``       one row per iteration (:data:`CSV_FIELDS`); validation columns filled on
-                  validation iterations, empty otherwise
+``log.csv``       one row per iteration (:data:`CSV_FIELDS`; IL: ``IL_CSV_FIELDS`` of
+                  :mod:`learning.il_setups`); validation columns filled on validation
+                  iterations, empty otherwise
 ``curve.png``     learning curve: training return and validation successes vs env steps
 ``latest.pt``     the full (resumable) checkpoint at the last validation (:mod:`checkpoint`)
-``best.pt``       the checkpoint with the most validation successes (ties: higher mean return)
+``best.pt``       the checkpoint with the most validation successes (ties: higher mean return;
+                  IL: the smaller path distance to the expert's)
 ``summary.json``  the run's outcome: first 15/15 (iteration, env steps, wall-clock), stop reason
+                  (IL also: first >= 14/15, the best validation record)
 ================  ===========================================================================
 
 Every ``validate_every`` iterations the deterministic policy runs the 15 validation episodes
@@ -30,6 +35,7 @@ import io
 import json
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -48,7 +54,7 @@ from learning.checkpoint import (
 from learning.rollout import NonFiniteError
 from learning.setups import RLSetup, get_setup
 from learning.trpo import IterationStats, TRPOAgent, train
-from usvsim.evaluate import evaluate, validation_episodes
+from usvsim.evaluate import EpisodeRecord, evaluate, validation_episodes
 from usvsim.fileio import atomic_savefig, atomic_write_text
 
 __all__ = ["CSV_FIELDS", "TrainArgs", "run", "validate"]
@@ -74,11 +80,11 @@ CSV_FIELDS = (
 
 @dataclass(frozen=True)
 class TrainArgs:
-    """Train a steering policy by TRPO for one RL setup (validation, checkpoints, early stop)."""
+    """Train a steering policy, rl-* by TRPO, il-* by GAIL (validation, checkpoints, early stop)."""
 
     setup: str  # rl-* (TRPO) or il-* (GAIL): {rl,il}-{gaussian,categorical}-{positional,radar}
     seed: int = 0  # seeds networks, action sampling and training episodes
-    iterations: int = 0  # TRPO iteration budget; 0: the setup's default
+    iterations: int = 0  # iteration budget (TRPO or GAIL); 0: the setup's default
     validate_every: int = 0  # validate on the 15 episodes every K iterations; 0: setup default
     stop_after: int = 3  # stop after this many consecutive 15/15 validations; 0: never stop early
     out: str = ""  # output folder; default usvsim-results/train/<setup>-seed<seed>
@@ -97,6 +103,11 @@ def validate(agent: TRPOAgent, setup: RLSetup) -> dict[str, float]:
         observation=setup.observation,
         action=setup.action,
     )
+    return validation_summary(records)
+
+
+def validation_summary(records: Sequence[EpisodeRecord]) -> dict[str, float]:
+    """Successes, episodes, mean return and the closest pole approach (m) of ``records``."""
     returns = [float(np.sum(r.reward_pole) + np.sum(r.reward_goal)) for r in records]
     return {
         "successes": int(sum(r.success for r in records)),
@@ -115,14 +126,13 @@ class _Run:
 
     def __init__(self, args: TrainArgs, setup: RLSetup, out: Path, rows: list[dict[str, Any]]):
         self.args, self.setup, self.out = args, setup, out
-        self.rows = rows
+        self.log = RunLog(out, CSV_FIELDS, setup.name, rows)
+        self.rows = self.log.rows
         self.history: list[dict[str, Any]] = []
         self.best: tuple[int, float] | None = None
-        self.consecutive = 0
-        self.first_full: dict[str, Any] | None = None
+        self.milestones = Milestones()
         self.stop_reason = "iterations"
         self.wall_offset_s = 0.0  # wall-clock of the run before a resume
-        self.last_plot = 0.0
         self.validate_every = args.validate_every or setup.validate_every
 
     def restore(self, history: list[dict[str, Any]]) -> None:
@@ -130,10 +140,7 @@ class _Run:
         self.history = list(history)
         self.wall_offset_s = float(history[-1]["wall_time_s"]) if history else 0.0
         for h in history:
-            full = h["successes"] == h["n_episodes"]
-            self.consecutive = self.consecutive + 1 if full else 0
-            if full and self.first_full is None:
-                self.first_full = dict(h)
+            self.milestones.add(h)
             key = (int(h["successes"]), float(h["mean_return"]))
             self.best = key if self.best is None or key > self.best else self.best
 
@@ -168,25 +175,9 @@ class _Run:
         self, stats: IterationStats, agent: TRPOAgent, row: dict[str, Any], wall: float
     ) -> bool:
         val = validate(agent, self.setup)
-        row.update(
-            val_successes=val["successes"],
-            val_mean_return=val["mean_return"],
-            val_min_pole_distance_m=val["min_pole_distance_m"],
-        )
-        record = {
-            "iteration": stats.iteration,
-            "env_steps": stats.env_steps,
-            "wall_time_s": wall,
-            **val,
-            "success_rate": val["successes"] / val["n_episodes"],
-            "kl": stats.kl,
-            "entropy": stats.entropy,
-        }
+        record = validation_record(row, wall, val, kl=stats.kl, entropy=stats.entropy)
         self.history.append(record)
-        full = val["successes"] == val["n_episodes"]
-        self.consecutive = self.consecutive + 1 if full else 0
-        if full and self.first_full is None:
-            self.first_full = dict(record)
+        self.milestones.add(record)
         ckpt = Checkpoint.from_agent(
             agent,
             self.setup,
@@ -199,32 +190,23 @@ class _Run:
         if self.best is None or key > self.best:
             self.best = key
             save_checkpoint(ckpt, self.out / "best.pt")
-        self.write_log(plot=time.monotonic() - self.last_plot > 30.0)
-        if self.args.stop_after > 0 and self.consecutive >= self.args.stop_after:
-            self.stop_reason = f"{self.args.stop_after} consecutive 15/15 validations"
+        self.log.write(plot=self.log.plot_due())
+        reason = self.milestones.stop_reason(self.args.stop_after)
+        if reason:
+            self.stop_reason = reason
             return True
         return False
-
-    def write_log(self, plot: bool = True) -> None:
-        buf = io.StringIO()
-        writer = csv.DictWriter(buf, fieldnames=CSV_FIELDS, restval="")
-        writer.writeheader()
-        writer.writerows(self.rows)
-        atomic_write_text(self.out / "log.csv", buf.getvalue())
-        if plot:
-            self.last_plot = time.monotonic()
-            plot_learning_curve(self.rows, self.out / "curve.png", self.setup.name)
 
     def write_summary(self, agent: TRPOAgent, wall_s: float, error: str | None) -> None:
         summary = {
             "setup": self.setup.name,
             "seed": self.args.seed,
-            "command": "usvsim train " + " ".join(_argv(self.args)),
+            "command": command_of(self.args),
             "iterations": agent.iteration,
             "env_steps": agent.env_steps,
             "wall_time_s": wall_s,
             "stop_reason": error or self.stop_reason,
-            "first_15_of_15": self.first_full,
+            "first_15_of_15": self.milestones.first_full,
             "best": None
             if self.best is None
             else {"successes": self.best[0], "mean_return": self.best[1]},
@@ -234,8 +216,26 @@ class _Run:
         atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
 
 
-def _argv(args: TrainArgs) -> list[str]:
-    """The command-line options that reproduce ``args`` (non-default ones only)."""
+def validation_record(
+    row: dict[str, Any], wall_s: float, val: dict[str, float], **extra: Any
+) -> dict[str, Any]:
+    """Fill the log ``row``'s ``val_*`` columns from ``val`` (:func:`validation_summary`, and
+    whatever else was measured) and return the validation's record for the checkpoints'
+    history and ``summary.json``: iteration, env steps, wall-clock, ``val``, the success rate
+    and ``extra``."""
+    row.update({f"val_{k}": v for k, v in val.items() if k != "n_episodes"})
+    return {
+        "iteration": row["iteration"],
+        "env_steps": row["env_steps"],
+        "wall_time_s": wall_s,
+        **val,
+        "success_rate": val["successes"] / val["n_episodes"],
+        **extra,
+    }
+
+
+def command_of(args: TrainArgs) -> str:
+    """The ``usvsim train`` command line that reproduces ``args`` (non-default options only)."""
     out = [args.setup]
     for f in dataclasses.fields(args):
         value = getattr(args, f.name)
@@ -243,18 +243,87 @@ def _argv(args: TrainArgs) -> list[str]:
             continue
         flag = "--" + f.name.replace("_", "-")
         out += [flag] if isinstance(value, bool) else [flag, str(value)]
-    return out
+    return "usvsim train " + " ".join(out)
 
 
-def plot_learning_curve(rows: list[dict[str, Any]], path: Path, title: str) -> None:
-    """Training return and validation successes against environment steps (PNG)."""
+@dataclass
+class Milestones:
+    """What a run's validations reached: the first >= 14/15, the first 15/15 (whole validation
+    records) and how many 15/15 in a row up to the last one."""
+
+    first_14_of_15: dict[str, Any] | None = None
+    first_full: dict[str, Any] | None = None
+    consecutive: int = 0
+
+    def add(self, record: dict[str, Any]) -> None:
+        """Count one validation record (``successes``, ``n_episodes``, ...), in run order."""
+        successes, n = int(record["successes"]), int(record["n_episodes"])
+        self.consecutive = self.consecutive + 1 if successes == n else 0
+        if successes >= n - 1 and self.first_14_of_15 is None:
+            self.first_14_of_15 = dict(record)
+        if successes == n and self.first_full is None:
+            self.first_full = dict(record)
+
+    def stop_reason(self, stop_after: int) -> str:
+        """Why to stop after ``stop_after`` consecutive 15/15 (0: never); "" to go on."""
+        if stop_after > 0 and self.consecutive >= stop_after:
+            return f"{stop_after} consecutive 15/15 validations"
+        return ""
+
+
+class RunLog:
+    """A run's ``log.csv`` (one row per iteration, ``fields`` columns) and ``curve.png``.
+
+    ``return_key`` names the column plotted as the training return and ``return_label`` its
+    axis label. Both files are rewritten atomically; :meth:`plot_due` limits the plot (the
+    slow part) to once per 30 s of a long run, and an unchanged log is not plotted again.
+    """
+
+    def __init__(
+        self,
+        out: Path,
+        fields: Sequence[str],
+        title: str,
+        rows: list[dict[str, Any]],
+        return_key: str = "mean_return",
+        return_label: str = "training return\n(fixed-horizon)",
+    ) -> None:
+        self.out, self.fields, self.title, self.rows = out, tuple(fields), title, rows
+        self.return_key, self.return_label = return_key, return_label
+        self.last_plot = 0.0
+        self.plotted_rows = -1  # len(rows) at the last plot
+
+    def plot_due(self) -> bool:
+        return time.monotonic() - self.last_plot > 30.0
+
+    def write(self, plot: bool = True) -> None:
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=self.fields, restval="")
+        writer.writeheader()
+        writer.writerows(self.rows)
+        atomic_write_text(self.out / "log.csv", buf.getvalue())
+        if plot and len(self.rows) != self.plotted_rows:
+            self.last_plot, self.plotted_rows = time.monotonic(), len(self.rows)
+            plot_learning_curve(
+                self.rows, self.out / "curve.png", self.title, self.return_key, self.return_label
+            )
+
+
+def plot_learning_curve(
+    rows: list[dict[str, Any]],
+    path: Path,
+    title: str,
+    return_key: str = "mean_return",
+    return_label: str = "training return\n(fixed-horizon)",
+) -> None:
+    """Training return (column ``return_key``) and validation successes against env steps."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     steps = np.array([r["env_steps"] for r in rows], dtype=float)
-    ret = np.array([r["mean_return"] for r in rows], dtype=float)
+    ret = np.array([r[return_key] for r in rows], dtype=float)
     val = [
         (r["env_steps"], r["val_successes"])
         for r in rows
@@ -262,7 +331,7 @@ def plot_learning_curve(rows: list[dict[str, Any]], path: Path, title: str) -> N
     ]
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     ax1.plot(steps, ret, lw=1)
-    ax1.set_ylabel("training return\n(fixed-horizon)")
+    ax1.set_ylabel(return_label)
     ax1.set_title(title)
     ax1.grid(alpha=0.3)
     if val:
@@ -278,7 +347,9 @@ def plot_learning_curve(rows: list[dict[str, Any]], path: Path, title: str) -> N
     plt.close(fig)
 
 
-def _read_rows(path: Path, up_to_iteration: int) -> list[dict[str, Any]]:
+def read_log_rows(path: Path, up_to_iteration: int) -> list[dict[str, Any]]:
+    """The rows of a run's ``log.csv`` up to ``up_to_iteration`` (a resumed run's checkpoint);
+    later rows, logged after that checkpoint, are dropped: the resumed run redoes them."""
     if not path.is_file():
         return []
     with path.open(newline="") as handle:
@@ -295,22 +366,110 @@ def _read_rows(path: Path, up_to_iteration: int) -> list[dict[str, Any]]:
     return kept
 
 
+def progress_bar(total: int, initial: int, desc: str, quiet: bool) -> Any:
+    """The run's tqdm bar (iterations, on stderr); disabled by ``quiet``."""
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=initial, desc=desc, unit="it", file=sys.stderr, disable=quiet)
+
+
+def advance(bar: Any, ret: float, kl: float, last_validation: dict[str, Any] | None) -> None:
+    """One iteration on ``bar``: training return, KL and the last validation's successes."""
+    bar.set_postfix(
+        ret=f"{ret:.1f}",
+        kl=f"{kl:.4f}",
+        val="-" if last_validation is None else f"{last_validation['successes']}/15",
+        refresh=False,
+    )
+    bar.update(1)
+
+
+def outcome(
+    name: str,
+    iterations: int,
+    env_steps: int,
+    wall_s: float,
+    stop: str,
+    first_full: dict[str, Any] | None,
+    out: Path,
+) -> str:
+    """The one line a finished run prints."""
+    first = (
+        "never"
+        if first_full is None
+        else f"iteration {first_full['iteration']} ({first_full['env_steps']:,} steps, "
+        f"{first_full['wall_time_s']:.0f} s)"
+    )
+    return (
+        f"{name}: {iterations} iterations, {env_steps:,} env steps, {wall_s:.0f} s; "
+        f"stopped: {stop}; first 15/15: {first}; files in {out}"
+    )
+
+
+def _check_options(args: TrainArgs) -> None:
+    for name in ("iterations", "validate_every", "stop_after", "n_envs"):
+        if getattr(args, name) < 0:
+            raise _fail(f"--{name.replace('_', '-')} must be >= 0")
+
+
+def _out_dir(args: TrainArgs, name: str) -> Path:
+    """``--out``, default ``usvsim-results/train/<setup>-seed<seed>``; refuses to overwrite."""
+    out = Path(args.out or f"usvsim-results/train/{name}-seed{args.seed}")
+    if not args.resume and (out / "latest.pt").exists():
+        raise _fail(f"{out / 'latest.pt'} exists: use --resume, or another --out")
+    return out
+
+
+def _report_failure(error: str, out: Path) -> int:
+    print(
+        f"usvsim train: {error}. Checkpoints in {out} are those of the last good validation "
+        "(nothing was saved after the failure).",
+        file=sys.stderr,
+    )
+    return 1
+
+
 def _run_il(args: TrainArgs) -> int:
-    """``usvsim train il-*``: GAIL from the shipped demonstrations (learning.il_setups)."""
+    """``usvsim train il-*``: GAIL from the shipped demonstrations (:func:`il_setups.train_il`),
+    with the options and output files of an RL run (module docstring)."""
     from learning.il_setups import get_il_setup, train_il
 
     try:
         setup = get_il_setup(args.setup)
     except ValueError as err:
         raise _fail(str(err)) from None
-    out = Path(args.out or f"usvsim-results/train/{setup.name}-seed{args.seed}")
-    train_il(
-        setup,
-        out,
-        seed=args.seed,
-        iterations=args.iterations or None,
-        resume=args.resume,
-        threads=args.threads,
+    _check_options(args)
+    out = _out_dir(args, setup.name)
+    if args.n_envs:
+        setup = setup.replace(num_envs=args.n_envs)
+    try:
+        result = train_il(
+            setup,
+            out,
+            seed=args.seed,
+            iterations=args.iterations or None,
+            resume=args.resume,
+            threads=args.threads,
+            validate_every=args.validate_every,
+            stop_after=args.stop_after,
+            time_budget_s=args.time_budget_s,
+            quiet=args.quiet,
+            command=command_of(args),
+        )
+    except CheckpointError as err:
+        raise _fail(f"cannot resume: {err}") from None
+    except (NonFiniteError, NonFiniteWeightsError) as err:
+        return _report_failure(f"non-finite value in training ({err})", out)
+    print(
+        outcome(
+            setup.name,
+            result.iterations,
+            result.env_steps,
+            result.wall_time_s,
+            result.stop_reason,
+            result.first_full,
+            out,
+        )
     )
     return 0
 
@@ -324,10 +483,8 @@ def run(args: TrainArgs) -> int:
         setup = get_setup(args.setup)
     except ValueError as err:
         raise _fail(str(err)) from None
-    for name in ("iterations", "validate_every", "stop_after", "n_envs"):
-        if getattr(args, name) < 0:
-            raise _fail(f"--{name.replace('_', '-')} must be >= 0")
-    out = Path(args.out or f"usvsim-results/train/{setup.name}-seed{args.seed}")
+    _check_options(args)
+    out = _out_dir(args, setup.name)
     state: dict[str, Any] | None = None
     rows: list[dict[str, Any]] = []
     history: list[dict[str, Any]] = []
@@ -340,9 +497,7 @@ def run(args: TrainArgs) -> int:
             raise _fail(f"cannot resume from {out / 'latest.pt'}: slim checkpoint (no critic)")
         setup = setup.replace(**{k: v for k, v in ckpt.setup_params.items() if k != "name"})
         state, history = ckpt.agent, ckpt.history
-        rows = _read_rows(out / "log.csv", int(state["iteration"]))
-    elif (out / "latest.pt").exists():
-        raise _fail(f"{out / 'latest.pt'} exists: use --resume, or another --out")
+        rows = read_log_rows(out / "log.csv", int(state["iteration"]))
     if args.n_envs and state is None:
         setup = setup.replace(num_envs=args.n_envs)
     config = setup.trpo_config(args.seed, args.iterations or None)
@@ -352,28 +507,12 @@ def run(args: TrainArgs) -> int:
     r = _Run(args, setup, out, rows)
     r.restore(history)
 
-    from tqdm import tqdm
-
     start_iteration = int(state["iteration"]) if state is not None else 0
-    bar = tqdm(
-        total=config.iterations,
-        initial=start_iteration,
-        desc=setup.name,
-        unit="it",
-        file=sys.stderr,
-        disable=args.quiet,
-    )
+    bar = progress_bar(config.iterations, start_iteration, setup.name, args.quiet)
 
     def callback(stats: IterationStats, agent: TRPOAgent) -> bool:
         stop = r.on_iteration(stats, agent)
-        last = r.history[-1] if r.history else None
-        bar.set_postfix(
-            ret=f"{stats.mean_return:.1f}",
-            kl=f"{stats.kl:.4f}",
-            val="-" if last is None else f"{last['successes']}/15",
-            refresh=False,
-        )
-        bar.update(1)
+        advance(bar, stats.mean_return, stats.kl, r.history[-1] if r.history else None)
         return stop
 
     t0 = time.perf_counter()
@@ -386,26 +525,20 @@ def run(args: TrainArgs) -> int:
     finally:
         bar.close()
     wall = r.wall_offset_s + time.perf_counter() - t0
-    r.write_log()
+    r.log.write()
     if error is not None:
-        print(
-            f"usvsim train: {error}. Checkpoints in {out} are those of the last good validation "
-            "(nothing was saved after the failure).",
-            file=sys.stderr,
-        )
-        return 1
+        return _report_failure(error, out)
     assert agent is not None
     r.write_summary(agent, wall, None)
-    first = r.first_full
     print(
-        f"{setup.name}: {agent.iteration} iterations, {agent.env_steps:,} env steps, "
-        f"{wall:.0f} s; stopped: {r.stop_reason}; first 15/15: "
-        + (
-            "never"
-            if first is None
-            else f"iteration {first['iteration']} ({first['env_steps']:,} steps, "
-            f"{first['wall_time_s']:.0f} s)"
+        outcome(
+            setup.name,
+            agent.iteration,
+            agent.env_steps,
+            wall,
+            r.stop_reason,
+            r.milestones.first_full,
+            out,
         )
-        + f"; files in {out}"
     )
     return 0
