@@ -96,6 +96,7 @@ class GAILConfig:
 
     reward: str = "-log(1-D)"  # one of REWARDS (module docstring, step 3)
     disc_hidden: tuple[int, ...] = (400, 300)  # study: the policy's trunk widths
+    balanced_fusion: bool = False  # D's CNN: learning.networks.NetworkConfig.balanced_fusion
     disc_lr: float = 3e-4  # Adam
     disc_steps: int = 10  # Adam steps per iteration
     disc_minibatch: int = 256  # expert pairs and as many policy pairs per step
@@ -139,10 +140,12 @@ def reward_from_logits(logits: Tensor, kind: str) -> Tensor:
 class Discriminator(nn.Module):
     """f_w(s, a, z) → logit (B,); trunks as the policy's (module table)."""
 
-    def __init__(self, observation_space: spaces.Space, hidden: tuple[int, ...]) -> None:
+    def __init__(
+        self, observation_space: spaces.Space, hidden: tuple[int, ...], balanced: bool = False
+    ) -> None:
         super().__init__()
         extra = spaces.Box(-np.inf, np.inf, (1 + N_ABSORBING,), dtype=np.float32)
-        cfg = NetworkConfig(hidden=hidden)
+        cfg = NetworkConfig(hidden=hidden, balanced_fusion=balanced)
         if isinstance(observation_space, spaces.Dict):
             space: spaces.Space = spaces.Dict({**observation_space.spaces, "zz_action": extra})
         elif isinstance(observation_space, spaces.Box) and len(observation_space.shape) == 3:
@@ -231,7 +234,7 @@ class GAILTrainer:
         )
         with torch.random.fork_rng():
             torch.manual_seed(seed + 7)
-            self.disc = Discriminator(observation_space, config.disc_hidden)
+            self.disc = Discriminator(observation_space, config.disc_hidden, config.balanced_fusion)
         self.optimizer = torch.optim.Adam(self.disc.parameters(), lr=config.disc_lr)
         self.generator = torch.Generator().manual_seed(seed + 11)
         obs = self.disc_obs(expert.obs)

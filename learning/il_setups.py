@@ -105,6 +105,7 @@ class ILSetup:
     critic_epochs: int = 5
     critic_minibatch: int = 256
     init_std_fraction: float = 0.5
+    balanced_fusion: bool = False  # radar: policy, critic and D (learning.networks)
     reward: str = "-log(1-D)"
     disc_lr: float = 3e-4
     disc_steps: int = 10
@@ -126,6 +127,7 @@ class ILSetup:
     def gail_config(self) -> GAILConfig:
         return GAILConfig(
             reward=self.reward,
+            balanced_fusion=self.balanced_fusion,
             disc_lr=self.disc_lr,
             disc_steps=self.disc_steps,
             disc_minibatch=self.disc_minibatch,
@@ -168,6 +170,7 @@ IL_SETUPS: dict[str, ILSetup] = {
             max_kl=0.01,
             policy_warmup=10,  # measured without: cloned 15/15 fell to 2/15 in 10 iterations
             freeze_input_stats=True,
+            balanced_fusion=True,  # learning.networks: goal (and D's action) weigh as the image
             iterations=150,
             num_envs=8,
             steps_per_env=128,
@@ -181,6 +184,7 @@ IL_SETUPS: dict[str, ILSetup] = {
             max_kl=0.01,
             policy_warmup=10,  # measured without: cloned 15/15 fell to 2/15 in 10 iterations
             freeze_input_stats=True,
+            balanced_fusion=True,  # learning.networks: goal (and D's action) weigh as the image
             iterations=150,
             num_envs=8,
             steps_per_env=128,

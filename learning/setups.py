@@ -106,6 +106,7 @@ class RLSetup:
     critic_epochs: int = 5
     critic_minibatch: int = 256
     init_std_fraction: float = 0.5  # Gaussian: initial σ / action half-width
+    balanced_fusion: bool = False  # learning.networks.NetworkConfig.balanced_fusion
     validate_every: int = 5  # iterations between validations on the 15 episodes
     study_iterations: int = 0  # the study's iterations to its best validation (Table 4.1)
 
@@ -156,6 +157,7 @@ class GaussianRadar(RLSetup):
     fvp_fraction: float = 0.1  # 410 rows suffice for the Fisher-vector products
     critic_epochs: int = 2  # the critic's CNN dominates the update's cost
     critic_minibatch: int = 512
+    balanced_fusion: bool = True  # the goal's weight in FC 1 (learning.networks)
     study_iterations: int = 1300
 
 
@@ -170,6 +172,7 @@ class CategoricalRadar(RLSetup):
     fvp_fraction: float = 0.1
     critic_epochs: int = 2
     critic_minibatch: int = 512
+    balanced_fusion: bool = True  # the goal's weight in FC 1 (learning.networks)
     study_iterations: int = 4300
 
 
@@ -207,5 +210,8 @@ def trpo_config_of(setup: Any, seed: int = 0, iterations: int | None = None) -> 
         critic_lr=setup.critic_lr,
         critic_epochs=setup.critic_epochs,
         critic_minibatch=setup.critic_minibatch,
-        network=NetworkConfig(init_std_fraction=setup.init_std_fraction),
+        network=NetworkConfig(
+            init_std_fraction=setup.init_std_fraction,
+            balanced_fusion=setup.balanced_fusion,
+        ),
     )
