@@ -71,6 +71,28 @@ def test_cnn_policy_on_dict_observation() -> None:
     assert make_critic(space)(obs).shape == (5,)
 
 
+def test_balanced_fusion_gives_the_goal_the_image_share_of_fc1_input_variance() -> None:
+    space, obs = _radar_goal(), _dict_obs(64)
+    torch.manual_seed(3)
+    plain = make_policy(space, GAUSSIAN)
+    torch.manual_seed(3)
+    balanced = make_policy(space, GAUSSIAN, NetworkConfig(balanced_fusion=True))
+    trunk = balanced.trunk
+    assert isinstance(trunk, CNNTrunk)
+    assert trunk.vector_scale == pytest.approx(np.sqrt(3190 / 2))
+    # same weights; the only difference is the fixed factor on the goal
+    scaled = {**obs, "goal": obs["goal"] * trunk.vector_scale}
+    with torch.no_grad():
+        torch.testing.assert_close(balanced(obs).mean, plain(scaled).mean)
+        trunk.norm.train()  # batch statistics: every varying conv feature has unit variance
+        image = trunk.image_features(obs["radar"])
+        goal = trunk.vector_scale * obs["goal"]
+    # FC 1 input power of each part: Σ over features of the batch variance
+    image_power, goal_power = image.var(0).sum(), goal.var(0).sum()
+    assert 0.7 < float(goal_power / image_power) < 1.4
+    assert make_policy(space, GAUSSIAN).trunk.vector_scale == 1.0  # the study's fusion by default
+
+
 def test_cnn_image_shape_is_a_parameter() -> None:
     shape = (2, 30, 60)
     policy = make_policy(_radar_goal(shape), CATEGORICAL, NetworkConfig(hidden=(16, 8)))
