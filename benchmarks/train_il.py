@@ -17,7 +17,9 @@ included), the best validation (most successes, then most expert-like path; what
 holds) and when it came, the study's best success and iterations to it (Table 4.1,
 ``shared/reference/table-4-1.md``), the whole run (it stops after ``--stop-after`` consecutive
 15/15, or at its iteration budget) and ``best.pt``'s validation, held-out and likeness
-results. Shipping the models is not this script's job (``train_rl.py --ship`` does it for RL).
+results. ``--ship`` writes slim copies of the ``best.pt`` files to ``usvsim/models/<setup>.pt``
+(float16 weights for the radar CNN, as for RL), evaluates those, and records them in
+``usvsim/models/models.json`` and the IL table of ``usvsim/models/README.md``.
 """
 
 from __future__ import annotations
@@ -28,12 +30,20 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from train_rl import evaluate_checkpoint, run_options, write_results  # this folder
+from train_rl import (  # this folder
+    MODELS_DIR,
+    evaluate_checkpoint,
+    merge_models_json,
+    replace_readme_section,
+    run_options,
+    write_results,
+)
 
-from learning.checkpoint import load_helmsman
+from learning.checkpoint import load_checkpoint, load_helmsman, save_checkpoint, slim_copy
 from learning.il_setups import IL_SETUPS
 from learning.likeness import helmsman_likeness
 from learning.train_cli import VALIDATION_EPISODES, TrainArgs, run
+from usvsim.fileio import atomic_write_text
 
 
 def train_one(args: TrainArgs) -> dict[str, Any]:
@@ -92,6 +102,7 @@ def main(argv: list[str] | None = None) -> int:
         __doc__.splitlines()[0], list(IL_SETUPS), "usvsim-results/bench-train-il", threads=1
     )
     parser.add_argument("--iterations", type=int, default=0, help="budget; 0: setup default")
+    parser.add_argument("--ship", action="store_true", help="copy the models to usvsim/models")
     args = parser.parse_args(argv)
     out = Path(args.out)
     results = []
@@ -109,6 +120,10 @@ def main(argv: list[str] | None = None) -> int:
         )
         summary = train_one(train_args)
         best = run_dir / "best.pt"
+        if args.ship:
+            radar = IL_SETUPS[name].observation != "positional"
+            save_checkpoint(slim_copy(load_checkpoint(best), half=radar), MODELS_DIR / f"{name}.pt")
+            best = MODELS_DIR / f"{name}.pt"
         results.append(
             {
                 "setup": name,
@@ -121,7 +136,12 @@ def main(argv: list[str] | None = None) -> int:
         )
         print(markdown_table(results[-1:]), flush=True)
     table = markdown_table(results)
-    write_results(out, "train_il", table, args.threads, results)
+    machine = write_results(out, "train_il", table, args.threads, results)
+    if args.ship:
+        merged = merge_models_json(results, machine)
+        atomic_write_text(MODELS_DIR / "models.json", json.dumps(merged, indent=2) + "\n")
+        il = [m for m in merged["models"].values() if m["setup"].startswith("il-")]
+        replace_readme_section("il-table", "train_il.py", markdown_table(il), il)
     print(table)
     return 0
 

@@ -177,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     table = markdown_table(results)
     machine = write_results(out, "train_rl", table, args.threads, results)
     if args.ship:
-        merged = _merge_models_json(results, machine)
+        merged = merge_models_json(results, machine)
         atomic_write_text(MODELS_DIR / "models.json", json.dumps(merged, indent=2) + "\n")
         write_readme_table(list(merged["models"].values()))
     print(table)
@@ -186,16 +186,24 @@ def main(argv: list[str] | None = None) -> int:
 
 def write_readme_table(results: list[dict[str, Any]]) -> None:
     """Replace the RL table in ``usvsim/models/README.md`` (between its ``rl-table`` markers)."""
+    replace_readme_section("rl-table", "train_rl.py", markdown_table(results), results)
+
+
+def replace_readme_section(
+    marker: str, script: str, table: str, results: list[dict[str, Any]]
+) -> None:
+    """Put ``table`` and the commands of ``results`` between the ``marker`` comments of
+    ``usvsim/models/README.md``."""
     path = MODELS_DIR / "README.md"
     text = path.read_text()
-    start, end = "<!-- rl-table: written by benchmarks/train_rl.py --ship -->", "<!-- /rl-table -->"
+    start, end = f"<!-- {marker}: written by benchmarks/{script} --ship -->", f"<!-- /{marker} -->"
     i, j = text.index(start) + len(start), text.index(end)
     commands = "\n".join(f"- `{r['setup']}`: `{r['command']}`" for r in results)
-    body = f"\n{markdown_table(results)}\nCommands (seed 0):\n\n{commands}\n"
+    body = f"\n{table}\nCommands (seed 0):\n\n{commands}\n"
     atomic_write_text(path, text[:i] + body + text[j:])
 
 
-def _merge_models_json(results: list[dict[str, Any]], machine: dict[str, Any]) -> dict[str, Any]:
+def merge_models_json(results: list[dict[str, Any]], machine: dict[str, Any]) -> dict[str, Any]:
     """``models.json`` with the entries of ``results`` replacing those of the same setup."""
     path = MODELS_DIR / "models.json"
     models: dict[str, Any] = json.loads(path.read_text())["models"] if path.is_file() else {}
