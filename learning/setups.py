@@ -33,7 +33,10 @@ the pole did. Only the time limit stays a truncation (bootstrapped). The per-ste
 unchanged; evaluation uses the plain environment.
 
 What is tuned: the batch (``num_envs`` × ``steps_per_env``), γ, λ, δ, the Fisher sub-sample
-and the critic. Each setup is a frozen dataclass whose :meth:`RLSetup.trpo_config` gives the
+and the critic. The radar setups also scale the goal vector up to the image's share of the first
+fully connected layer's input (``balanced_fusion``, :mod:`learning.networks`): with the study's
+plain concatenation rl-gaussian-radar needed 230 iterations to its first 15/15, with it 65.
+Each setup is a frozen dataclass whose :meth:`RLSetup.trpo_config` gives the
 :class:`learning.trpo.TRPOConfig` of a run; the command line (``usvsim train``) overrides only
 the seed, the iteration budget and the number of boats, so a setup name plus a seed reproduces
 a run.
