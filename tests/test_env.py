@@ -196,3 +196,30 @@ def test_vector_env_spaces_and_episode_options(plant):
     assert vec.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
     with pytest.raises(ValueError, match="unknown reset options"):
         vec.reset(options={"episode": specs[0]})
+
+
+def test_batch_state_is_a_copy_of_the_true_state(plant):
+    env = PoleAvoidanceVectorEnv(2, plant=plant)
+    env.reset(seed=4)
+    state = env.sim.state
+    state.x[:] = np.nan
+    assert np.all(np.isfinite(env.sim.state.x))
+    env.step(np.zeros((2, 1), dtype=np.float32))
+    assert np.all(np.isfinite(env.sim.state.x))
+
+
+def test_goal_test_equals_hypot_at_the_boundary():
+    from usvsim.vector_env import _within
+
+    r = 10.0
+    edge = np.array([6.0, 8.0, 10.0, 0.0, 7.0710678118654755, np.nextafter(10.0, 11.0)])
+    dx = np.concatenate([edge, -edge, [np.nan, np.inf, 1e300, 3.0]])
+    dy = np.concatenate([edge[::-1], edge, [0.0, 0.0, 1e300, np.nan]])
+    rng = np.random.default_rng(0)
+    angle = rng.uniform(0, 2 * np.pi, 20_000)
+    radius = r * (1.0 + rng.choice([-1e-16, 0.0, 1e-16, 1e-3], angle.size))
+    dx = np.concatenate([dx, radius * np.cos(angle)])[None, :]
+    dy = np.concatenate([dy, radius * np.sin(angle)])[None, :]
+    expected = np.hypot(dx, dy) <= r
+    np.testing.assert_array_equal(_within(dx, dy, r), expected)
+    assert 0 < expected.sum() < expected.size

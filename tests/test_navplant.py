@@ -86,3 +86,20 @@ def test_fused_step_rejects_wrong_noise(plant):
         fused.step(state, nav, np.zeros(2), 3.0, 20, 1, np.zeros((2, 3)))
     with pytest.raises(ValueError, match="NaN or inf"):
         fused.step(state, nav, np.array([0.0, np.nan]), 3.0, 20, 1, np.zeros((2, 100)))
+
+
+def test_packed_run_equals_the_navigator_step(plant):
+    cfg = NavConfig()
+    n, T = 8, 20
+    state, rng = boats(plant, n, 5)
+    nav = Navigator(cfg, n)
+    nav.reset(state.eta, state.nu, np.random.default_rng(6))
+    fused = NavigatedPlant(plant, cfg)
+    packed = np.concatenate([state.x, state.c, export_nav_state(nav)], axis=1)
+    psi_ref = rng.uniform(-3, 3, n)
+    normals = rng.standard_normal((n, fused.draws_needed(21, T)))
+    traj = fused.run(packed, psi_ref, 3.0, T, 21, normals)
+    _, plant_traj, nav_traj = fused.step(state, nav, psi_ref, 3.0, T, 21, normals)
+    np.testing.assert_array_equal(traj[:, :, :13], plant_traj)
+    np.testing.assert_array_equal(traj[:, :, 13:], nav_traj)
+    np.testing.assert_array_equal(traj[:, -1, 13:], export_nav_state(nav))

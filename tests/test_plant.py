@@ -115,3 +115,19 @@ def test_bad_plant_arguments_raise():
         Plant("default", current=(-1.0, 0.0))
     with pytest.raises(ValueError, match="backend must be"):
         Plant("default", backend="gpu")  # type: ignore[arg-type]
+
+
+def test_trim_actuator_looks_up_a_repeated_speed_with_the_same_numbers():
+    fresh = Plant("default")
+    speeds = np.array([3.0, 3.0, 3.0])
+    direct = np.asarray(fresh._surge_drag(speeds[None, :])).ravel()
+    first, again = fresh.trim_actuator(speeds), fresh.trim_actuator(speeds[:2])
+    np.testing.assert_array_equal(first[:, 0], np.clip(direct, *_a1_range(fresh)))
+    np.testing.assert_array_equal(again, first[:2])
+    mixed = np.array([1.0, 3.0, 0.0])
+    expected = np.clip(np.asarray(fresh._surge_drag(mixed[None, :])).ravel(), *_a1_range(fresh))
+    np.testing.assert_array_equal(fresh.trim_actuator(mixed)[:, 0], expected)
+
+
+def _a1_range(plant: Plant) -> tuple[float, float]:
+    return plant.vessel.actuation.a1_min, plant.vessel.actuation.a1_max

@@ -111,6 +111,26 @@ def test_boat_noise_serves_each_boat_its_own_generator_stream():
         np.testing.assert_array_equal(np.array(got[i]), ref)
 
 
+def test_boat_noise_reseeding_restarts_only_those_streams():
+    noise = BoatNoise(3, width=16, block=5)
+    noise.seed(np.arange(3), [1, 2, 3])
+    first = noise.for_boats(None).standard_normal((3, 7))
+    noise.seed(np.array([1]), [42])
+    second = noise.for_boats(None).standard_normal((3, 20))
+    ref = {s: np.random.default_rng(s).standard_normal(27) for s in (1, 3)}
+    np.testing.assert_array_equal(np.concatenate([first[0], second[0]]), ref[1])
+    np.testing.assert_array_equal(np.concatenate([first[2], second[2]]), ref[3])
+    np.testing.assert_array_equal(second[1], np.random.default_rng(42).standard_normal(20))
+
+
+def test_first_bad_spec_is_reported():
+    specs = [EpisodeSpec(0, 60.0, 0.0), EpisodeSpec(0, -1.0, 0.0), EpisodeSpec(5, 60.0, 0.0)]
+    with pytest.raises(ValueError, match=r"start_distance_m must be finite and > 0, got -1\.0"):
+        episode_geometry(Scenario(), specs)
+    with pytest.raises(ValueError, match="pole_index 5 out of range for 2 poles"):
+        episode_geometry(Scenario(), specs[2:] + specs[:2])
+
+
 def test_boat_noise_scales_and_checks_the_row_count():
     noise = BoatNoise(2)
     noise.seed(np.arange(2), [1, 2])

@@ -114,7 +114,11 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "train": ("learning.train_cli", "TrainArgs", "train a policy (rl-* by TRPO, il-* by GAIL)"),
     "evaluate": ("learning.evaluate_cli", "EvaluateArgs", "evaluate a trained checkpoint"),
     "sitl": ("usvsim.sitl", "SitlArgs", "the usvsim plant as a MAVLink (Rover boat) vehicle"),
-    "sitl-physics": ("usvsim.sitl_physics", "SitlPhysicsArgs", "physics backend for ArduPilot SITL"),
+    "sitl-physics": (
+        "usvsim.sitl_physics",
+        "SitlPhysicsArgs",
+        "physics backend for ArduPilot SITL",
+    ),
     "bridge": ("usvsim.bridge", "BridgeArgs", "a helmsman steers an ArduPilot boat over MAVLink"),
 }
 _LOCAL_RUNNERS: dict[str, Callable[[Any], int]] = {"demo": run_demo, "perf": run_perf}

@@ -6,6 +6,11 @@ and over sub-steps, keeping each boat's state in registers/cache between sub-ste
 library is compiled on first use with the system C compiler and cached by the hash of its source.
 Measured on 2 cores (``usvsim perf``): see the README.
 
+A per-step input (e.g. sensor noise) can be passed as :class:`GatheredSteps`, a pool of numbers
+per boat and a small layout table: the driver builds each step's input itself, so no
+(N, steps, inputs) array is built in Python. The generated code's ``fmod``, ``fmax`` and ``fmin``
+calls go to exact stand-ins (same bits as the C library, fewer cycles; see ``_EXACT_LIBM``).
+
 Where no C compiler is found the fallback evaluates ``Function.map(N, "thread", 2)`` in CasADi's
 virtual machine: identical numbers, roughly 20× slower.
 """
@@ -15,10 +20,12 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
@@ -26,10 +33,21 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BatchStepper", "CompileError", "cache_dir"]
+__all__ = ["BatchStepper", "CompileError", "GatheredSteps", "cache_dir"]
 
 Backend = Literal["auto", "compiled", "casadi"]
-_CFLAGS = ["-O3", "-march=native", "-fPIC", "-shared", "-fopenmp", "-fno-fast-math"]
+# -fno-plt and -Bsymbolic: calls between the generated functions go straight to them, not
+# through the PLT; they change how functions are called, never what they compute
+_CFLAGS = [
+    "-O3",
+    "-march=native",
+    "-fPIC",
+    "-shared",
+    "-fopenmp",
+    "-fno-fast-math",
+    "-fno-plt",
+    "-Wl,-Bsymbolic",
+]
 
 
 class CompileError(RuntimeError):
@@ -42,26 +60,63 @@ def cache_dir() -> Path:
     return Path(root) if root else Path.home() / ".cache" / "usvsim"
 
 
+# Exact stand-ins for three C library functions the generated code calls. Each returns the
+# library's (glibc's) bits for every input: an fmod result is always exactly representable, so
+# x - n·y with the right integer n, computed by one FMA, is it (n from the rounded quotient,
+# corrected by one where the quotient rounded across an integer; infinities, NaN, y = 0 and huge
+# quotients go to the library); fmax/fmin return the non-NaN argument and x when x == y (so
+# ±0 as glibc). usv_fmod is never inlined and fmax/fmin are called only from CasADi's
+# out-of-line helpers, so the generated arithmetic (and its FMA contraction) compiles exactly as
+# before: only the calls get cheaper.
+_EXACT_LIBM = r"""
+#include <math.h>
+__attribute__((noinline)) static double usv_fmod(double x, double y) {
+  if (!isfinite(x) || !isfinite(y) || y == 0.0 || fabs(x / y) >= 9007199254740992.0)
+    return fmod(x, y);
+  double n = trunc(x / y);
+  double r = fma(-n, y, x);
+  double away = (x < 0.0) == (y < 0.0) ? 1.0 : -1.0;  /* sign of the quotient */
+  if (r != 0.0 && (r < 0.0) != (x < 0.0)) { n -= away; r = fma(-n, y, x); }
+  else if (fabs(r) >= fabs(y)) { n += away; r = fma(-n, y, x); }
+  return r == 0.0 ? copysign(0.0, x) : r;
+}
+static inline double usv_fmax(double x, double y) {
+  return isnan(x) ? y : (isnan(y) ? x : (x >= y ? x : y));
+}
+static inline double usv_fmin(double x, double y) {
+  return isnan(x) ? y : (isnan(y) ? x : (x <= y ? x : y));
+}
+"""
+
 _DRIVER = r"""
 #include <string.h>
 #define NS {ns}
-#define NA {na}
+#define NPS {nps}
+/* per-step input (k, j) of boat i: pool[i, index[k, j]] * factor[k, j], or factor[k, j] where
+   index[k, j] < 0 (see GatheredSteps) */
 void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
-               const double* per_boat, int n_per_boat, const double* per_step, int n_per_step,
-               double* traj) {{
+               const double* per_boat, int n_per_boat, const double* pool, int n_pool,
+               const long long* index, const double* factor, double* traj) {{
   #pragma omp parallel for schedule(static) if(n >= 64)
   for (int i = 0; i < n; ++i) {{
-    double s[NS], s_next[NS];
+    double s[NS], s_next[NS], e[NPS > 0 ? NPS : 1];
     const casadi_real* arg[{sz_arg}];
     casadi_real* res[{sz_res}];
     casadi_int iw[{sz_iw} + 1];
     casadi_real w[{sz_w} + 1];
+    const double* row = pool ? pool + (long)i * n_pool : 0;
     memcpy(s, s0 + (long)i * NS, sizeof(s));
     for (int k = 0; k < n_sub; ++k) {{
       arg[0] = s;
       arg[1] = per_boat + (long)i * n_per_boat;
       arg[2] = shared_in;
-      if (n_per_step > 0) arg[3] = per_step + ((long)i * n_sub + k) * n_per_step;
+      if (NPS > 0) {{
+        for (int j = 0; j < NPS; ++j) {{
+          long long c = index[k * NPS + j];
+          e[j] = c >= 0 ? row[c] * factor[k * NPS + j] : factor[k * NPS + j];
+        }}
+        arg[3] = e;
+      }}
       res[0] = s_next;
       {fname}(arg, res, iw, w, 0);
       memcpy(s, s_next, sizeof(s));
@@ -91,16 +146,18 @@ def _generate_source(fn: ca.Function) -> str:
         finally:
             os.chdir(cwd)
         body = (Path(tmp) / name).read_text()
+    for libm in ("fmod", "fmax", "fmin"):  # whole-word calls only, not casadi_fmax( etc.
+        body = re.sub(rf"\b{libm}\(", f"usv_{libm}(", body)
     driver = _DRIVER.format(
         ns=fn.size1_in(0),
-        na=fn.size1_in(1),
+        nps=fn.size1_in(3) if fn.n_in() == 4 else 0,
         sz_arg=fn.sz_arg(),
         sz_res=fn.sz_res(),
         sz_iw=fn.sz_iw(),
         sz_w=fn.sz_w(),
         fname=fn.name(),
     )
-    return body + driver
+    return _EXACT_LIBM + body + driver
 
 
 def _compile(source: str) -> Path:
@@ -129,6 +186,27 @@ def _compile(source: str) -> Path:
     return lib
 
 
+@dataclass(frozen=True)
+class GatheredSteps:
+    """Per-step inputs (N, n_sub, nps) given as a pool of numbers per boat and a layout.
+
+    Entry (i, k, j) is ``pool[i, index[k, j]] * factor[k, j]`` where ``index[k, j] >= 0`` and the
+    constant ``factor[k, j]`` where ``index[k, j] < 0``. Shapes: ``pool`` (N, M) float64,
+    ``index`` (n_sub, nps) int64 in [-1, M), ``factor`` (n_sub, nps) float64. The compiled path
+    builds each entry when the step needs it, without an (N, n_sub, nps) array in memory;
+    :meth:`dense` builds that array in NumPy (the same products).
+    """
+
+    pool: NDArray[np.float64]
+    index: NDArray[np.int64]
+    factor: NDArray[np.float64]
+
+    def dense(self) -> NDArray[np.float64]:
+        """The per-step inputs as an (N, n_sub, nps) array."""
+        gathered = self.pool[:, np.maximum(self.index, 0)] * self.factor
+        return np.where(self.index >= 0, gathered, self.factor)
+
+
 class BatchStepper:
     """Evaluate ``fn(s, per_boat, shared[, per_step]) -> s_next`` for N boats, ``n_sub`` steps.
 
@@ -154,17 +232,13 @@ class BatchStepper:
                 if backend == "compiled":
                     raise
         if self._lib is not None:
-            c_double_p = ctypes.POINTER(ctypes.c_double)
+            ptr, int_ = ctypes.c_void_p, ctypes.c_int
             self._lib.usv_batch.argtypes = [
-                ctypes.c_int,
-                ctypes.c_int,
-                c_double_p,
-                c_double_p,
-                c_double_p,
-                ctypes.c_int,
-                c_double_p,
-                ctypes.c_int,
-                c_double_p,
+                *(int_, int_),  # n, n_sub
+                *(ptr, ptr),  # s0, shared
+                *(ptr, int_),  # per_boat, its width
+                *(ptr, int_, ptr, ptr),  # pool, its width, index, factor (GatheredSteps)
+                ptr,  # trajectory out
             ]
             self._lib.usv_batch.restype = None
         self.backend: str = "compiled" if self._lib is not None else "casadi"
@@ -175,10 +249,10 @@ class BatchStepper:
         per_boat: NDArray[np.float64],
         shared: NDArray[np.float64],
         n_sub: int,
-        per_step: NDArray[np.float64] | None = None,
+        per_step: NDArray[np.float64] | GatheredSteps | None = None,
     ) -> NDArray[np.float64]:
         """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na), shared (ng,) and,
-        for a four-input ``fn``, per-step inputs (N, n_sub, nps)."""
+        for a four-input ``fn``, per-step inputs (N, n_sub, nps) or their :class:`GatheredSteps`."""
         s0 = np.ascontiguousarray(s0, dtype=np.float64)
         per_boat = np.ascontiguousarray(per_boat, dtype=np.float64)
         shared = np.ascontiguousarray(shared, dtype=np.float64)
@@ -194,38 +268,63 @@ class BatchStepper:
             raise ValueError(f"shared input must have shape ({self.ng},), got {shared.shape}")
         if not isinstance(n_sub, (int, np.integer)) or n_sub < 1:
             raise ValueError(f"n_sub must be a positive integer, got {n_sub!r}")
-        if self.nps:
-            if per_step is None:
-                raise ValueError("this step function needs a per-step input")
-            per_step = np.ascontiguousarray(per_step, dtype=np.float64)
-            if per_step.shape != (n, n_sub, self.nps):
-                raise ValueError(
-                    f"per-step input must have shape ({n}, {n_sub}, {self.nps}), "
-                    f"got {per_step.shape}"
-                )
-        elif per_step is not None:
-            raise ValueError("this step function takes no per-step input")
+        steps = self._checked_steps(per_step, n, int(n_sub))
         traj = np.empty((n, n_sub, self.ns))
         if self._lib is not None:
-            ptr = ctypes.POINTER(ctypes.c_double)
             self._lib.usv_batch(
                 n,
                 n_sub,
-                s0.ctypes.data_as(ptr),
-                shared.ctypes.data_as(ptr),
-                per_boat.ctypes.data_as(ptr),
+                s0.ctypes.data,
+                shared.ctypes.data,
+                per_boat.ctypes.data,
                 self.na,
-                None if per_step is None else per_step.ctypes.data_as(ptr),
-                self.nps,
-                traj.ctypes.data_as(ptr),
+                None if steps is None else steps.pool.ctypes.data,
+                0 if steps is None else steps.pool.shape[1],
+                None if steps is None else steps.index.ctypes.data,
+                None if steps is None else steps.factor.ctypes.data,
+                traj.ctypes.data,
             )
             return traj
         fmap = self._maps.get(n)
         if fmap is None:
             fmap = self._maps[n] = self.fn.map(n, "thread", 2)
+        dense = None if steps is None else steps.dense()
         s = s0.T
         for k in range(n_sub):
-            extra = () if per_step is None else (per_step[:, k, :].T,)
+            extra = () if dense is None else (dense[:, k, :].T,)
             s = np.asarray(fmap(s, per_boat.T, shared, *extra))
             traj[:, k, :] = s.T
         return traj
+
+    def _checked_steps(
+        self, per_step: NDArray[np.float64] | GatheredSteps | None, n: int, n_sub: int
+    ) -> GatheredSteps | None:
+        """``per_step`` as contiguous :class:`GatheredSteps` of checked shapes (the C code
+        trusts them); an (N, n_sub, nps) array becomes a pool read in order."""
+        if not self.nps:
+            if per_step is not None:
+                raise ValueError("this step function takes no per-step input")
+            return None
+        if per_step is None:
+            raise ValueError("this step function needs a per-step input")
+        if not isinstance(per_step, GatheredSteps):
+            dense = np.ascontiguousarray(per_step, dtype=np.float64)
+            if dense.shape != (n, n_sub, self.nps):
+                raise ValueError(
+                    f"per-step input must have shape ({n}, {n_sub}, {self.nps}), got {dense.shape}"
+                )
+            in_order = np.arange(n_sub * self.nps, dtype=np.int64).reshape(n_sub, self.nps)
+            return GatheredSteps(dense.reshape(n, -1), in_order, np.ones((n_sub, self.nps)))
+        pool = np.ascontiguousarray(per_step.pool, dtype=np.float64)
+        index = np.ascontiguousarray(per_step.index, dtype=np.int64)
+        factor = np.ascontiguousarray(per_step.factor, dtype=np.float64)
+        if pool.ndim != 2 or pool.shape[0] != n:
+            raise ValueError(f"per-step pool must have shape ({n}, M), got {pool.shape}")
+        if index.shape != (n_sub, self.nps) or factor.shape != (n_sub, self.nps):
+            raise ValueError(
+                f"per-step index and factor must have shape ({n_sub}, {self.nps}), got "
+                f"{index.shape} and {factor.shape}"
+            )
+        if index.max(initial=-1) >= pool.shape[1]:
+            raise ValueError(f"per-step index reaches past the pool's {pool.shape[1]} columns")
+        return GatheredSteps(pool, index, factor)

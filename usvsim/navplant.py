@@ -8,7 +8,9 @@ order, so the fused path reproduces ``Plant.step`` followed by ``Navigator.run``
 (tested to 1e-9), at a fraction of the cost: no Python work per plant step.
 
 State per boat (28): plant ``x`` (8), autopilot ``c`` (5), filter ``n`` (15,
-:data:`usvsim.navigation.NAV_STATE_FIELDS`).
+:data:`usvsim.navigation.NAV_STATE_FIELDS`). :meth:`NavigatedPlant.run` steps this packed state
+directly (what the batch keeps between decisions); :meth:`NavigatedPlant.step` takes and updates a
+:class:`usvsim.plant.PlantState` and a :class:`usvsim.navigation.Navigator` instead.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-from usvsim.fastpath import BatchStepper
+from usvsim.fastpath import BatchStepper, GatheredSteps
 from usvsim.model import NX
 from usvsim.navigation import (
     NAV_NS,
@@ -69,7 +71,7 @@ class NavigatedPlant:
                 period_steps(nav_config.sensors.compass_rate_hz, nav_config.dt_s),
             )
         )
-        self._layouts: dict[tuple[int, int], tuple[NDArray[np.intp], FloatArray]] = {}
+        self._layouts: dict[tuple[int, int], tuple[NDArray[np.int64], FloatArray, int]] = {}
         self.step_function = ca.Function(
             "usv_nav_step", [s, w, g, e], [ca.vertcat(s_plant, n_next)]
         )
@@ -81,8 +83,16 @@ class NavigatedPlant:
     def backend(self) -> str:
         return self._stepper.backend
 
-    def _layout(self, first_step_index: int, n_steps: int) -> tuple[NDArray[np.intp], FloatArray]:
-        """Cached (column index (T, 6), flags-and-validity (T, 8)) of :func:`nav_noise_block`."""
+    def _layout(
+        self, first_step_index: int, n_steps: int
+    ) -> tuple[NDArray[np.int64], FloatArray, int]:
+        """Cached layout of :func:`nav_noise_block` as :class:`GatheredSteps` index and factor
+        (T, 8), and the number of normals per boat.
+
+        Entry (j, k < 6) of the block is ``normals[:, index[j, k]] * factor[j, k]`` (factor 0
+        where the sensor is silent, 1 where it fires); columns 6 and 7 are the constant firing
+        flags (index -1, factor the flag).
+        """
         key = (first_step_index % self._cycle, n_steps)
         layout = self._layouts.get(key)
         if layout is None:
@@ -91,15 +101,51 @@ class NavigatedPlant:
             )
             probe = np.arange(1.0, m + 1.0)[None, :]  # column c holds c + 1
             block = nav_noise_block(self.nav_config, first_step_index, n_steps, probe)[0]
-            cols = np.maximum(block[:, :6].astype(np.intp) - 1, 0)
-            scale = np.concatenate([block[:, :6] > 0, block[:, 6:]], axis=1).astype(float)
-            layout = self._layouts[key] = (cols, scale)
+            index = np.full((n_steps, 8), -1, dtype=np.int64)
+            index[:, :6] = np.maximum(block[:, :6].astype(np.int64) - 1, 0)
+            factor = np.concatenate([block[:, :6] > 0, block[:, 6:]], axis=1).astype(float)
+            layout = self._layouts[key] = (index, factor, m)
         return layout
 
     def draws_needed(self, first_step_index: int, n_steps: int) -> int:
         """Standard normals each boat consumes over plant steps first..first + n_steps - 1."""
-        _, scale = self._layout(first_step_index, n_steps)
-        return int(np.count_nonzero(scale[:, :6]))
+        return self._layout(first_step_index, n_steps)[2]
+
+    def noise_steps(
+        self, first_step_index: int, n_steps: int, normals: FloatArray
+    ) -> GatheredSteps:
+        """The per-step sensor noise and flags (N, n_steps, 8) of :func:`nav_noise_block` from
+        ``normals`` (N, :meth:`draws_needed`), as a pool and the cached layout."""
+        index, factor, m = self._layout(first_step_index, n_steps)
+        if normals.ndim != 2 or normals.shape[1] != m:
+            raise ValueError(
+                f"expected {m} normals per boat for these steps, got array of shape {normals.shape}"
+            )
+        return GatheredSteps(normals, index, factor)
+
+    def run(
+        self,
+        s0: FloatArray,
+        psi_ref_rad: FloatArray,
+        speed_ref_mps: float,
+        n_steps: int,
+        first_step_index: int,
+        normals: FloatArray,
+    ) -> FloatArray:
+        """Advance packed states ``s0`` (N, 28) = [x, c, n] ``n_steps`` plant steps.
+
+        ``psi_ref_rad`` (N,) rad and ``speed_ref_mps`` (m/s, all boats) are held over the steps;
+        ``normals`` (N, :meth:`draws_needed`) are each boat's next standard normals, in
+        :meth:`Navigator.step` order. Returns the packed states after each step, (N, T, 28).
+        """
+        psi_ref = np.asarray(psi_ref_rad, dtype=float)
+        if not (np.all(np.isfinite(psi_ref)) and np.isfinite(speed_ref_mps)):
+            raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
+        w = np.empty((psi_ref.shape[0], 4))
+        w[:, 0], w[:, 1] = psi_ref, speed_ref_mps
+        w[:, 2], w[:, 3] = self.plant.current
+        noise = self.noise_steps(first_step_index, n_steps, normals)
+        return self._stepper.run(s0, w, self.plant.gains, n_steps, noise)
 
     def step(
         self,
@@ -126,16 +172,7 @@ class NavigatedPlant:
         w[:, 0], w[:, 1] = psi_ref, speed
         w[:, 2], w[:, 3] = self.plant.current
         s0 = np.concatenate([state.x, state.c, export_nav_state(navigator)], axis=1)
-        cols, scale = self._layout(first_step_index, n_steps)
-        if normals.shape != (n, self.draws_needed(first_step_index, n_steps)):
-            raise ValueError(
-                f"expected {self.draws_needed(first_step_index, n_steps)} normals per boat "
-                f"for these steps, got array of shape {normals.shape}"
-            )
-        noise = np.zeros((n, n_steps, 8))
-        noise[:, :, :6] = normals[:, cols]
-        noise *= scale  # zero where a sensor is silent; flags in the last two columns
-        noise[:, :, 6:] = scale[:, 6:]
+        noise = self.noise_steps(first_step_index, n_steps, normals)
         traj = self._stepper.run(s0, w, self.plant.gains, n_steps, noise)
         last = traj[:, -1]
         import_nav_state(navigator, last[:, NS:])

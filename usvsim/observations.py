@@ -132,9 +132,11 @@ def build_observation(
     """
     _check_kind(kind)
     if kind == "positional":
-        r_p, b_p = relative_polar(pos_ne, psi_rad, pole_ne)
-        r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
-        return np.stack([r_p, b_p, r_g, b_g], axis=-1).astype(np.float32)
+        # pole and goal in one pass: r, b (N, 2) → rows [r_pole, φ_pole, r_goal, φ_goal]
+        r, b = relative_polar(pos_ne, psi_rad, np.stack([pole_ne, goal_ne], axis=1))
+        obs = np.empty((r.shape[0], 4), dtype=np.float32)
+        obs[:, 0::2], obs[:, 1::2] = r, b
+        return obs
     r_p, b_p = relative_polar(pos_ne, psi_rad, pole_ne)
     image = render_radar(r_p, b_p, pole_radius_m, radar, noise)
     if kind == "radar":

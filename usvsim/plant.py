@@ -139,6 +139,7 @@ class Plant:
         self._surge_drag = ca.Function(
             "drag", [u], [damping_forces(self.vessel, ca.vertcat(u, 0, 0))[0]]
         )
+        self._trim_a1: dict[float, float] = {}  # surge trim per speed (m/s), see trim_actuator
 
     @property
     def backend(self) -> str:
@@ -150,9 +151,23 @@ class Plant:
         return self.design.config.cruise_speed_mps
 
     def trim_actuator(self, speed_mps: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Actuator values (N, 2) that hold surge speed ``speed_mps`` on a straight course."""
-        # a function of one scalar called with a (1, N) row evaluates element-wise
-        a1 = np.asarray(self._surge_drag(np.asarray(speed_mps, dtype=float)[None, :])).ravel()
+        """Actuator values (N, 2) that hold surge speed ``speed_mps`` (N,) on a straight course.
+
+        Batches reset boats at one speed over and over: a speed seen before is looked up instead
+        of evaluating the drag again (an element-wise function: the same numbers either way).
+        """
+        speed = np.asarray(speed_mps, dtype=float)
+        a1: NDArray[np.float64]
+        first = float(speed[0]) if speed.size else 0.0
+        if first in self._trim_a1 and np.all(speed == first):
+            a1 = np.full(speed.shape, self._trim_a1[first])
+        elif first != 0.0 and np.all(speed == first) and len(self._trim_a1) < 16:
+            # ±0 excluded: a dict cannot tell them apart
+            self._trim_a1[first] = float(np.asarray(self._surge_drag(first)).item())
+            a1 = np.full(speed.shape, self._trim_a1[first])
+        else:
+            # a function of one scalar called with a (1, N) row evaluates element-wise
+            a1 = np.asarray(self._surge_drag(speed[None, :])).ravel()
         act = self.vessel.actuation
         return np.stack([np.clip(a1, act.a1_min, act.a1_max), np.zeros_like(a1)], axis=1)
 

@@ -160,15 +160,24 @@ def episode_geometry(scenario: Scenario, specs: Sequence[EpisodeSpec]) -> Episod
         If a spec names a pole that does not exist or has a non-finite or non-positive distance.
     """
     n_poles = len(scenario.poles_ne)
-    for s in specs:
+    index = [s.pole_index for s in specs]
+    d, beta, offset = (
+        np.array(
+            [(s.start_distance_m, s.start_bearing_rad, s.heading_offset_rad) for s in specs],
+            dtype=float,
+        )
+        .reshape(-1, 3)
+        .T
+    )
+    pole_index = np.asarray(index, dtype=np.intp)
+    bad_pole = (pole_index < 0) | (pole_index >= n_poles)
+    bad_distance = ~(np.isfinite(d) & (d > 0))
+    if bad_pole.any() or bad_distance.any():  # report the first bad spec, as a loop would
+        s = specs[int(np.argmax(bad_pole | bad_distance))]
         if not 0 <= s.pole_index < n_poles:
             raise ValueError(f"pole_index {s.pole_index} out of range for {n_poles} poles")
-        if not (math.isfinite(s.start_distance_m) and s.start_distance_m > 0):
-            raise ValueError(f"start_distance_m must be finite and > 0, got {s.start_distance_m}")
-    poles = np.asarray(scenario.poles_ne, dtype=float)[[s.pole_index for s in specs]]
-    d = np.array([s.start_distance_m for s in specs], dtype=float)
-    beta = np.array([s.start_bearing_rad for s in specs], dtype=float)
-    offset = np.array([s.heading_offset_rad for s in specs], dtype=float)
+        raise ValueError(f"start_distance_m must be finite and > 0, got {s.start_distance_m}")
+    poles = np.asarray(scenario.poles_ne, dtype=float)[pole_index]
     out = np.stack([np.cos(beta), np.sin(beta)], axis=-1)  # unit vector pole → start
     start = poles + d[:, None] * out
     psi0 = ssa(beta + math.pi + offset)
@@ -207,13 +216,15 @@ class BoatNoise:
         self._idx = self._all
         self._block: FloatArray | None = None  # gathered numbers of the served boats
         self._pos = 0  # numbers of the block already served
+        self._windows: dict[int, FloatArray] = {}  # m -> view (N, width - m + 1, m) of _buf
 
     def seed(self, boats: NDArray[np.intp], seeds: Sequence[int]) -> None:
         """Restart the streams of ``boats`` from ``seeds`` (one per boat)."""
         self._commit()
-        for i, s in zip(boats, seeds, strict=True):
-            self._gens[int(i)] = np.random.default_rng(int(s))
-            self._cursor[int(i)] = self._buf.shape[1]
+        boats = np.asarray(boats, dtype=np.intp)
+        for i, s in zip(boats.tolist(), seeds, strict=True):
+            self._gens[i] = np.random.default_rng(int(s))
+        self._cursor[boats] = self._buf.shape[1]
 
     def for_boats(self, boats: NDArray[np.intp] | None) -> BoatNoise:
         """Serve the following draws to ``boats`` only (``None``: all boats); returns self."""
@@ -231,23 +242,36 @@ class BoatNoise:
         """The next ``m`` unread numbers of every served boat, (n, m), without reading them."""
         if m > self._buf.shape[1]:
             old, self._buf = self._buf, np.zeros((self._buf.shape[0], 2 * m))
+            self._windows.clear()
             self._refill(self._all[[g is not None for g in self._gens]], old)
-        idx = self._idx
-        self._refill(idx[self._cursor[idx] + m > self._buf.shape[1]], self._buf)
+        idx, width = self._idx, self._buf.shape[1]
         cursor = self._cursor[idx]
-        return self._buf[idx[:, None], cursor[:, None] + np.arange(m)]
+        if np.any(cursor + m > width):
+            self._refill(idx[cursor + m > width], self._buf)
+            cursor = self._cursor[idx]
+        windows = self._windows.get(m)
+        if windows is None:  # windows[i, c] is the view buf[i, c : c + m]
+            if len(self._windows) >= 16:  # draw sizes are few in practice: bound the cache
+                self._windows.clear()
+            step_row, step_col = self._buf.strides
+            windows = self._windows[m] = np.lib.stride_tricks.as_strided(
+                self._buf,
+                shape=(self._buf.shape[0], width - m + 1, m),
+                strides=(step_row, step_col, step_col),
+                writeable=False,
+            )
+        return windows[idx, cursor]
 
     def _refill(self, boats: NDArray[np.intp], old: FloatArray) -> None:
         """Move each boat's unread tail (in ``old``) to the front, the rest from its generator."""
-        width = self._buf.shape[1]
-        for i in boats:
-            gen = self._gens[int(i)]
+        for i, c in zip(boats.tolist(), self._cursor[boats].tolist(), strict=True):
+            gen = self._gens[i]
             if gen is None:
-                raise RuntimeError(f"BoatNoise: boat {int(i)} has no seeded stream")
-            tail = old[i, int(self._cursor[i]) :].copy()
-            self._buf[i, : tail.size] = tail
-            self._buf[i, tail.size :] = gen.standard_normal(width - tail.size)
-            self._cursor[i] = 0
+                raise RuntimeError(f"BoatNoise: boat {i} has no seeded stream")
+            n_tail = old.shape[1] - c
+            self._buf[i, :n_tail] = old[i, c:]  # overlapping rows are copied safely by NumPy
+            gen.standard_normal(out=self._buf[i, n_tail:])
+        self._cursor[boats] = 0
 
     def standard_normal(self, size: int | tuple[int, ...]) -> FloatArray:
         """Standard normals of shape ``size``; ``size[0]`` must be the number of served boats."""

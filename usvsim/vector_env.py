@@ -51,10 +51,11 @@ from numpy.typing import NDArray
 
 from usvsim.angles import ssa
 from usvsim.autopilot import AutopilotConfig
-from usvsim.navigation import NavConfig, Navigator
+from usvsim.model import NX
+from usvsim.navigation import NavConfig, Navigator, export_nav_state
 from usvsim.navplant import NavigatedPlant
 from usvsim.observations import build_observation, observation_space
-from usvsim.plant import Plant, PlantState
+from usvsim.plant import NS, Plant, PlantState
 from usvsim.radar import RadarConfig
 from usvsim.reward import GaussianReward, RewardFunction, RewardTerms
 from usvsim.scenario import BoatNoise, EpisodeSpec, Scenario, draw_episode, episode_geometry
@@ -127,6 +128,15 @@ def heading_change_rad(kind: str, actions: Any, n_boats: int, max_change_rad: fl
         centre = (N_CATEGORIES - 1) // 2
         return (a.astype(np.float64) - centre) * (max_change_rad / centre)
     raise ValueError(f"action must be one of {ACTION_KINDS}, got {kind!r}")
+
+
+def _within(dx: FloatArray, dy: FloatArray, radius_m: float) -> NDArray[np.bool_]:
+    """``np.hypot(dx, dy) <= radius_m``, exactly, with hypot evaluated only inside the square
+    ``|dx|, |dy| <= radius_m``: hypot (rounded faithfully) is never below ``max(|dx|, |dy|)``."""
+    inside = (np.abs(dx) <= radius_m) & (np.abs(dy) <= radius_m)
+    if inside.any():
+        inside[inside] = np.hypot(dx[inside], dy[inside]) <= radius_m
+    return inside
 
 
 @dataclass(frozen=True)
@@ -236,11 +246,16 @@ class PoleAvoidanceBatch:
         self.plant = plant or Plant(vessel, autopilot, dt_s=self.scenario.dt_s, backend=backend)
         if abs(self.plant.dt_s - self.scenario.dt_s) > 1e-12:
             raise ValueError(f"Plant.dt_s {self.plant.dt_s} != Scenario.dt_s {self.scenario.dt_s}")
-        self.nav = Navigator(nav, n)
+        # the filters' reference implementation, used to start them (reset); while stepping,
+        # their states live packed in self._s
+        self._nav = Navigator(nav, n)
         self._navplant = NavigatedPlant(self.plant, nav)  # plant + filter, compiled together
         self._noise = BoatNoise(n)
         self._collision_m = self.scenario.pole_radius_m + self.plant.vessel.half_beam_m
-        self._state: PlantState = self.plant.initial_state(np.zeros((n, 3)))
+        # packed per-boat state [x (8), c (5), filter n (15)], the fused step's layout (N, 28);
+        # the filter part is meaningful once a boat is reset
+        start = self.plant.initial_state(np.zeros((n, 3)))
+        self._s = np.concatenate([start.x, start.c, export_nav_state(self._nav)], axis=1)
         self.pole_ne = np.zeros((n, 2))
         self.goal_ne = np.zeros((n, 2))
         self._est_pos = np.zeros((n, 2))
@@ -254,7 +269,7 @@ class PoleAvoidanceBatch:
     @property
     def state(self) -> PlantState:
         """True plant state of all boats (for evaluation and plots, never for observations)."""
-        return self._state
+        return PlantState(x=self._s[:, :NX].copy(), c=self._s[:, NX:NS].copy())
 
     @property
     def estimate(self) -> tuple[FloatArray, FloatArray]:
@@ -270,16 +285,16 @@ class PoleAvoidanceBatch:
         if len(specs) != idx.size:
             raise ValueError(f"need one EpisodeSpec per reset boat ({idx.size}), got {len(specs)}")
         geo = episode_geometry(self.scenario, specs)
-        rows = self.plant.initial_state(geo.start_eta, np.full(idx.size, self.scenario.speed_mps))
-        x, c = self._state.x.copy(), self._state.c.copy()
-        x[idx], c[idx] = rows.x, rows.c
-        self._state = PlantState(x=x, c=c)
+        rows = self.plant.initial_state(geo.start_eta, self.scenario.speed_mps)
+        self._s[idx, :NX], self._s[idx, NX:NS] = rows.x, rows.c
         self.pole_ne[idx], self.goal_ne[idx] = geo.pole_ne, geo.goal_ne
         self._noise.seed(idx, [s.noise_seed for s in specs])
         mask = np.zeros(self.n_boats, dtype=bool)
         mask[idx] = True
-        est = self.nav.reset(x[:, 0:3], x[:, 3:6], self._rng_view(idx), mask=mask)
+        x = self._s[:, :NX]
+        est = self._nav.reset(x[:, 0:3], x[:, 3:6], self._rng_view(idx), mask=mask)
         self._noise.for_boats(None)
+        self._s[idx, NS:] = export_nav_state(self._nav)[idx]  # the freshly started filters
         self._est_pos[idx], self._est_psi[idx] = est.pos_ne[idx], est.psi[idx]
         self._n_decisions[idx] = 0
         self._min_pole[idx] = [s.start_distance_m for s in specs]
@@ -326,28 +341,33 @@ class PoleAvoidanceBatch:
         normals = self._noise.for_boats(None).standard_normal(
             (self.n_boats, self._navplant.draws_needed(first, T))
         )
-        self._state, traj, nav_traj = self._navplant.step(
-            self._state, self.nav, psi_ref, sc.speed_mps, T, first, normals
-        )
+        packed = self._navplant.run(self._s, psi_ref, sc.speed_mps, T, first, normals)  # (N, T, 28)
+        self._s = packed[:, -1].copy()
         self._plant_step += T
-        self._est_pos = nav_traj[:, -1, 0:2].copy()
-        self._est_psi = nav_traj[:, -1, 8].copy()
+        self._est_pos = self._s[:, NS : NS + 2].copy()
+        self._est_psi = self._s[:, NS + 8].copy()
 
-        pos = traj[:, :, 0:2]
-        d_pole = np.hypot(*np.moveaxis(pos - self.pole_ne[:, None], -1, 0))  # (N, T)
-        d_goal = np.hypot(*np.moveaxis(pos - self.goal_ne[:, None], -1, 0))
-        hit, in_goal = d_pole < self._collision_m, d_goal <= sc.goal_radius_m
-        collision, reached = hit.any(axis=1), in_goal.any(axis=1)
+        traj = packed[:, :, :NS]
+        x_n, y_e = traj[:, :, 0], traj[:, :, 1]  # true position at every plant step (N, T)
+        d_pole = np.hypot(x_n - self.pole_ne[:, 0:1], y_e - self.pole_ne[:, 1:2])
+        hit = d_pole < self._collision_m
+        dx_goal, dy_goal = x_n - self.goal_ne[:, 0:1], y_e - self.goal_ne[:, 1:2]
+        in_goal = _within(dx_goal, dy_goal, sc.goal_radius_m)
+        collision, reached = np.any(hit, axis=1), np.any(in_goal, axis=1)
         terminated = reached | collision
         # a terminated episode ends at its first event step; the rest of the period is discarded
         end = np.where(terminated, np.argmax(hit | in_goal, axis=1), T - 1)
-        rows = np.arange(self.n_boats)
-        after_end = np.arange(T) > end[:, None]
-        self._min_pole = np.minimum(self._min_pole, np.where(after_end, np.inf, d_pole).min(axis=1))
-        t_first = (self._n_decisions * T + np.argmax(in_goal, axis=1) + 1) * sc.dt_s
-        self._t_goal = np.where(reached & np.isinf(self._t_goal), t_first, self._t_goal)
+        upto_end = d_pole
+        if terminated.any():
+            upto_end = np.where(np.arange(T) > end[:, None], np.inf, d_pole)
+        self._min_pole = np.minimum(self._min_pole, upto_end.min(axis=1))
+        if reached.any():
+            t_first = (self._n_decisions * T + np.argmax(in_goal, axis=1) + 1) * sc.dt_s
+            self._t_goal = np.where(reached & np.isinf(self._t_goal), t_first, self._t_goal)
         self._n_decisions += 1
-        d_pole_end, d_goal_end = d_pole[rows, end], d_goal[rows, end]
+        rows = np.arange(self.n_boats)
+        d_pole_end = d_pole[rows, end]
+        d_goal_end = np.hypot(dx_goal[rows, end], dy_goal[rows, end])
         out_of_area = d_pole_end > sc.area_radius_m
         time_limit = self._n_decisions >= sc.max_decisions
         terms = self.reward(d_pole_end, d_goal_end)
@@ -446,7 +466,8 @@ class PoleAvoidanceVectorEnv(VectorEnv):
         res = self.sim.step(actions)
         info: dict[str, Any] = {}
         everyone = np.ones(self.num_envs, dtype=bool)
-        for key, value in res.info_arrays().items():
+        arrays = res.info_arrays()
+        for key, value in arrays.items():
             info[key], info[f"_{key}"] = value, everyone
         obs = res.observation
         done = res.terminated | res.truncated
@@ -456,7 +477,7 @@ class PoleAvoidanceVectorEnv(VectorEnv):
             for i in idx:
                 final_obs[i] = _rows(obs, i)
             final_info: dict[str, Any] = {}
-            for key, value in res.info_arrays().items():
+            for key, value in arrays.items():
                 final_info[key], final_info[f"_{key}"] = value.copy(), done
             info.update(
                 final_obs=final_obs, _final_obs=done, final_info=final_info, _final_info=done
