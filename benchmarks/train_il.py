@@ -10,6 +10,7 @@ and ``train_il.json`` (everything, with each run's ``summary.json``) into ``--ou
     python benchmarks/train_il.py                       # all four setups (run as a script)
     python benchmarks/train_il.py --setups il-gaussian-positional --out /tmp/bench
     python benchmarks/train_il.py --iterations 20       # a short budget for every setup
+    python benchmarks/train_il.py --finished --ship     # ship the runs already in --out
 
 Reported per setup: wall-clock, environment steps and iterations to the FIRST validation with
 at least 14/15 successes and to the first 15/15 (validation time included; behavioural cloning
@@ -103,6 +104,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--iterations", type=int, default=0, help="budget; 0: setup default")
     parser.add_argument("--ship", action="store_true", help="copy the models to usvsim/models")
+    parser.add_argument(
+        "--finished",
+        action="store_true",
+        help="do not train: evaluate (and --ship) the finished runs in --out (their summary.json)",
+    )
     args = parser.parse_args(argv)
     out = Path(args.out)
     results = []
@@ -118,7 +124,10 @@ def main(argv: list[str] | None = None) -> int:
             time_budget_s=args.time_budget_s,
             threads=args.threads,
         )
-        summary = train_one(train_args)
+        if args.finished:
+            summary = json.loads((run_dir / "summary.json").read_text())
+        else:
+            summary = train_one(train_args)
         best = run_dir / "best.pt"
         if args.ship:
             radar = IL_SETUPS[name].observation != "positional"
