@@ -199,7 +199,7 @@ def replace_readme_section(
     start, end = f"<!-- {marker}: written by benchmarks/{script} --ship -->", f"<!-- /{marker} -->"
     i, j = text.index(start) + len(start), text.index(end)
     commands = "\n".join(f"- `{r['setup']}`: `{r['command']}`" for r in results)
-    body = f"\n{table}\nCommands (seed 0):\n\n{commands}\n"
+    body = f"\n{table}\nCommands (`--seed` when not 0):\n\n{commands}\n"
     atomic_write_text(path, text[:i] + body + text[j:])
 
 
