@@ -43,7 +43,8 @@ from train_rl import (  # this folder
 from learning.checkpoint import load_checkpoint, load_helmsman, save_checkpoint, slim_copy
 from learning.il_setups import IL_SETUPS
 from learning.likeness import helmsman_likeness
-from learning.train_cli import VALIDATION_EPISODES, TrainArgs, run
+from learning.run_log import VALIDATION_EPISODES
+from learning.train_cli import TrainArgs, run
 from usvsim.fileio import atomic_write_text
 
 

@@ -64,16 +64,9 @@ from learning.demonstrations import DEMOS_DIR, load_recordings, quality_check
 from learning.gail import GAILConfig, GAILStats, GAILTrainer, train_gail
 from learning.likeness import ExpertReference, expert_reference, likeness
 from learning.preprocess import ExpertData, expert_data
+from learning.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.setups import trpo_config_of
-from learning.train_cli import (
-    Milestones,
-    RunLog,
-    advance,
-    progress_bar,
-    read_log_rows,
-    validation_record,
-    validation_summary,
-)
+from learning.train_cli import validation_record, validation_summary
 from learning.trpo import TRPOAgent, TRPOConfig
 from usvsim.evaluate import evaluate, validation_episodes
 from usvsim.fileio import atomic_open, atomic_write_text
