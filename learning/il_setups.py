@@ -143,6 +143,17 @@ class ILSetup:
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 
+# hyperparameters shared by the two radar setups
+_RADAR: dict[str, Any] = {
+    "max_kl": 0.01,
+    "policy_warmup": 10,  # measured without: cloned 15/15 fell to 2/15 in 10 iterations
+    "freeze_input_stats": True,
+    "balanced_fusion": True,  # learning.networks: goal (and D's action) weigh as the image
+    "iterations": 150,
+    "num_envs": 8,
+    "steps_per_env": 128,
+}
+
 IL_SETUPS: dict[str, ILSetup] = {
     s.name: s
     for s in (
@@ -166,13 +177,7 @@ IL_SETUPS: dict[str, ILSetup] = {
             "il-gaussian-radar",
             "radar+goal",
             "gaussian",
-            max_kl=0.01,
-            policy_warmup=10,  # measured without: cloned 15/15 fell to 2/15 in 10 iterations
-            freeze_input_stats=True,
-            balanced_fusion=True,  # learning.networks: goal (and D's action) weigh as the image
-            iterations=150,
-            num_envs=8,
-            steps_per_env=128,
+            **_RADAR,
             study_success=0.533,
             study_iterations=3700,
         ),
@@ -180,13 +185,7 @@ IL_SETUPS: dict[str, ILSetup] = {
             "il-categorical-radar",
             "radar+goal",
             "categorical",
-            max_kl=0.01,
-            policy_warmup=10,  # measured without: cloned 15/15 fell to 2/15 in 10 iterations
-            freeze_input_stats=True,
-            balanced_fusion=True,  # learning.networks: goal (and D's action) weigh as the image
-            iterations=150,
-            num_envs=8,
-            steps_per_env=128,
+            **_RADAR,
             # its path to the expert swings by ±1.5 m between checks (seed 0, every 10: 15/15
             # at 7.4 m best): more checks give best.pt more candidates
             validate_every=5,
