@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.los import LOSHelmsman, heading_change_to_action
-from usvsim.angles import ssa
+from usvsim.common.angles import ssa
 
 __all__ = ["AvoidHelmsman", "CollisionCone", "cone_heading_change"]
 

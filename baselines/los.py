@@ -2,7 +2,7 @@
 
 What the boat knows
 -------------------
-A helmsman sees only its observation (:mod:`usvsim.observations`), here the positional one,
+A helmsman sees only its observation (:mod:`usvsim.task.observations`), here the positional one,
 ``[r_pole, φ_pole, r_goal, φ_goal]`` of the navigation estimate, bearings relative to the
 estimated heading (clockwise positive). Pole and goal are fixed landmarks, so the two vectors
 fix the boat's estimated pose in a frame anchored on them (:func:`landmark_pose`): origin at the
@@ -16,7 +16,7 @@ y starboard) the landmarks are g_b = r_goal (cos φ_goal, sin φ_goal) and p_b l
 Guidance
 --------
 When the helmsman first sees a goal (after ``reset``, or when the landmarks change, as at a
-waypoint switch in :mod:`usvsim.waypoint_task`) it lays a straight path from where the boat is to
+waypoint switch in :mod:`usvsim.task.waypoints`) it lays a straight path from where the boat is to
 the goal and follows it with :func:`guidance.los.los_step` (proportional LOS by default; Fossen
 2021, §12.4.2). Every decision (2 s) the heading reference becomes the action::
 
@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from guidance.los import GuidanceOutput, LOSConfig, LOSGuidance
 from guidance.waypoints import WaypointPath
-from usvsim.angles import ssa
+from usvsim.common.angles import ssa
 
 __all__ = [
     "DEFAULT_LOS_CONFIG",
@@ -121,7 +121,7 @@ class LOSHelmsman:
         A jump of the goal range above this (m) in one period also means a new goal (the boat
         covers ~6 m per period).
 
-    ``observation`` and ``action`` tell :func:`usvsim.evaluate.evaluate` what this helmsman needs.
+    ``observation`` and ``action`` tell :func:`usvsim.evaluation.episodes.evaluate` what this helmsman needs.
     ``last_output`` holds the latest :class:`guidance.los.GuidanceOutput` (cross-track errors).
     """
 

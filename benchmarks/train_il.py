@@ -1,10 +1,10 @@
 """Training wall-clock benchmark of the four IL setups (GAIL), as ``train_rl.py`` for RL.
 
 For each setup this runs the recorded training command (``usvsim train SETUP --seed S``, the
-setup's defaults otherwise; :mod:`learning.train_cli`, :mod:`learning.il_setups`) on this
+setup's defaults otherwise; :mod:`learning.cli.train`, :mod:`learning.experiments.il_setups`) on this
 machine's CPU with ``--threads`` torch threads, then evaluates the run's ``best.pt`` on the 15
-validation and 200 held-out episodes (:mod:`learning.evaluate_cli`) and for expert-likeness on
-the validation starts (:mod:`learning.likeness`), and writes ``train_il.md`` (a Markdown table)
+validation and 200 held-out episodes (:mod:`learning.cli.evaluate`) and for expert-likeness on
+the validation starts (:mod:`usvsim.evaluation.likeness`), and writes ``train_il.md`` (a Markdown table)
 and ``train_il.json`` (everything, with each run's ``summary.json``) into ``--out``::
 
     python benchmarks/train_il.py                       # all four setups (run as a script)
@@ -40,12 +40,17 @@ from train_rl import (  # this folder
     write_results,
 )
 
-from learning.checkpoint import load_checkpoint, load_helmsman, save_checkpoint, slim_copy
-from learning.il_setups import IL_SETUPS
-from learning.likeness import helmsman_likeness
-from learning.run_log import VALIDATION_EPISODES
-from learning.train_cli import TrainArgs, run
-from usvsim.fileio import atomic_write_text
+from learning.cli.train import TrainArgs, run
+from learning.experiments.checkpoint import (
+    load_checkpoint,
+    load_helmsman,
+    save_checkpoint,
+    slim_copy,
+)
+from learning.experiments.il_setups import IL_SETUPS
+from learning.experiments.run_log import VALIDATION_EPISODES
+from usvsim.common.fileio import atomic_write_text
+from usvsim.evaluation.likeness import helmsman_likeness
 
 
 def train_one(args: TrainArgs) -> dict[str, Any]:

@@ -1,9 +1,9 @@
 """Training wall-clock benchmark of the four RL setups (issue 5), and the shipped models.
 
 For each setup this runs the recorded training command (``usvsim train SETUP --seed S``, the
-setup's defaults otherwise; :mod:`learning.train_cli`) on this machine's CPU with
+setup's defaults otherwise; :mod:`learning.cli.train`) on this machine's CPU with
 ``--threads`` torch threads, then evaluates the run's ``best.pt`` on the 15 validation and 200
-held-out episodes (:mod:`learning.evaluate_cli`) and writes a Markdown table::
+held-out episodes (:mod:`learning.cli.evaluate`) and writes a Markdown table::
 
     python benchmarks/train_rl.py                       # all four setups
     python benchmarks/train_rl.py --setups rl-gaussian-positional --out /tmp/bench
@@ -30,18 +30,18 @@ from typing import Any
 
 import torch
 
-from learning.checkpoint import (
+from learning.cli.evaluate import evaluation_row
+from learning.cli.train import TrainArgs, run
+from learning.experiments.checkpoint import (
     PolicyHelmsman,
     load_agent,
     load_checkpoint,
     save_checkpoint,
     slim_copy,
 )
-from learning.evaluate_cli import evaluation_row
-from learning.setups import SETUPS, get_setup
-from learning.train_cli import TrainArgs, run
-from usvsim.evaluate import evaluate, heldout_episodes, validation_episodes
-from usvsim.fileio import atomic_write_text
+from learning.experiments.setups import SETUPS, get_setup
+from usvsim.common.fileio import atomic_write_text
+from usvsim.evaluation.episodes import evaluate, heldout_episodes, validation_episodes
 
 MODELS_DIR = Path(__file__).resolve().parent.parent / "usvsim" / "models"
 

@@ -72,7 +72,7 @@ from guidance.waypoints import (
     as_positions,
     check_switch_radius,
 )
-from usvsim.angles import ssa
+from usvsim.common.angles import ssa
 
 __all__ = [
     "GuidanceLaw",

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.autopilot import AutopilotConfig, design_autopilot, design_report, loop_transfer
-from usvsim.plant import Plant
-from usvsim.vessels import DEFAULT_VESSEL
+from usvsim.vessel.autopilot import AutopilotConfig, design_autopilot, design_report, loop_transfer
+from usvsim.vessel.plant import Plant
+from usvsim.vessel.vessels import DEFAULT_VESSEL
 
 
 def step_response(plant: Plant, step_deg: float, seconds: float) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +114,7 @@ def test_rover_control_law_matches_ardupilot_formula():
     """One update by hand: r_des = P_ang·ψ̃ (limited), steer = FF·r_des + P·(r_des − r) + I."""
     import casadi as ca
 
-    from usvsim.autopilot import control_law
+    from usvsim.vessel.autopilot import control_law
 
     cfg = AutopilotConfig(kind="rover")
     d = design_autopilot(DEFAULT_VESSEL, cfg)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from baselines import AvoidHelmsman, CollisionCone, LOSHelmsman, cone_heading_change, landmark_pose
-from usvsim.evaluate import evaluate, validation_episodes
-from usvsim.observations import build_observation
+from usvsim.evaluation.episodes import evaluate, validation_episodes
+from usvsim.task.observations import build_observation
 
 
 def test_landmark_pose_is_the_navigation_pose_up_to_a_rigid_motion() -> None:

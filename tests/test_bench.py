@@ -10,10 +10,14 @@ from pathlib import Path
 
 import pytest
 
-from usvsim import bench, fileio
-from usvsim.bench import BenchArgs, run, run_bench, write_results
-from usvsim.cli import _add_dataclass_arguments, _field_comments
-from usvsim.helmsmen import available_helmsmen
+from usvsim.cli.args import add_dataclass_arguments as _add_dataclass_arguments
+from usvsim.cli.args import field_comments as _field_comments
+from usvsim.cli.bench import run_bench_command as run
+from usvsim.common import fileio
+from usvsim.evaluation import bench
+from usvsim.evaluation.bench import BenchArgs, run_bench, write_results
+from usvsim.helm.protocol import RandomHelmsman, StraightAheadHelmsman
+from usvsim.helm.registry import available_helmsmen, make_helmsman
 
 
 def test_registry_lists_the_baselines(tmp_path: Path) -> None:
@@ -23,12 +27,16 @@ def test_registry_lists_the_baselines(tmp_path: Path) -> None:
     assert (h.observation, h.action) == ("positional", "gaussian")  # type: ignore[attr-defined]
 
 
-def test_registry_skips_models_without_the_checkpoint_module(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    (tmp_path / "trpo-positional.pt").write_bytes(b"not a model")
-    monkeypatch.setitem(sys.modules, "learning.checkpoint", None)  # import raises ImportError
-    assert list(available_helmsmen(tmp_path)) == ["los", "los-avoid"]
+def test_make_helmsman_knows_every_kind_of_name(tmp_path: Path) -> None:
+    assert isinstance(make_helmsman("straight", "categorical"), StraightAheadHelmsman)
+    assert isinstance(make_helmsman("random"), RandomHelmsman)
+    assert type(make_helmsman("los-avoid")).__name__ == "AvoidHelmsman"
+    with pytest.raises(ValueError, match=r"unknown helmsman 'nope'; choose straight, random, los"):
+        make_helmsman("nope")
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not a model")
+    with pytest.raises(ValueError, match="bad.pt"):
+        make_helmsman(str(bad))
 
 
 def test_registry_loads_models_with_the_checkpoint_module(
@@ -36,14 +44,15 @@ def test_registry_loads_models_with_the_checkpoint_module(
 ) -> None:
     (tmp_path / "trpo-positional.pt").write_bytes(b"weights")
     loaded: list[Path] = []
-    fake = types.ModuleType("learning.checkpoint")
+    fake = types.ModuleType("learning.experiments.checkpoint")
 
     def load_helmsman(path: Path) -> str:
         loaded.append(path)
         return "helmsman"
 
     fake.load_helmsman = load_helmsman  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "learning.checkpoint", fake)
+    fake.CheckpointError = ValueError  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "learning.experiments.checkpoint", fake)
     helmsmen = available_helmsmen(tmp_path)
     assert list(helmsmen) == ["los", "los-avoid", "trpo-positional"]
     assert helmsmen["trpo-positional"]() == "helmsman" and loaded == [

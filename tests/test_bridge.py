@@ -1,4 +1,4 @@
-"""The MAVLink bridge (usvsim.bridge) against ``usvsim sitl`` on loopback, faster than real time.
+"""The MAVLink bridge (usvsim.mavlink.bridge) against ``usvsim sitl`` on loopback, faster than real time.
 
 End to end: a helmsman drives the endpoint past the pole to the goal and the true path matches
 the in-process simulation of the same episode (same EpisodeSpec, same sensor-noise stream in
@@ -18,13 +18,14 @@ from typing import Any
 import numpy as np
 import pytest
 
-from usvsim.bridge import Bridge, BridgeArgs, TelemetryEstimator
-from usvsim.geo import GeoOrigin, geodetic_from_ned
-from usvsim.mavlink_link import GlobalPosition, MavlinkLink, RoverMode
-from usvsim.mission import Mission
-from usvsim.scenario import EpisodeSpec, Scenario, episode_geometry
-from usvsim.sitl import RoverSitl, SitlArgs
-from usvsim.vector_env import PoleAvoidanceBatch
+from usvsim.mavlink.bridge import Bridge, BridgeArgs
+from usvsim.mavlink.link import GlobalPosition, MavlinkLink, RoverMode
+from usvsim.mavlink.mission import Mission
+from usvsim.mavlink.sitl import RoverSitl, SitlArgs
+from usvsim.nav.geo import GeoOrigin, geodetic_from_ned
+from usvsim.nav.telemetry import TelemetryEstimator
+from usvsim.task.batch import PoleAvoidanceBatch
+from usvsim.task.scenario import EpisodeSpec, Scenario, episode_geometry
 
 SPEEDUP = 25.0
 PATH_TOLERANCE_M = 2.0  # measured max deviation ~0.9 m (25x and 60x speedup)
@@ -248,7 +249,7 @@ def test_estimator_tracks_a_straight_run() -> None:
 
 
 def test_bridge_loads_baselines_and_shipped_models_by_name() -> None:
-    from usvsim.bridge import load_helmsman
+    from usvsim.helm.registry import make_helmsman as load_helmsman
 
     avoid = load_helmsman("los-avoid")
     assert avoid.observation == "positional"  # type: ignore[attr-defined]

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 import torch
 
-from learning.checkpoint import (
+from learning.algorithms.trpo import TRPOAgent
+from learning.experiments.checkpoint import (
     FORMAT,
     VERSION,
     Checkpoint,
@@ -22,12 +23,12 @@ from learning.checkpoint import (
     save_checkpoint,
     slim_copy,
 )
-from learning.setups import get_setup
-from learning.trpo import TRPOAgent
-from usvsim.evaluate import Helmsman
-from usvsim.helmsmen import helmsman_kinds
-from usvsim.observations import observation_space
-from usvsim.vector_env import PoleAvoidanceVectorEnv, action_space
+from learning.experiments.setups import get_setup
+from usvsim.helm.protocol import Helmsman
+from usvsim.helm.registry import helmsman_kinds
+from usvsim.task.batch import action_space
+from usvsim.task.observations import observation_space
+from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 
 def _agent(setup_name: str, seed: int = 3) -> tuple[TRPOAgent, Checkpoint]:
@@ -189,7 +190,7 @@ SHIPPED = sorted(MODELS.glob("*.pt"))  # every shipped model has its models.json
 def test_shipped_model_reproduces_its_recorded_validation(path: Path) -> None:
     import json
 
-    from usvsim.evaluate import evaluate, validation_episodes
+    from usvsim.evaluation.episodes import evaluate, validation_episodes
 
     rl = path.stem.startswith("rl-")  # expected_setup knows the RL setups only
     ckpt = load_checkpoint(path, expected_setup=path.stem if rl else None)

@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from usvsim.cli import COMMANDS, main
+from usvsim.cli import main
+from usvsim.cli.main import COMMANDS
 
 
 def test_help_lists_every_command(capsys):

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from learning.demonstrations import (
+from learning.imitation.demonstrations import (
     DEMOS_DIR,
     DemoFormatError,
     load_recording,

@@ -10,11 +10,12 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import usvsim
-from usvsim.env import PoleAvoidanceEnv
-from usvsim.observations import relative_polar
-from usvsim.plant import Plant
-from usvsim.scenario import EpisodeSpec, Scenario
-from usvsim.vector_env import PoleAvoidanceVectorEnv, heading_change_rad
+from usvsim.task.batch import heading_change_rad
+from usvsim.task.env import PoleAvoidanceEnv
+from usvsim.task.observations import relative_polar
+from usvsim.task.scenario import EpisodeSpec, Scenario
+from usvsim.task.vector_env import PoleAvoidanceVectorEnv
+from usvsim.vessel.plant import Plant
 
 MAX = math.radians(30.0)
 
@@ -129,7 +130,7 @@ def test_goal_checked_at_every_plant_step(plant):
 
 
 def test_custom_reward_is_pluggable(plant):
-    from usvsim.reward import RewardTerms
+    from usvsim.task.reward import RewardTerms
 
     def reward(d_pole, d_goal):
         return RewardTerms(pole=-1.0 / d_pole, goal=-d_goal)
@@ -209,7 +210,7 @@ def test_batch_state_is_a_copy_of_the_true_state(plant):
 
 
 def test_goal_test_equals_hypot_at_the_boundary():
-    from usvsim.vector_env import _within
+    from usvsim.task.batch import _within
 
     r = 10.0
     edge = np.array([6.0, 8.0, 10.0, 0.0, 7.0710678118654755, np.nextafter(10.0, 11.0)])

@@ -8,17 +8,16 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from usvsim.evaluate import (
+from usvsim.evaluation.episodes import (
     Helmsman,
-    RandomHelmsman,
-    StraightAheadHelmsman,
     evaluate,
     format_records,
     heldout_episodes,
     summarise,
     validation_episodes,
 )
-from usvsim.plant import Plant
+from usvsim.helm.protocol import RandomHelmsman, StraightAheadHelmsman
+from usvsim.vessel.plant import Plant
 
 
 @pytest.fixture(scope="module")
@@ -128,7 +127,7 @@ def test_radar_observation_evaluation_runs_batched(plant):
 
 
 def test_episode_plots_write_pngs(straight_records, tmp_path):
-    from usvsim.episode_plots import plot_episode, plot_radar_strip
+    from usvsim.evaluation.episode_plots import plot_episode, plot_radar_strip
 
     fig = plot_episode(straight_records[0], tmp_path / "episode.png")
     assert len(fig.axes) == 3

@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learning.expert import ExpertParams, draw_traits, run_expert
-from usvsim.evaluate import validation_episodes
+from baselines.expert import ExpertParams, draw_traits, run_expert
+from usvsim.evaluation.episodes import validation_episodes
 
 
 def test_traits_stay_in_their_ranges_and_prefer_starboard() -> None:

@@ -8,10 +8,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from usvsim.fastpath import BatchStepper, GatheredSteps
-from usvsim.navigation import NavConfig
-from usvsim.navplant import NavigatedPlant
-from usvsim.plant import Plant
+from usvsim.nav.filter import NavConfig
+from usvsim.nav.navplant import NavigatedPlant
+from usvsim.vessel.codegen import BatchStepper, GatheredSteps
+from usvsim.vessel.plant import Plant
 
 SPECIAL = [0.0, -0.0, 1.0, -1.0, 2.5, -7.25, 1e-300, -5e-324, 1e300, np.inf, -np.inf, np.nan]
 

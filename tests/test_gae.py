@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
 
-from learning.gae import gae
-from learning.rollout import (
+from learning.algorithms.gae import gae
+from learning.algorithms.rollout import (
     NonFiniteError,
     RolloutBatch,
     RolloutCollector,

@@ -9,8 +9,10 @@ import pytest
 import torch
 from gymnasium import spaces
 
-from learning.demonstrations import load_recordings, quality_check
-from learning.gail import (
+from learning.algorithms.rollout import RolloutCollector
+from learning.algorithms.trpo import TRPOAgent, TRPOConfig
+from learning.imitation.demonstrations import load_recordings, quality_check
+from learning.imitation.gail import (
     GAILConfig,
     GAILTrainer,
     _cat,
@@ -18,12 +20,11 @@ from learning.gail import (
     reward_from_logits,
     train_gail,
 )
-from learning.likeness import expert_reference, helmsman_likeness
-from learning.preprocess import ExpertData, expert_data
-from learning.rollout import RolloutCollector
-from learning.trpo import TRPOAgent, TRPOConfig
-from usvsim.evaluate import validation_episodes
-from usvsim.vector_env import PoleAvoidanceVectorEnv, action_space
+from learning.imitation.preprocess import ExpertData, expert_data
+from usvsim.evaluation.episodes import validation_episodes
+from usvsim.evaluation.likeness import expert_reference, helmsman_likeness
+from usvsim.task.batch import action_space
+from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 torch.set_num_threads(1)
 
@@ -173,9 +174,9 @@ def test_short_gail_run_makes_the_policy_more_expert_like(expert: ExpertData) ->
 def test_cloned_cnn_policy_keeps_its_batchnorm_statistics() -> None:
     """After cloning, a trainer's refresh of the BatchNorm statistics on the same states
     leaves the policy's actions as they were (the statistics were settled)."""
-    from learning.gail import behavioural_cloning
-    from learning.networks import refresh_batchnorm
-    from usvsim.observations import observation_space
+    from learning.algorithms.networks import refresh_batchnorm
+    from learning.imitation.gail import behavioural_cloning
+    from usvsim.task.observations import observation_space
 
     kept = [r for r in load_recordings().recordings if not quality_check(r)][:3]
     data = expert_data(kept, "radar+goal", "gaussian")
@@ -188,8 +189,8 @@ def test_cloned_cnn_policy_keeps_its_batchnorm_statistics() -> None:
 
 @pytest.mark.slow
 def test_il_run_validates_checkpoints_and_resumes(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    from learning.checkpoint import load_checkpoint, load_helmsman
-    from learning.il_setups import get_il_setup, train_il
+    from learning.experiments.checkpoint import load_checkpoint, load_helmsman
+    from learning.experiments.il_setups import get_il_setup, train_il
 
     setup = get_il_setup("il-gaussian-positional").replace(
         validate_every=1, bc_epochs=1, num_envs=4, steps_per_env=16

@@ -1,11 +1,11 @@
-"""Flat-earth geodetic <-> NED conversion (usvsim.geo)."""
+"""Flat-earth geodetic <-> NED conversion (usvsim.nav.geo)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from usvsim.geo import WGS84_A_M, GeoOrigin, geodetic_from_ned, ned_from_geodetic
+from usvsim.nav.geo import WGS84_A_M, GeoOrigin, geodetic_from_ned, ned_from_geodetic
 
 
 def test_one_degree_of_longitude_on_the_equator_is_a_pi_over_180() -> None:

@@ -18,7 +18,7 @@ from guidance import (
     los_step,
 )
 from guidance.waypoints import path_errors
-from usvsim.plant import Plant
+from usvsim.vessel.plant import Plant
 
 DT_S = 0.1  # s, plant step and guidance update interval
 CROSS_CURRENT = (0.5, -np.pi / 2)  # 0.5 m/s towards west, perpendicular to a northbound path

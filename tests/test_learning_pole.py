@@ -6,10 +6,11 @@ import dataclasses
 
 import torch
 
-from learning.setups import get_setup
-from learning.train_cli import validate
-from learning.trpo import IterationStats, TRPOAgent, train
-from usvsim.evaluate import RandomHelmsman, evaluate, validation_episodes
+from learning.algorithms.trpo import IterationStats, TRPOAgent, train
+from learning.cli.train import validate
+from learning.experiments.setups import get_setup
+from usvsim.evaluation.episodes import evaluate, validation_episodes
+from usvsim.helm.protocol import RandomHelmsman
 
 TIMES = {"rollout_time_s", "update_time_s", "wall_time_s"}
 

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from learning.likeness import (
+from usvsim.evaluation.episodes import validation_episodes
+from usvsim.evaluation.likeness import (
     ExpertReference,
     expert_reference,
     heading_changes,
@@ -16,7 +17,7 @@ from learning.likeness import (
     likeness,
     pass_side,
 )
-from usvsim.evaluate import StraightAheadHelmsman, validation_episodes
+from usvsim.helm.protocol import StraightAheadHelmsman
 
 
 def _north_path(east_m: float, n: int = 1001) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""The typed MAVLink adapter (usvsim.mavlink_link) on loopback: OS-assigned ports, deadlines."""
+"""The typed MAVLink adapter (usvsim.mavlink.link) on loopback: OS-assigned ports, deadlines."""
 
 import math
 import time
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from usvsim.mavlink_link import (
+from usvsim.mavlink.link import (
     TYPE_MASK_VELOCITY_YAW,
     CommandLong,
     GlobalPosition,

@@ -1,4 +1,4 @@
-"""Mission files (usvsim.mission): parsing, NED conversion and precise errors."""
+"""Mission files (usvsim.mavlink.mission): parsing, NED conversion and precise errors."""
 
 import json
 from pathlib import Path
@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usvsim.geo import GeoOrigin
-from usvsim.mission import Mission, MissionError, load_mission, parse_mission
+from usvsim.mavlink.mission import Mission, MissionError, load_mission, parse_mission
+from usvsim.nav.geo import GeoOrigin
 
 GOOD = {
     "origin": {"lat": 63.43, "lon": 10.39},

@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from usvsim.model import (
+from usvsim.vessel.model import (
     build_dynamics,
     build_force_dynamics,
     build_rk4_step,
@@ -20,7 +20,7 @@ from usvsim.model import (
     mass_matrix,
     nomoto_from_linear,
 )
-from usvsim.vessels import CYBERSHIP2, DEFAULT_VESSEL, VIKNES830, get_vessel
+from usvsim.vessel.vessels import CYBERSHIP2, DEFAULT_VESSEL, VIKNES830, get_vessel
 
 NO_CURRENT = np.zeros(2)
 

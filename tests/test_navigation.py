@@ -1,4 +1,4 @@
-"""Tests of usvsim.navigation.
+"""Tests of usvsim.nav.filter.
 
 1. Cross-implementation: the batched filters equal filterpy's ``KalmanFilter`` run per boat on
    the same measurements (means and covariances, including masked per-boat resets).
@@ -16,8 +16,8 @@ from filterpy.common import Q_discrete_white_noise
 from filterpy.kalman import KalmanFilter
 from scipy.linalg import expm
 
-from usvsim.angles import ssa
-from usvsim.navigation import (
+from usvsim.common.angles import ssa
+from usvsim.nav.filter import (
     NavConfig,
     NavEstimate,
     Navigator,
@@ -25,7 +25,7 @@ from usvsim.navigation import (
     position_filter_model,
     position_transition,
 )
-from usvsim.sensors import SensorConfig, sample_gps
+from usvsim.nav.sensors import SensorConfig, sample_gps
 
 DT = 0.1  # s, plant step
 
@@ -497,7 +497,7 @@ def test_position_estimate_beats_raw_gnss_on_the_plant() -> None:
     """
     import math
 
-    from usvsim.plant import Plant
+    from usvsim.vessel.plant import Plant
 
     plant = Plant("default")
     n = 32

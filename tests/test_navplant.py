@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usvsim.navigation import NavConfig, Navigator, build_nav_step, export_nav_state
-from usvsim.navplant import NavigatedPlant
-from usvsim.plant import Plant
+from usvsim.nav.filter import NavConfig, Navigator, build_nav_step, export_nav_state
+from usvsim.nav.navplant import NavigatedPlant
+from usvsim.vessel.plant import Plant
 
 
 class RecordingRng:

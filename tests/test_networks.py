@@ -8,8 +8,8 @@ import torch
 from gymnasium import spaces
 from torch import distributions as td
 
-from learning.distributions import Categorical, DiagGaussian
-from learning.networks import (
+from learning.algorithms.distributions import Categorical, DiagGaussian
+from learning.algorithms.networks import (
     CNNTrunk,
     NetworkConfig,
     make_critic,
@@ -18,7 +18,7 @@ from learning.networks import (
     space_from_spec,
     space_to_spec,
 )
-from learning.normalization import ObservationNormalizer, RunningMeanStd
+from learning.algorithms.normalization import ObservationNormalizer, RunningMeanStd
 
 POSITIONAL = spaces.Box(-1e4, 1e4, (4,), np.float32)
 GAUSSIAN = spaces.Box(-1.0, 1.0, (1,), np.float32)

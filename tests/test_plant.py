@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.fastpath import BatchStepper
-from usvsim.plant import NS, Plant
+from usvsim.vessel.codegen import BatchStepper
+from usvsim.vessel.plant import NS, Plant
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +54,7 @@ def test_batch_equals_single_boats(plant):
     psi_ref = rng.uniform(-3, 3, 5)
     batch_state, _ = plant.step(state, psi_ref, n_steps=30)
     for i in range(5):
-        from usvsim.plant import PlantState
+        from usvsim.vessel.plant import PlantState
 
         single = PlantState(x=state.x[i : i + 1], c=state.c[i : i + 1])
         one, _ = plant.step(single, psi_ref[i : i + 1], n_steps=30)
@@ -94,7 +94,7 @@ def test_non_finite_state_and_wrong_shapes_raise(plant):
     state, _ = random_state(plant, 2)
     broken = state.x.copy()
     broken[0, 3] = np.nan
-    from usvsim.plant import PlantState
+    from usvsim.vessel.plant import PlantState
 
     with pytest.raises(ValueError, match="plant state contains NaN"):
         plant.step(PlantState(x=broken, c=state.c), 0.0)

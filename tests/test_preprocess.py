@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from learning.demonstrations import SITE_ORIGIN, Recording
-from learning.preprocess import (
+from learning.imitation.demonstrations import SITE_ORIGIN, Recording
+from learning.imitation.preprocess import (
     decision_track,
     encode_actions,
     expert_data,
@@ -17,9 +17,9 @@ from learning.preprocess import (
     interpolate_position,
     recording_from_tlog,
 )
-from usvsim.geo import geodetic_from_ned
-from usvsim.mavlink_link import Attitude, GlobalPosition, MavlinkLink
-from usvsim.observations import relative_polar
+from usvsim.mavlink.link import Attitude, GlobalPosition, MavlinkLink
+from usvsim.nav.geo import geodetic_from_ned
+from usvsim.task.observations import relative_polar
 
 POLES = [[0.0, 0.0], [500.0, 500.0]]
 

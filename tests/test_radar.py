@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.radar import RadarConfig, pixel_index, render_radar
-from usvsim.scenario import BoatNoise
+from usvsim.task.radar import RadarConfig, pixel_index, render_radar
+from usvsim.task.scenario import BoatNoise
 
 TINY = 1e-6  # m: a point-like pole lights exactly one pixel
 

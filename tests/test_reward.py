@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.reward import GaussianReward, RewardTerms
+from usvsim.task.reward import GaussianReward, RewardTerms
 
 
 def test_values_at_known_distances():

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.angles import ssa
-from usvsim.scenario import (
+from usvsim.common.angles import ssa
+from usvsim.task.scenario import (
     BoatNoise,
     EpisodeSpec,
     Scenario,

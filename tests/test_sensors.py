@@ -1,12 +1,12 @@
-"""Tests of usvsim.sensors: noise statistics, rate schedule, compass wrapping, input checks."""
+"""Tests of usvsim.nav.sensors: noise statistics, rate schedule, compass wrapping, input checks."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from usvsim.angles import ssa
-from usvsim.sensors import (
+from usvsim.common.angles import ssa
+from usvsim.nav.sensors import (
     SensorConfig,
     period_steps,
     sample_compass,

@@ -1,4 +1,4 @@
-"""The Rover-like MAVLink endpoint (usvsim.sitl) on loopback, faster than real time."""
+"""The Rover-like MAVLink endpoint (usvsim.mavlink.sitl) on loopback, faster than real time."""
 
 import math
 import time
@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usvsim.mavlink_link import (
+from usvsim.mavlink.link import (
     CommandAck,
     GlobalPosition,
     Heartbeat,
@@ -18,7 +18,7 @@ from usvsim.mavlink_link import (
     RoverMode,
     StatusText,
 )
-from usvsim.sitl import RoverSitl, SitlArgs
+from usvsim.mavlink.sitl import RoverSitl, SitlArgs
 
 SPEEDUP = 40.0
 KEY = bytes(range(1, 33))

@@ -1,4 +1,4 @@
-"""ArduPilot SITL JSON backend (usvsim.sitl_physics) against a fake SITL sending PWM frames."""
+"""ArduPilot SITL JSON backend (usvsim.mavlink.sitl_physics) against a fake SITL sending PWM frames."""
 
 import json
 import math
@@ -9,7 +9,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from usvsim.sitl_physics import (
+from usvsim.mavlink.sitl_physics import (
     JsonPhysics,
     ServoFrame,
     actuator_command,
@@ -17,7 +17,7 @@ from usvsim.sitl_physics import (
     parse_servo_frame,
     serve,
 )
-from usvsim.vessels import get_vessel
+from usvsim.vessel.vessels import get_vessel
 
 RATE_HZ = 50
 

@@ -1,4 +1,4 @@
-"""usvsim.stats: the Wilson score interval against published values and a second implementation."""
+"""usvsim.evaluation.stats: the Wilson score interval against published values and a second implementation."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.stats import finite_mean, finite_median, proportion, wilson_interval
+from usvsim.evaluation.stats import finite_mean, finite_median, proportion, wilson_interval
 
 
 @pytest.mark.parametrize(

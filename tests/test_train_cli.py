@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import torch
 
-import learning.trpo
-from learning.checkpoint import load_checkpoint
-from learning.evaluate_cli import EvaluateArgs
-from learning.evaluate_cli import run as run_evaluate
-from learning.setups import FixedHorizonReturn, get_setup
-from learning.train_cli import TrainArgs, run
+import learning.algorithms.trpo
+from learning.cli.evaluate import EvaluateArgs
+from learning.cli.evaluate import run as run_evaluate
+from learning.cli.train import TrainArgs, run
+from learning.experiments.checkpoint import load_checkpoint
+from learning.experiments.setups import FixedHorizonReturn, get_setup
 
 SETUP = "rl-categorical-positional"
 
@@ -90,13 +90,13 @@ def test_nan_in_the_loss_stops_with_an_error_and_keeps_the_checkpoint(
 ) -> None:
     assert run(_args(tmp_path)) == 0
     before = {name: (tmp_path / name).read_bytes() for name in ("latest.pt", "best.pt")}
-    real_gae = learning.trpo.gae
+    real_gae = learning.algorithms.trpo.gae
 
     def nan_gae(*a: object, **kw: object) -> tuple[np.ndarray, np.ndarray]:
         adv, ret = real_gae(*a, **kw)  # type: ignore[arg-type]
         return adv * np.nan, ret
 
-    monkeypatch.setattr(learning.trpo, "gae", nan_gae)
+    monkeypatch.setattr(learning.algorithms.trpo, "gae", nan_gae)
     assert run(_args(tmp_path, iterations=4, resume=True)) == 1
     assert "non-finite" in capsys.readouterr().err
     for name, data in before.items():
@@ -107,7 +107,7 @@ def test_nan_in_the_loss_stops_with_an_error_and_keeps_the_checkpoint(
 def test_early_stop_after_consecutive_full_validations(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import learning.train_cli as cli
+    import learning.cli.train as cli
 
     full = {"successes": 15, "n_episodes": 15, "mean_return": -10.0, "min_pole_distance_m": 20.0}
     monkeypatch.setattr(cli, "validate", lambda agent, setup: dict(full))
@@ -159,7 +159,7 @@ def test_nan_weights_after_an_update_are_never_saved(
 ) -> None:
     assert run(_args(tmp_path)) == 0
     before = {name: (tmp_path / name).read_bytes() for name in ("latest.pt", "best.pt")}
-    real_step = learning.trpo.trpo_step
+    real_step = learning.algorithms.trpo.trpo_step
 
     def poisoned_step(policy, *a, **kw):
         stats = real_step(policy, *a, **kw)
@@ -167,7 +167,7 @@ def test_nan_weights_after_an_update_are_never_saved(
             policy.head.bias.fill_(float("nan"))
         return stats
 
-    monkeypatch.setattr(learning.trpo, "trpo_step", poisoned_step)
+    monkeypatch.setattr(learning.algorithms.trpo, "trpo_step", poisoned_step)
     assert run(_args(tmp_path, iterations=4, resume=True)) == 1
     assert "non-finite weights" in capsys.readouterr().err
     for name, data in before.items():

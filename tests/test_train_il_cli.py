@@ -10,12 +10,12 @@ from typing import Any
 
 import pytest
 
-import learning.il_setups as il_setups
-from learning.checkpoint import load_checkpoint
-from learning.il_setups import IL_CSV_FIELDS, IL_SETUPS
-from learning.likeness import ExpertReference, expert_reference
-from learning.train_cli import TrainArgs, run
-from usvsim.evaluate import validation_episodes
+import learning.experiments.il_setups as il_setups
+from learning.cli.train import TrainArgs, run
+from learning.experiments.checkpoint import load_checkpoint
+from learning.experiments.il_setups import IL_CSV_FIELDS, IL_SETUPS
+from usvsim.evaluation.episodes import validation_episodes
+from usvsim.evaluation.likeness import ExpertReference, expert_reference
 
 SETUP = "il-gaussian-positional"
 STEPS = 4 * 16  # n_envs x steps_per_env of the tiny setup

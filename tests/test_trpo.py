@@ -13,9 +13,9 @@ import torch
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 
-from learning.networks import NetworkConfig, make_policy
-from learning.rollout import NonFiniteError, RolloutBatch, RolloutCollector, flatten_obs
-from learning.trpo import (
+from learning.algorithms.networks import NetworkConfig, make_policy
+from learning.algorithms.rollout import NonFiniteError, RolloutBatch, RolloutCollector, flatten_obs
+from learning.algorithms.trpo import (
     IterationStats,
     TRPOAgent,
     TRPOConfig,

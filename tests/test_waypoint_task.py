@@ -1,4 +1,4 @@
-"""usvsim.waypoint_task: course geometry, goal switching in order, and the baselines on courses."""
+"""usvsim.task.waypoints: course geometry, goal switching in order, and the baselines on courses."""
 
 from __future__ import annotations
 
@@ -8,15 +8,9 @@ import numpy as np
 import pytest
 
 from baselines import AvoidHelmsman
-from usvsim.evaluate import StraightAheadHelmsman
-from usvsim.waypoint_task import (
-    WaypointRecord,
-    WaypointScenario,
-    draw_course,
-    evaluate_waypoints,
-    heldout_courses,
-    validation_courses,
-)
+from usvsim.evaluation.waypoints import WaypointRecord, evaluate_waypoints
+from usvsim.helm.protocol import StraightAheadHelmsman
+from usvsim.task.waypoints import WaypointScenario, draw_course, heldout_courses, validation_courses
 
 
 @pytest.fixture(scope="module")

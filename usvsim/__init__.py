@@ -1,9 +1,9 @@
 """usvsim: learning and testing steering policies for unmanned surface vehicles.
 
-Modules (the architecture, bottom up): :mod:`usvsim.vessels` (parameters), :mod:`usvsim.model`
-(CasADi 3-DOF model), :mod:`usvsim.autopilot` (heading autopilot, speed control),
-:mod:`usvsim.plant` (batched closed-loop plant), :mod:`usvsim.sensors` and
-:mod:`usvsim.navigation` (GPS/compass/gyro and the Kalman filter), then the task, environments,
+Modules (the architecture, bottom up): :mod:`usvsim.vessel.vessels` (parameters), :mod:`usvsim.vessel.model`
+(CasADi 3-DOF model), :mod:`usvsim.vessel.autopilot` (heading autopilot, speed control),
+:mod:`usvsim.vessel.plant` (batched closed-loop plant), :mod:`usvsim.nav.sensors` and
+:mod:`usvsim.nav.filter` (GPS/compass/gyro and the Kalman filter), then the task, environments,
 evaluation and command-line interface.
 """
 
@@ -17,4 +17,4 @@ ENV_ID = "usvsim/PoleAvoidance-v0"
 
 if ENV_ID not in gymnasium.registry:
     # string entry point: the environment module is imported only on gymnasium.make
-    gymnasium.register(id=ENV_ID, entry_point="usvsim.env:PoleAvoidanceEnv")
+    gymnasium.register(id=ENV_ID, entry_point="usvsim.task.env:PoleAvoidanceEnv")

@@ -1,0 +1,3 @@
+"""Learning algorithms and their parts: networks, distributions, normalisation, rollouts, GAE,
+TRPO.
+"""

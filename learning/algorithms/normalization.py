@@ -1,0 +1,149 @@
+"""Observation normalisation: running mean/std for vectors, a fixed scale for images.
+
+=====================================  ===================================================
+observation part                       normalised as
+=====================================  ===================================================
+``Box`` float vector (positional, goal)  ``clip((x - μ) / sqrt(σ² + ε), -clip, clip)``, μ and σ²
+                                       running statistics over every observation seen
+``Box`` uint8 image (radar)            ``x / 255`` (a fixed scale: no statistics to drift)
+``Dict``                               each key as above
+=====================================  ===================================================
+
+The running statistics use the parallel update of Chan, Golub and LeVeque (1979), in float64,
+so that a batch of any size merges exactly with the statistics so far. Their state is a plain
+dict of arrays (:meth:`ObservationNormalizer.state_dict`) saved with the model: a policy's inputs
+mean the same thing when it is loaded again.
+
+When the statistics change is the trainer's choice; :mod:`learning.algorithms.trpo` updates them between
+iterations, so that within one iteration the policy is one fixed function.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+__all__ = ["ObservationNormalizer", "RunningMeanStd", "is_image_space"]
+
+Obs = NDArray[Any] | dict[str, NDArray[Any]]
+
+
+def is_image_space(space: spaces.Space) -> bool:
+    """True for a ``Box`` of uint8 with shape (C, H, W): an image fed to a CNN."""
+    return isinstance(space, spaces.Box) and space.dtype == np.uint8 and len(space.shape) == 3
+
+
+class RunningMeanStd:
+    """Running mean and variance of vectors of shape ``shape`` (float64).
+
+    >>> rms = RunningMeanStd((1,))
+    >>> rms.update(np.array([[1.0], [2.0]])); rms.update(np.array([[3.0], [4.0], [5.0]]))
+    >>> float(rms.mean[0]), float(rms.var[0]), rms.count
+    (3.0, 2.0, 5.0)
+    """
+
+    def __init__(self, shape: tuple[int, ...]) -> None:
+        self.shape = shape
+        self.mean = np.zeros(shape, dtype=np.float64)
+        self.var = np.ones(shape, dtype=np.float64)
+        self.count = 0.0
+
+    def update(self, x: NDArray[Any]) -> None:
+        """Merge a batch ``x`` of shape (B, *shape) into the statistics (population variance)."""
+        x = np.asarray(x, dtype=np.float64).reshape((-1, *self.shape))
+        if not np.isfinite(x).all():
+            raise ValueError("non-finite observation: refusing to update the running statistics")
+        n = float(x.shape[0])
+        if n == 0:
+            return
+        b_mean, b_var = x.mean(axis=0), x.var(axis=0)
+        if self.count == 0:
+            self.mean, self.var, self.count = b_mean, b_var, n
+            return
+        total = self.count + n
+        delta = b_mean - self.mean
+        m2 = self.var * self.count + b_var * n + delta**2 * self.count * n / total
+        self.mean = self.mean + delta * n / total
+        self.var = m2 / total
+        self.count = total
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"mean": self.mean.copy(), "var": self.var.copy(), "count": self.count}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        mean = np.asarray(state["mean"], dtype=np.float64)
+        if mean.shape != self.shape:
+            raise ValueError(
+                f"normaliser shape mismatch: saved {mean.shape}, expected {self.shape}"
+            )
+        self.mean = mean.copy()
+        self.var = np.asarray(state["var"], dtype=np.float64).copy()
+        self.count = float(state["count"])
+
+
+class ObservationNormalizer:
+    """Normalises observations of ``space`` (Box vector, Box uint8 image, or a Dict of those).
+
+    ``enabled=False`` keeps the vector parts unchanged (images are still scaled by 1/255).
+    Arrays may carry any leading batch axes: (..., *shape).
+    """
+
+    def __init__(
+        self, space: spaces.Space, clip: float = 10.0, eps: float = 1e-8, enabled: bool = True
+    ) -> None:
+        self.space = space
+        self.clip, self.eps, self.enabled = clip, eps, enabled
+        parts = space.spaces if isinstance(space, spaces.Dict) else {"": space}
+        self.stats: dict[str, RunningMeanStd] = {}
+        for key, sub in parts.items():
+            if not isinstance(sub, spaces.Box):
+                raise TypeError(
+                    f"observation part {key!r}: only Box spaces are supported, got {sub}"
+                )
+            if not is_image_space(sub):
+                self.stats[key] = RunningMeanStd(tuple(sub.shape))
+
+    def _parts(self, obs: Obs) -> dict[str, NDArray[Any]]:
+        if isinstance(self.space, spaces.Dict):
+            if not isinstance(obs, dict):
+                raise TypeError("expected a dict observation")
+            return obs
+        if isinstance(obs, dict):
+            raise TypeError("expected an array observation, got a dict")
+        return {"": obs}
+
+    def update(self, obs: Obs) -> None:
+        """Merge a batch of raw observations into the running statistics."""
+        if not self.enabled:
+            return
+        for key, x in self._parts(obs).items():
+            if key in self.stats:
+                self.stats[key].update(x)
+
+    def __call__(self, obs: Obs) -> Obs:
+        """Normalised float32 copy of a batch of raw observations (same structure)."""
+        out: dict[str, NDArray[np.float32]] = {}
+        for key, x in self._parts(obs).items():
+            if key not in self.stats:
+                out[key] = np.asarray(x, dtype=np.float32) * np.float32(1.0 / 255.0)
+            elif not self.enabled:
+                out[key] = np.asarray(x, dtype=np.float32)
+            else:
+                s = self.stats[key]
+                z = (np.asarray(x, dtype=np.float64) - s.mean) / np.sqrt(s.var + self.eps)
+                out[key] = np.clip(z, -self.clip, self.clip).astype(np.float32)
+        return out if isinstance(self.space, spaces.Dict) else out[""]
+
+    def state_dict(self) -> dict[str, Any]:
+        return {key: s.state_dict() for key, s in self.stats.items()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        if set(state) != set(self.stats):
+            raise ValueError(
+                f"normaliser keys mismatch: saved {sorted(state)}, expected {sorted(self.stats)}"
+            )
+        for key, s in self.stats.items():
+            s.load_state_dict(state[key])

@@ -1,0 +1,1 @@
+"""The learning commands: ``usvsim train`` and ``usvsim evaluate``."""

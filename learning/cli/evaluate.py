@@ -1,0 +1,126 @@
+"""``usvsim evaluate CHECKPOINT``: a trained policy on the validation and held-out episode sets.
+
+Loads the checkpoint (:func:`learning.experiments.checkpoint.load_checkpoint`, precise errors for a bad
+file), runs its deterministic policy on the study's 15 validation episodes and on the 200
+held-out episodes (:mod:`usvsim.evaluation.episodes`), and prints one table::
+
+    set         episodes  success  collision  min d_pole m (min / median)  mean t_goal s
+    validation        15  15/15 (100.0 %)  0  ...
+
+``min d_pole`` is each episode's closest approach to the pole (true positions, every 0.1 s);
+the table gives its minimum and median over all episodes of the set, and the minimum over the
+successful ones.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch
+
+from learning.experiments.checkpoint import (
+    CheckpointError,
+    PolicyHelmsman,
+    load_agent,
+    load_checkpoint,
+)
+from usvsim.common.fileio import atomic_write_text
+from usvsim.evaluation.episodes import (
+    EpisodeRecord,
+    evaluate,
+    format_records,
+    heldout_episodes,
+    validation_episodes,
+)
+
+__all__ = ["EvaluateArgs", "evaluation_row", "format_table", "run"]
+
+
+@dataclass(frozen=True)
+class EvaluateArgs:
+    """Evaluate a trained policy checkpoint on the validation (15) and held-out episodes."""
+
+    checkpoint: str  # path of a .pt checkpoint, e.g. usvsim/models/rl-gaussian-positional.pt
+    heldout: int = 200  # held-out episodes to run (0: validation only)
+    episodes: bool = False  # also print one line per validation episode
+    json: str = ""  # also write the table as JSON to this path
+    threads: int = 2  # torch CPU threads
+
+
+def evaluation_row(name: str, records: Sequence[EpisodeRecord]) -> dict[str, Any]:
+    """Aggregates of one episode set (distances in m, times in s)."""
+    d = np.array([r.min_pole_distance_m for r in records])
+    ok = np.array([r.success for r in records])
+    t_goal = np.array([r.time_to_goal_s for r in records])
+    return {
+        "set": name,
+        "episodes": len(records),
+        "successes": int(ok.sum()),
+        "success_rate": float(ok.mean()),
+        "collisions": int(sum(r.collision for r in records)),
+        "min_pole_distance_m": float(d.min()),
+        "median_pole_distance_m": float(np.median(d)),
+        "min_pole_distance_successful_m": float(d[ok].min()) if ok.any() else math.nan,
+        "mean_time_to_goal_s": float(np.nanmean(t_goal)) if np.isfinite(t_goal).any() else math.nan,
+    }
+
+
+def format_table(rows: Sequence[dict[str, Any]]) -> str:
+    """The rows of :func:`evaluation_row` as a fixed-width table."""
+    lines = [
+        f"{'set':<11}{'episodes':>9}  {'success':<17}{'collisions':>10}  "
+        f"{'min d_pole m (min / median / min successful)':<46}{'mean t_goal s':>13}"
+    ]
+    for r in rows:
+        success = f"{r['successes']}/{r['episodes']} ({100 * r['success_rate']:.1f} %)"
+        dist = (
+            f"{r['min_pole_distance_m']:.1f} / {r['median_pole_distance_m']:.1f} / "
+            f"{r['min_pole_distance_successful_m']:.1f}"
+        )
+        lines.append(
+            f"{r['set']:<11}{r['episodes']:>9}  {success:<17}{r['collisions']:>10}  "
+            f"{dist:<46}{r['mean_time_to_goal_s']:>13.1f}"
+        )
+    return "\n".join(lines)
+
+
+def run(args: EvaluateArgs) -> int:
+    """Run ``usvsim evaluate`` (module docstring); 0 on success."""
+    torch.set_num_threads(max(1, args.threads))
+    if args.heldout < 0:
+        raise SystemExit("usvsim evaluate: --heldout must be >= 0")
+    try:
+        ckpt = load_checkpoint(args.checkpoint)
+        agent = load_agent(ckpt, args.checkpoint)
+    except CheckpointError as err:
+        raise SystemExit(f"usvsim evaluate: {err}") from None
+    helmsman = PolicyHelmsman(agent, ckpt.observation, ckpt.action)
+    kinds = {"observation": ckpt.observation, "action": ckpt.action}
+    sets = [("validation", validation_episodes())]
+    if args.heldout:
+        sets.append(("held-out", heldout_episodes(n=args.heldout)))
+    rows, per_episode = [], ""
+    for name, episodes in sets:
+        records = evaluate(helmsman, episodes, **kinds)
+        rows.append(evaluation_row(name, records))
+        if name == "validation" and args.episodes:
+            per_episode = format_records(records)
+    print(
+        f"{args.checkpoint}: setup {ckpt.setup} ({ckpt.observation}, {ckpt.action}), "
+        f"iteration {agent.iteration}, {agent.env_steps:,} env steps, "
+        f"git {ckpt.git_revision}"
+    )
+    print(format_table(rows))
+    if per_episode:
+        print(per_episode)
+    if args.json:
+        payload = {"checkpoint": args.checkpoint, "setup": ckpt.setup, "rows": rows}
+        atomic_write_text(args.json, json.dumps(payload, indent=2) + "\n")
+    sys.stdout.flush()
+    return 0

@@ -1,0 +1,388 @@
+"""Checkpoints of trained policies: a documented, versioned file format, and loading as a helmsman.
+
+A checkpoint is one file written by ``torch.save`` (atomically, :mod:`usvsim.common.fileio`) holding a
+dict of plain data and tensors only, so that it loads with ``torch.load(weights_only=True)``
+(no pickled code runs when a file is opened):
+
+=====================  =========================================================================
+key                    value
+=====================  =========================================================================
+``format``             ``"usvsim.checkpoint"`` (identifies the file)
+``version``            :data:`VERSION` (an int; a reader refuses newer versions)
+``setup``              setup name, e.g. ``"rl-gaussian-positional"`` (:mod:`learning.experiments.setups`)
+``observation``        observation kind the policy needs: ``positional`` | ``radar+goal``
+``action``             action kind it produces: ``gaussian`` | ``categorical``
+``setup_params``       every field of the :class:`learning.experiments.setups.RLSetup` used (dict)
+``agent``              :meth:`learning.algorithms.trpo.TRPOAgent.state_dict`: TRPO config, observation and
+                       action spaces, policy weights, observation-normaliser statistics (mean,
+                       var, count as lists), and — unless ``slim`` — critic, critic optimiser,
+                       random generator and counters needed to resume training
+``slim``               True when only what acting needs is stored (policy + normaliser)
+``weights_dtype``      ``"float32"``, or ``"float16"`` when the policy's floating-point
+                       tensors were stored in half precision (converted back on load)
+``git_revision``       ``git describe --always --dirty`` of the code that trained it, or
+                       ``"unknown"``
+``created_utc``        ISO 8601 time of writing
+``train_args``         the command-line options of the run (dict)
+``validation``         the validation record this checkpoint was saved at (dict, or None):
+                       iteration, env_steps, wall_time_s, successes, n_episodes, success_rate,
+                       mean_return, min_pole_distance_m, kl, entropy
+``history``            every validation record of the run up to this checkpoint (list)
+=====================  =========================================================================
+
+:func:`load_checkpoint` checks all of it and raises :class:`CheckpointError` with the file's path
+and what is wrong (unreadable or truncated file, not a checkpoint, newer version, missing keys,
+another setup or observation kind than expected, weights that do not fit the network).
+:func:`load_helmsman` wraps the policy's deterministic action as a
+:class:`usvsim.evaluation.episodes.Helmsman` that declares its ``observation`` and ``action`` kinds (read by
+:func:`usvsim.helm.registry.helmsman_kinds`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import os
+import pickle
+import subprocess
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from numpy.typing import NDArray
+
+from learning.algorithms.networks import NetworkConfig, space_to_spec
+from learning.algorithms.trpo import TRPOAgent, TRPOConfig
+from learning.experiments.setups import RLSetup, get_setup
+from usvsim.common.fileio import atomic_open
+from usvsim.task.batch import action_space
+from usvsim.task.observations import observation_space
+
+__all__ = [
+    "FORMAT",
+    "VERSION",
+    "Checkpoint",
+    "CheckpointError",
+    "NonFiniteWeightsError",
+    "PolicyHelmsman",
+    "git_revision",
+    "load_agent",
+    "load_checkpoint",
+    "load_helmsman",
+    "save_checkpoint",
+    "slim_copy",
+]
+
+FORMAT = "usvsim.checkpoint"
+VERSION = 1
+_REQUIRED = ("setup", "observation", "action", "setup_params", "agent", "slim", "weights_dtype")
+
+
+class CheckpointError(ValueError):
+    """A checkpoint file that cannot be used: unreadable, not a checkpoint, or mismatched."""
+
+
+class NonFiniteWeightsError(ValueError):
+    """Refused to save a policy holding NaN or ±inf (the file on disk is left as it was)."""
+
+
+def git_revision(repo: str | os.PathLike[str] | None = None) -> str:
+    """``git describe --always --dirty`` of ``repo`` (default: this package's), or "unknown"."""
+    cwd = Path(repo) if repo is not None else Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(
+            ["git", "describe", "--always", "--dirty"],
+            cwd=cwd,
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return out.stdout.strip() or "unknown"
+
+
+def _plain(value: Any) -> Any:
+    """Numpy arrays and scalars → lists and Python numbers (recursively), tensors kept."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _cast_floats(state: dict[str, Any], dtype: torch.dtype) -> dict[str, Any]:
+    return {
+        k: v.to(dtype) if isinstance(v, torch.Tensor) and v.is_floating_point() else v
+        for k, v in state.items()
+    }
+
+
+@dataclass
+class Checkpoint:
+    """A checkpoint in memory (see the module table for the meaning of each field)."""
+
+    setup: str
+    observation: str
+    action: str
+    setup_params: dict[str, Any]
+    agent: dict[str, Any]
+    slim: bool = False
+    weights_dtype: str = "float32"
+    git_revision: str = "unknown"
+    created_utc: str = ""
+    train_args: dict[str, Any] = field(default_factory=dict)
+    validation: dict[str, Any] | None = None
+    history: list[dict[str, Any]] = field(default_factory=list)
+
+    @classmethod
+    def from_agent(
+        cls,
+        agent: TRPOAgent,
+        setup: RLSetup,
+        *,
+        train_args: dict[str, Any] | None = None,
+        validation: dict[str, Any] | None = None,
+        history: list[dict[str, Any]] | None = None,
+    ) -> Checkpoint:
+        """The full (resumable) checkpoint of ``agent`` trained on ``setup``."""
+        return cls(
+            setup=setup.name,
+            observation=setup.observation,
+            action=setup.action,
+            setup_params=_plain(dataclasses.asdict(setup)),
+            agent=_plain(agent.state_dict()),
+            git_revision=git_revision(),
+            train_args=_plain(dict(train_args or {})),
+            validation=None if validation is None else _plain(dict(validation)),
+            history=[_plain(dict(h)) for h in history or []],
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "setup": self.setup,
+            "observation": self.observation,
+            "action": self.action,
+            "setup_params": self.setup_params,
+            "agent": self.agent,
+            "slim": self.slim,
+            "weights_dtype": self.weights_dtype,
+            "git_revision": self.git_revision,
+            "created_utc": self.created_utc
+            or _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "train_args": self.train_args,
+            "validation": self.validation,
+            "history": self.history,
+        }
+
+    def make_agent(self) -> TRPOAgent:
+        """The agent: fully restored (resumable) unless slim, else policy and normaliser only."""
+        if not self.slim:
+            return TRPOAgent.from_state_dict(self.agent)
+        state = self.agent
+        agent = TRPOAgent(
+            observation_space(self.observation),
+            action_space(self.action),
+            _config_from_state(state),
+        )
+        agent.policy.load_state_dict(_cast_floats(state["policy"], torch.float32))
+        agent.normalizer.load_state_dict(state["normalizer"])
+        agent.iteration, agent.env_steps = int(state["iteration"]), int(state["env_steps"])
+        return agent
+
+
+def _config_from_state(state: dict[str, Any]) -> TRPOConfig:
+    """The :class:`TRPOConfig` stored in an agent state (as ``TRPOAgent.from_state_dict``)."""
+    saved = dict(state["config"])
+    net = dict(saved["network"])
+    net["hidden"] = tuple(net["hidden"])
+    saved["network"] = NetworkConfig(**net)
+    return TRPOConfig(**saved)
+
+
+def save_checkpoint(checkpoint: Checkpoint, path: str | os.PathLike[str]) -> None:
+    """Write ``checkpoint`` to ``path`` atomically (the old file stays whole if this fails).
+
+    Refuses (:class:`NonFiniteWeightsError`, nothing written) a policy holding NaN or ±inf.
+    """
+    for name, tensor in checkpoint.agent["policy"].items():
+        if isinstance(tensor, torch.Tensor) and tensor.is_floating_point():
+            if not bool(torch.isfinite(tensor).all()):
+                raise NonFiniteWeightsError(
+                    f"refusing to save a policy with non-finite weights ({name})"
+                )
+    with atomic_open(path, "wb") as handle:
+        torch.save(checkpoint.to_dict(), handle)
+
+
+def slim_copy(checkpoint: Checkpoint, half: bool = False) -> Checkpoint:
+    """What acting needs only (policy + normaliser), optionally with float16 weights.
+
+    The shipped models in ``usvsim/models`` are slim copies: a few MB instead of the full
+    training state (critic and Adam moments triple the size).
+    """
+    keep = ("format", "config", "observation_space", "action_space", "normalizer")
+    agent = {k: checkpoint.agent[k] for k in keep}
+    agent["iteration"], agent["env_steps"] = (
+        checkpoint.agent["iteration"],
+        checkpoint.agent["env_steps"],
+    )
+    policy = checkpoint.agent["policy"]
+    agent["policy"] = _cast_floats(policy, torch.float16) if half else dict(policy)
+    return Checkpoint(
+        setup=checkpoint.setup,
+        observation=checkpoint.observation,
+        action=checkpoint.action,
+        setup_params=checkpoint.setup_params,
+        agent=agent,
+        slim=True,
+        weights_dtype="float16" if half else "float32",
+        git_revision=checkpoint.git_revision,
+        created_utc=checkpoint.created_utc,
+        train_args=checkpoint.train_args,
+        validation=checkpoint.validation,
+        history=checkpoint.history,
+    )
+
+
+def _read(path: Path) -> dict[str, Any]:
+    if not path.is_file():
+        raise CheckpointError(f"{path}: no such checkpoint file")
+    # torch.save writes a zip archive with CRCs: check it first, so a truncated or overwritten
+    # file is named as such rather than failing somewhere inside the unpickler.
+    try:
+        with zipfile.ZipFile(path) as archive:
+            bad = archive.testzip()
+    except (zipfile.BadZipFile, OSError, EOFError) as err:
+        raise CheckpointError(
+            f"{path}: not a readable checkpoint (corrupt or truncated file?): {err}"
+        ) from None
+    if bad is not None:
+        raise CheckpointError(f"{path}: not a readable checkpoint (corrupt member {bad})")
+    try:
+        data = torch.load(path, map_location="cpu", weights_only=True)
+    except (RuntimeError, pickle.UnpicklingError, EOFError, OSError, IndexError) as err:
+        raise CheckpointError(
+            f"{path}: not a readable checkpoint (corrupt or truncated file?): {err}"
+        ) from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise CheckpointError(f"{path}: not a usvsim checkpoint (no format {FORMAT!r})")
+    version = data.get("version")
+    if not isinstance(version, int) or version > VERSION:
+        raise CheckpointError(
+            f"{path}: checkpoint version {version!r} is not supported (this code reads ≤ {VERSION})"
+        )
+    missing = [k for k in _REQUIRED if k not in data]
+    if missing:
+        raise CheckpointError(f"{path}: checkpoint lacks {missing}")
+    return data
+
+
+def _check_spaces(path: Path, data: dict[str, Any]) -> None:
+    """The stored spaces must be those of the stored observation/action kinds."""
+    try:
+        obs_spec = space_to_spec(observation_space(data["observation"]))
+        act_spec = space_to_spec(action_space(data["action"]))
+    except ValueError as err:
+        raise CheckpointError(f"{path}: {err}") from None
+    agent = data["agent"]
+    if agent.get("observation_space") != obs_spec:
+        raise CheckpointError(
+            f"{path}: its policy's observation space does not match observation "
+            f"{data['observation']!r} (file edited or written by other code)"
+        )
+    if agent.get("action_space") != act_spec:
+        raise CheckpointError(
+            f"{path}: its policy's action space does not match action {data['action']!r}"
+        )
+
+
+def load_checkpoint(
+    path: str | os.PathLike[str], expected_setup: str | RLSetup | None = None
+) -> Checkpoint:
+    """Read and check a checkpoint file; optionally require it to be of ``expected_setup``.
+
+    Raises
+    ------
+    CheckpointError
+        If the file is missing, unreadable, not a usvsim checkpoint, of a newer version,
+        incomplete, internally inconsistent, or of another setup (then the message names both
+        setups and their observation/action kinds).
+    """
+    p = Path(path)
+    data = _read(p)
+    if expected_setup is not None:
+        want = get_setup(expected_setup) if isinstance(expected_setup, str) else expected_setup
+        if (data["setup"], data["observation"], data["action"]) != (
+            want.name,
+            want.observation,
+            want.action,
+        ):
+            raise CheckpointError(
+                f"{p}: checkpoint is for setup {data['setup']!r} (observation "
+                f"{data['observation']!r}, action {data['action']!r}), expected {want.name!r} "
+                f"(observation {want.observation!r}, action {want.action!r})"
+            )
+    _check_spaces(p, data)
+    ckpt = Checkpoint(
+        setup=str(data["setup"]),
+        observation=str(data["observation"]),
+        action=str(data["action"]),
+        setup_params=dict(data["setup_params"]),
+        agent=dict(data["agent"]),
+        slim=bool(data["slim"]),
+        weights_dtype=str(data["weights_dtype"]),
+        git_revision=str(data.get("git_revision", "unknown")),
+        created_utc=str(data.get("created_utc", "")),
+        train_args=dict(data.get("train_args") or {}),
+        validation=data.get("validation"),
+        history=list(data.get("history") or []),
+    )
+    return ckpt
+
+
+def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>") -> TRPOAgent:
+    """``checkpoint.make_agent()`` with weight errors reported as :class:`CheckpointError`."""
+    try:
+        return checkpoint.make_agent()
+    except (KeyError, TypeError, ValueError, RuntimeError) as err:
+        raise CheckpointError(
+            f"{path}: weights do not fit the {checkpoint.setup} networks: {err}"
+        ) from None
+
+
+@dataclass
+class PolicyHelmsman:
+    """A trained policy as a :class:`usvsim.evaluation.episodes.Helmsman`: deterministic actions.
+
+    ``observation`` and ``action`` name the kinds it needs (``usvsim.helm.registry.helmsman_kinds``);
+    Gaussian actions are the mean clipped to [-1, 1], categorical ones the most likely bin.
+    """
+
+    agent: TRPOAgent
+    observation: str
+    action: str
+    name: str = "policy"
+
+    def reset(self, n_boats: int) -> None:
+        self._n = n_boats
+
+    def act(self, observation: Any) -> NDArray[Any]:
+        return self.agent.act(observation, deterministic=True)
+
+
+def load_helmsman(path: str | os.PathLike[str]) -> PolicyHelmsman:
+    """The policy of the checkpoint at ``path`` as a helmsman named after the file's stem."""
+    ckpt = load_checkpoint(path)
+    agent = load_agent(ckpt, path)
+    return PolicyHelmsman(agent, ckpt.observation, ckpt.action, name=Path(path).stem)

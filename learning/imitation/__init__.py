@@ -1,0 +1,1 @@
+"""Imitation learning: expert demonstrations, their preprocessing into expert data, GAIL."""

@@ -1,0 +1,117 @@
+"""The ``usvsim`` command line: one sub-command per entry of :data:`COMMANDS`.
+
+Each sub-command has one frozen dataclass holding its options (defined beside the code it
+configures); argparse is built from it (:mod:`usvsim.cli.args`) so ``--help`` lists every field
+with its default. Long work shows a progress bar; results are written atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
+
+from usvsim.cli.args import add_dataclass_arguments
+
+__all__ = ["COMMANDS", "Command", "build_parser", "main"]
+
+
+class Command(NamedTuple):
+    """Where a sub-command lives: its options dataclass and its runner (``module:name``)."""
+
+    options: str
+    runner: str
+    summary: str
+
+
+# modules are imported only when their command is chosen, so `usvsim --help` does not pay for
+# torch or pymavlink
+COMMANDS: dict[str, Command] = {
+    "bench": Command(
+        "usvsim.evaluation.bench:BenchArgs",
+        "usvsim.cli.bench:run_bench_command",
+        "compare every helmsman on validation and held-out",
+    ),
+    "demo": Command(
+        "usvsim.cli.plant:DemoArgs",
+        "usvsim.cli.plant:run_demo",
+        "vessel and autopilot design, plant plots (PNG)",
+    ),
+    "perf": Command(
+        "usvsim.cli.plant:PerfArgs",
+        "usvsim.cli.plant:run_perf",
+        "throughput of the plant and the environments",
+    ),
+    "train": Command(
+        "learning.cli.train:TrainArgs",
+        "learning.cli.train:run",
+        "train a policy (rl-* by TRPO, il-* by GAIL)",
+    ),
+    "evaluate": Command(
+        "learning.cli.evaluate:EvaluateArgs",
+        "learning.cli.evaluate:run",
+        "evaluate a trained checkpoint",
+    ),
+    "sitl": Command(
+        "usvsim.mavlink.sitl:SitlArgs",
+        "usvsim.cli.mavlink:run_sitl",
+        "the usvsim plant as a MAVLink (Rover boat) vehicle",
+    ),
+    "sitl-physics": Command(
+        "usvsim.mavlink.sitl_physics:SitlPhysicsArgs",
+        "usvsim.cli.mavlink:run_sitl_physics",
+        "physics backend for ArduPilot SITL",
+    ),
+    "bridge": Command(
+        "usvsim.mavlink.bridge:BridgeArgs",
+        "usvsim.cli.mavlink:run_bridge",
+        "a helmsman steers an ArduPilot boat over MAVLink",
+    ),
+}
+
+
+def _resolve(target: str) -> Any:
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def _command(name: str) -> tuple[type, Callable[[Any], int]]:
+    """The options dataclass and the run function of command ``name``."""
+    command = COMMANDS[name]
+    return _resolve(command.options), _resolve(command.runner)
+
+
+def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
+    """The parser; only the ``chosen`` command's options are built (its module imported)."""
+    parser = argparse.ArgumentParser(
+        prog="usvsim",
+        description="usvsim: learn and test steering policies for unmanned surface vehicles.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (_, _, summary) in COMMANDS.items():
+        if name == chosen:
+            cls, _ = _command(name)
+            doc = (cls.__doc__ or summary).strip().splitlines()[0]
+            add_dataclass_arguments(sub.add_parser(name, help=summary, description=doc), cls)
+        else:
+            sub.add_parser(name, help=summary, add_help=False)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = list(sys.argv[1:] if argv is None else argv)
+    chosen = next((a for a in args if not a.startswith("-")), None)
+    parser = build_parser(chosen if chosen in COMMANDS else None)
+    ns = parser.parse_args(args)
+    if ns.command is None:
+        parser.print_help()
+        return 0
+    cls, run = _command(ns.command)
+    values = {k: v for k, v in vars(ns).items() if k != "command"}
+    return run(cls(**values))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

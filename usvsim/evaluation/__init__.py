@@ -1,0 +1,2 @@
+"""The evaluation block: episode sets, the benchmark, statistics, throughput measurements, plots.
+"""

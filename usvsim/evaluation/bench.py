@@ -1,0 +1,414 @@
+"""``usvsim bench``: every available helmsman on the validation and held-out sets, one table.
+
+With no arguments: each helmsman of :func:`usvsim.helm.registry.available_helmsmen` runs the 15
+validation episodes and the 200 held-out episodes of the pole task (each set is ONE batch,
+:func:`usvsim.evaluation.episodes.evaluate`), and the table gives per helmsman and set
+
+==========================  ===================================================================
+column                      meaning
+==========================  ===================================================================
+success [95 % CI]           strict successes / episodes, Wilson score interval (usvsim.evaluation.stats)
+min d_pole min / median     closest approach to the pole (m) over every episode: the worst
+                            episode and the median episode (< 10 m fails, ≈ 2.5 m is a hit)
+t_goal                      mean time to the goal (s), successful episodes
+path                        mean path length (m), successful episodes
+Σ|ΔΔψ|                      mean smoothness, Σ |Δψ_k − Δψ_{k−1}| (°), successful episodes
+==========================  ===================================================================
+
+``--scenario waypoints`` runs the waypoint courses of :mod:`usvsim.task.waypoints` instead (15
+validation and ``--heldout`` held-out courses; t_goal is then the time to the last waypoint).
+
+Results go to ``--out`` (default ``usvsim-results/bench/``), every file written atomically
+(:mod:`usvsim.common.fileio`): ``bench[-waypoints].md``, ``bench[-waypoints].csv`` and one path plot per
+helmsman and set, ``paths[-waypoints]-<helmsman>-<set>.png``. ``--json`` prints only JSON on
+stdout (NaN as ``null``); the progress bar goes to stderr.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from usvsim.evaluation.stats import Proportion, finite_mean, finite_median, proportion
+
+__all__ = [
+    "BenchArgs",
+    "BenchResult",
+    "BenchRow",
+    "format_table",
+    "plot_pole_paths",
+    "plot_waypoint_paths",
+    "run_bench",
+    "summarise_set",
+    "to_csv",
+    "to_json",
+    "to_markdown",
+    "write_results",
+]
+
+SCENARIOS = ("pole", "waypoints")
+SET_NAMES = ("validation", "held-out")
+
+
+@dataclass(frozen=True)
+class BenchArgs:
+    """Compare every available helmsman on the validation and held-out episodes (the table)."""
+
+    scenario: str = "pole"  # pole (the study's task) | waypoints (courses of waypoints and poles)
+    helmsmen: str = ""  # comma-separated helmsman names; empty: every available helmsman
+    heldout: int = 200  # episodes (courses) in the held-out set
+    out: str = "usvsim-results/bench"  # results folder: Markdown, CSV and path plots
+    json: bool = False  # print JSON only (stdout)
+    no_plots: bool = False  # skip the path plots
+    no_likeness: bool = False  # skip the expert-likeness columns (validation, pole scenario)
+
+
+class _Record(Protocol):
+    """What the summary reads of an episode record (EpisodeRecord or WaypointRecord)."""
+
+    @property
+    def success(self) -> bool: ...
+    @property
+    def collision(self) -> bool: ...
+    @property
+    def min_pole_distance_m(self) -> float: ...
+    @property
+    def time_to_goal_s(self) -> float: ...
+    @property
+    def path_length_m(self) -> float: ...
+    @property
+    def smoothness_rad(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class BenchRow:
+    """One line of the table: a helmsman on one episode set."""
+
+    helmsman: str
+    episode_set: str
+    success: Proportion
+    collisions: int
+    min_pole_distance_min_m: float  # worst episode
+    min_pole_distance_median_m: float  # median episode
+    time_to_goal_mean_s: float  # successful episodes; NaN if none
+    path_length_mean_m: float  # successful episodes; NaN if none
+    smoothness_mean_deg: float  # successful episodes; NaN if none
+    wall_s: float  # evaluation time of the set (s)
+    # expert-likeness (usvsim.evaluation.likeness) on the validation set of the pole scenario, else NaN:
+    expert_path_distance_m: float = math.nan  # mean distance to the nearest expert path, m
+    expert_side_agreement: float = math.nan  # fraction of expert samples passing the same side
+    expert_action_distance_deg: float = math.nan  # Wasserstein distance of 2 s heading changes
+
+    def flat(self) -> dict[str, Any]:
+        """Flat dict for CSV and JSON (the proportion spread into columns)."""
+        d = asdict(self)
+        p = d.pop("success")
+        return {
+            "helmsman": self.helmsman,
+            "episode_set": self.episode_set,
+            "episodes": p["n"],
+            "successes": p["successes"],
+            "success_rate": p["rate"],
+            "success_ci95_low": p["lower"],
+            "success_ci95_high": p["upper"],
+            **{k: v for k, v in d.items() if k not in ("helmsman", "episode_set")},
+        }
+
+
+def summarise_set(
+    helmsman: str, episode_set: str, records: Sequence[_Record], wall_s: float
+) -> BenchRow:
+    """The table row of ``records`` (see the module docstring for the columns)."""
+    ok = [r for r in records if r.success]
+    d = [r.min_pole_distance_m for r in records]
+    return BenchRow(
+        helmsman=helmsman,
+        episode_set=episode_set,
+        success=proportion(len(ok), len(records)),
+        collisions=sum(bool(r.collision) for r in records),
+        min_pole_distance_min_m=float(min(d)),
+        min_pole_distance_median_m=finite_median(d),
+        time_to_goal_mean_s=finite_mean(r.time_to_goal_s for r in ok),
+        path_length_mean_m=finite_mean(r.path_length_m for r in ok),
+        smoothness_mean_deg=finite_mean(math.degrees(r.smoothness_rad) for r in ok),
+        wall_s=wall_s,
+    )
+
+
+@dataclass(frozen=True)
+class BenchResult:
+    """Rows of the table and the records behind them, keyed by (helmsman, set)."""
+
+    scenario: str
+    rows: tuple[BenchRow, ...]
+    records: dict[tuple[str, str], list[Any]]
+    wall_s: float
+
+
+def _episode_sets(scenario: str, heldout: int) -> dict[str, Sequence[Any]]:
+    if scenario == "pole":
+        from usvsim.evaluation.episodes import heldout_episodes, validation_episodes
+
+        return {"validation": validation_episodes(), "held-out": heldout_episodes(n=heldout)}
+    from usvsim.task.waypoints import heldout_courses, validation_courses
+
+    return {"validation": validation_courses(), "held-out": heldout_courses(n=heldout)}
+
+
+def _check_args(args: BenchArgs) -> None:
+    if args.scenario not in SCENARIOS:
+        raise SystemExit(
+            f"usvsim bench: --scenario must be one of {SCENARIOS}, not {args.scenario!r}"
+        )
+    if args.heldout < 1:
+        raise SystemExit(f"usvsim bench: --heldout must be ≥ 1, got {args.heldout}")
+
+
+def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
+    """Evaluate the selected helmsmen on both sets of ``args.scenario``; no files, no printing."""
+    from tqdm import tqdm
+
+    from usvsim.evaluation.episodes import evaluate
+    from usvsim.evaluation.waypoints import evaluate_waypoints
+    from usvsim.helm.registry import available_helmsmen, helmsman_kinds
+
+    _check_args(args)
+    factories = available_helmsmen()
+    names = [n.strip() for n in args.helmsmen.split(",") if n.strip()] or list(factories)
+    unknown = [n for n in names if n not in factories]
+    if unknown:
+        raise SystemExit(f"usvsim bench: unknown helmsmen {unknown}; available: {list(factories)}")
+    sets = _episode_sets(args.scenario, args.heldout)
+    start = time.perf_counter()
+    reference = _expert_reference(args, sets["validation"])
+    rows, records = [], {}
+    jobs = [(name, set_name) for name in names for set_name in sets]
+    bar = tqdm(jobs, desc="bench", unit="set", file=sys.stderr, disable=not progress)
+    for name, set_name in bar:
+        bar.set_postfix_str(f"{name} / {set_name}")
+        helmsman = factories[name]()
+        obs_kind, act_kind = helmsman_kinds(helmsman)
+        t0 = time.perf_counter()
+        evaluator = evaluate if args.scenario == "pole" else evaluate_waypoints
+        recs = evaluator(helmsman, sets[set_name], observation=obs_kind, action=act_kind)
+        row = summarise_set(name, set_name, recs, time.perf_counter() - t0)
+        if reference is not None and set_name == "validation":
+            row = _with_likeness(row, recs, reference)
+        rows.append(row)
+        records[(name, set_name)] = recs
+    return BenchResult(args.scenario, tuple(rows), records, time.perf_counter() - start)
+
+
+def _expert_reference(args: BenchArgs, specs: Sequence[Any]) -> Any:
+    """The expert model's paths on the validation starts, or None where it does not apply."""
+    if args.no_likeness or args.scenario != "pole":
+        return None
+    try:
+        from usvsim.evaluation.likeness import expert_reference
+    except ImportError:  # the learning package is optional for the bench
+        return None
+    return expert_reference(specs)
+
+
+def _with_likeness(row: BenchRow, records: Sequence[Any], reference: Any) -> BenchRow:
+    from usvsim.evaluation.likeness import likeness
+
+    score = likeness(records, reference)
+    return replace(
+        row,
+        expert_path_distance_m=score.path_distance_m,
+        expert_side_agreement=score.side_agreement,
+        expert_action_distance_deg=score.action_distance_deg,
+    )
+
+
+def _num(x: float, fmt: str) -> str:
+    return "–" if not math.isfinite(x) else format(x, fmt)
+
+
+_HEADER = (
+    "helmsman",
+    "set",
+    "n",
+    "success [95 % CI]",
+    "min d_pole min / median (m)",
+    "t_goal (s)",
+    "path (m)",
+    "Σ|ΔΔψ| (°)",
+    "to expert (m)",
+    "same side",
+)
+
+
+def _cells(row: BenchRow) -> tuple[str, ...]:
+    return (
+        row.helmsman,
+        row.episode_set,
+        str(row.success.n),
+        row.success.format_percent(),
+        f"{row.min_pole_distance_min_m:.1f} / {row.min_pole_distance_median_m:.1f}",
+        _num(row.time_to_goal_mean_s, ".1f"),
+        _num(row.path_length_mean_m, ".1f"),
+        _num(row.smoothness_mean_deg, ".0f"),
+        _num(row.expert_path_distance_m, ".1f"),
+        _num(row.expert_side_agreement, ".2f"),
+    )
+
+
+def format_table(rows: Sequence[BenchRow]) -> str:
+    """Fixed-width table for the terminal."""
+    cells = [_HEADER, *(_cells(r) for r in rows)]
+    widths = [max(len(c[i]) for c in cells) for i in range(len(_HEADER))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(line, widths, strict=True)) for line in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def to_markdown(result: BenchResult) -> str:
+    """The table as Markdown, with the scenario and what the columns mean."""
+    lines = [
+        f"# usvsim bench — scenario `{result.scenario}`",
+        "",
+        "| " + " | ".join(_HEADER) + " |",
+        "|" + "---|" * len(_HEADER),
+        *("| " + " | ".join(_cells(r)) + " |" for r in result.rows),
+        "",
+        "success: strict (goal reached, never closer than 10 m to a pole), Wilson 95 % interval; "
+        "min d_pole over all episodes; t_goal, path and Σ|ΔΔψ| are means over successful "
+        "episodes. to expert / same side: expert-likeness on the validation starts "
+        "(mean distance to the nearest of 8 expert paths; fraction of expert runs passing the "
+        "pole on the same side). "
+        f"Evaluation wall time {result.wall_s:.1f} s.",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def to_csv(rows: Sequence[BenchRow]) -> str:
+    """The rows as CSV (one column per :meth:`BenchRow.flat` key)."""
+    buffer = io.StringIO()
+    flat = [r.flat() for r in rows]
+    writer = csv.DictWriter(buffer, fieldnames=list(flat[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(flat)
+    return buffer.getvalue()
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def to_json(result: BenchResult, files: Sequence[str] = ()) -> str:
+    """Machine-readable result: scenario, sets, rows (NaN → null), wall time, files written."""
+    sizes: dict[str, int] = {}
+    for r in result.rows:
+        sizes[r.episode_set] = r.success.n
+    payload = {
+        "scenario": result.scenario,
+        "episode_sets": sizes,
+        "rows": [{k: _json_safe(v) for k, v in r.flat().items()} for r in result.rows],
+        "wall_s": result.wall_s,
+        "files": list(files),
+    }
+    return json.dumps(payload, indent=2, allow_nan=False)
+
+
+def write_results(result: BenchResult, out: Path, plots: bool = True) -> list[Path]:
+    """Write the Markdown table, the CSV and (optionally) the path plots, each atomically."""
+    from usvsim.common.fileio import atomic_write_text
+
+    stem = "bench" if result.scenario == "pole" else f"bench-{result.scenario}"
+    written = [out / f"{stem}.md", out / f"{stem}.csv"]
+    atomic_write_text(written[0], to_markdown(result))
+    atomic_write_text(written[1], to_csv(result.rows))
+    if plots:
+        written += _write_plots(result, out)
+    return written
+
+
+def _write_plots(result: BenchResult, out: Path) -> list[Path]:
+    from usvsim.common.mpl import use_file_backend_if_headless
+
+    use_file_backend_if_headless()
+    import matplotlib.pyplot as plt
+
+    from usvsim.common.fileio import atomic_savefig
+
+    prefix = "paths" if result.scenario == "pole" else f"paths-{result.scenario}"
+    plot = plot_pole_paths if result.scenario == "pole" else plot_waypoint_paths
+    written = []
+    for (name, set_name), recs in result.records.items():
+        fig = plot(recs, f"{name} — {set_name}")
+        path = out / f"{prefix}-{name}-{set_name}.png"
+        atomic_savefig(fig, path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+def plot_pole_paths(records: Sequence[Any], title: str) -> Any:
+    """All paths of a pole-task set in one frame: pole at the origin, start → goal along +x.
+
+    Each true path is rotated and shifted so the pole sits at (0, 0) and the start on the
+    negative x axis (the study's geometry puts start, pole and goal on one line); successes
+    green, failures red, with the pole's 10 m safety circle.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for r in records:
+        axis = r.goal_ne - r.pole_ne
+        u = axis / np.hypot(*axis)
+        rel = r.trajectory[:, :2] - r.pole_ne
+        along, across = rel @ u, rel @ np.array([-u[1], u[0]])
+        colour = "tab:green" if r.success else "tab:red"
+        ax.plot(along, across, color=colour, lw=0.7, alpha=0.5)
+        ax.plot(np.hypot(*axis), 0.0, "*", color="tab:orange", ms=6)
+    t = np.linspace(0.0, 2.0 * math.pi, 100)
+    ax.plot(10.0 * np.cos(t), 10.0 * np.sin(t), "--", color="tab:red", lw=1.0)
+    ax.plot(0.0, 0.0, "x", color="k", ms=8, mew=2)
+    n_ok = sum(bool(r.success) for r in records)
+    ax.set(
+        xlabel="along start → goal, from the pole (m)",
+        ylabel="across (m, starboard of the line > 0)",
+        title=f"{title}: {n_ok}/{len(records)} successes (green), pole ✕ with 10 m circle",
+    )
+    ax.set_aspect("equal", adjustable="datalim")
+    fig.tight_layout()
+    return fig
+
+
+def plot_waypoint_paths(records: Sequence[Any], title: str, n_courses: int = 6) -> Any:
+    """The first ``n_courses`` waypoint courses: waypoints ★, poles ✕ with 10 m circles, path."""
+    import matplotlib.pyplot as plt
+
+    shown = list(records)[:n_courses]
+    fig, axes = plt.subplots(2, math.ceil(len(shown) / 2), figsize=(12, 7.5), squeeze=False)
+    t = np.linspace(0.0, 2.0 * math.pi, 60)
+    for ax, r in zip(axes.flat, shown, strict=False):
+        w, p = r.course.waypoints_ne, r.course.poles_ne
+        ax.plot(w[:, 1], w[:, 0], "*--", color="0.5", lw=0.8, ms=9)
+        for pole in p:
+            ax.plot(pole[1] + 10.0 * np.sin(t), pole[0] + 10.0 * np.cos(t), color="tab:red", lw=1)
+        colour = "tab:green" if r.success else "tab:red"
+        ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=colour, lw=1.3)
+        ax.set_title(f"{r.outcome}, min d_pole {r.min_pole_distance_m:.1f} m", fontsize=9)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(shown) :]:
+        ax.set_visible(False)
+    fig.suptitle(f"{title} (north up, east right, m)")
+    fig.tight_layout()
+    return fig

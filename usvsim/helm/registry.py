@@ -1,0 +1,119 @@
+"""The one registry of helmsmen: every helmsman ``usvsim bench``, ``usvsim bridge`` and the
+notebooks can name.
+
+===========================  ===================================================================
+name                         helmsman
+===========================  ===================================================================
+``straight``                 :class:`usvsim.helm.protocol.StraightAheadHelmsman` (sanity check)
+``random``                   :class:`usvsim.helm.protocol.RandomHelmsman` (sanity check)
+``los``                      :class:`baselines.los.LOSHelmsman`, LOS to the goal
+``los-avoid``                :class:`baselines.avoid.AvoidHelmsman`, LOS + collision cone
+``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``
+a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
+===========================  ===================================================================
+
+:func:`available_helmsmen` lists the compared ones (baselines, then shipped models);
+:func:`make_helmsman` builds any of the table. This module is the only place where the simulator
+reaches :mod:`learning` (to load a checkpoint as a helmsman), so the simulator's layers never
+depend on the learning code.
+
+A helmsman may declare the observation and action kinds it needs as attributes
+``observation`` and ``action``; :func:`helmsman_kinds` reads them (defaults: positional,
+gaussian).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from usvsim.helm.protocol import Helmsman, RandomHelmsman, StraightAheadHelmsman
+from usvsim.task.batch import ActionKind
+
+__all__ = [
+    "MODELS_DIR",
+    "SANITY_HELMSMEN",
+    "HelmsmanFactory",
+    "available_helmsmen",
+    "helmsman_kinds",
+    "load_checkpoint_helmsman",
+    "make_helmsman",
+]
+
+HelmsmanFactory = Callable[[], Helmsman]
+MODELS_DIR = Path(__file__).resolve().parents[1] / "models"
+SANITY_HELMSMEN = ("straight", "random")
+
+
+def _los() -> Helmsman:
+    from baselines.los import LOSHelmsman
+
+    return LOSHelmsman()
+
+
+def _los_avoid() -> Helmsman:
+    from baselines.avoid import AvoidHelmsman
+
+    return AvoidHelmsman()
+
+
+def load_checkpoint_helmsman(path: str | Path) -> Helmsman:
+    """The policy of a checkpoint file as a helmsman; ``ValueError`` if it cannot be read."""
+    from learning.experiments.checkpoint import CheckpointError, load_helmsman
+
+    try:
+        return load_helmsman(path)
+    except CheckpointError as err:
+        raise ValueError(str(err)) from None
+
+
+def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFactory]:
+    """Name → factory of every compared helmsman: the baselines first, then trained policies.
+
+    ``models_dir`` defaults to :data:`MODELS_DIR` (the package's shipped models); every ``*.pt``
+    in it is one entry named by its stem. A trained policy named like a baseline raises
+    ``ValueError`` rather than hiding it.
+    """
+    helmsmen: dict[str, HelmsmanFactory] = {"los": _los, "los-avoid": _los_avoid}
+    folder = MODELS_DIR if models_dir is None else models_dir
+    for path in sorted(folder.glob("*.pt")) if folder.is_dir() else []:
+        if path.stem in helmsmen or path.stem in SANITY_HELMSMEN:
+            raise ValueError(f"trained model {path.stem!r} clashes with a baseline's name")
+        helmsmen[path.stem] = partial(load_checkpoint_helmsman, path)
+    return helmsmen
+
+
+def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
+    """Any helmsman of the module's table, by name or checkpoint path.
+
+    ``action`` is the action kind of the sanity helmsmen (``straight``, ``random``); the others
+    declare their own.
+
+    Raises
+    ------
+    ValueError
+        For unknown names and unreadable checkpoints.
+    """
+    if name == "straight":
+        return StraightAheadHelmsman(action=action)
+    if name == "random":
+        return RandomHelmsman(action=action)
+    registry = available_helmsmen()
+    if name in registry:
+        return registry[name]()
+    if Path(name).is_file():
+        return load_checkpoint_helmsman(name)
+    raise ValueError(
+        f"unknown helmsman {name!r}; choose {', '.join((*SANITY_HELMSMEN, *registry))} "
+        "or a checkpoint file (.pt)"
+    )
+
+
+def helmsman_kinds(helmsman: Any) -> tuple[str, str]:
+    """(observation kind, action kind) a helmsman declares; default (positional, gaussian)."""
+    return (
+        str(getattr(helmsman, "observation", "positional")),
+        str(getattr(helmsman, "action", "gaussian")),
+    )

@@ -1,0 +1,420 @@
+"""``usvsim bridge``: a helmsman steers an external autopilot (ArduPilot Rover, boat) over MAVLink.
+
+Sequence: wait for the vehicle's HEARTBEAT (must be a surface boat or rover), request
+GLOBAL_POSITION_INT and ATTITUDE at ``telemetry_rate_hz`` (SET_MESSAGE_INTERVAL), switch to
+GUIDED, arm only with ``--arm``; then on every telemetry tick:
+
+1. convert GLOBAL_POSITION_INT to NED around the mission origin (:mod:`usvsim.nav.geo`) and run the
+   simulator's Kalman filter models (:class:`TelemetryEstimator`);
+2. every ``decision_period_s`` of *vehicle* time, build the observation with the simulator's
+   builder (:func:`usvsim.task.observations.build_observation`), ask the helmsman
+   (:class:`usvsim.evaluation.episodes.Helmsman`), map the action to a heading change exactly as the
+   environment does (:func:`usvsim.task.batch.heading_change_rad`), and command
+   ``ψ_ref = ssa(ψ̂ + Δψ)`` at the mission's cruise speed;
+3. re-send the setpoint at ``setpoint_rate_hz`` (Rover drops GUIDED targets after ~3 s and
+   acknowledges none), and a GCS HEARTBEAT every vehicle second.
+
+Timing follows the vehicle clock (``time_boot_ms``), so a faster-than-real-time SITL gets the
+same 2 s decisions. Safety: the bridge commands HOLD and stops streaming when telemetry is older
+than ``stale_s`` (see :meth:`Bridge.telemetry_age_s`), when the helmsman raises or returns an
+invalid action (NaN, out of range), when the goal is reached, and on Ctrl-C (HOLD, then exit).
+Every decision and failsafe goes to a CSV log; the link is recorded as a tlog.
+
+Shapes inside: one boat, arrays of shape (1, ...), as the simulator's batched builders expect.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import statistics
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from usvsim.common.angles import ssa
+from usvsim.helm.protocol import Helmsman
+from usvsim.mavlink.link import (
+    MAV_RESULT_ACCEPTED,
+    Attitude,
+    CommandAck,
+    GlobalPosition,
+    Heartbeat,
+    MavCommand,
+    MavlinkLink,
+    Received,
+    RoverMode,
+    load_signing_key,
+)
+from usvsim.mavlink.mission import Mission
+from usvsim.nav.geo import ned_from_geodetic
+from usvsim.nav.telemetry import TelemetryEstimator
+from usvsim.task.batch import heading_change_rad
+from usvsim.task.observations import build_observation
+from usvsim.task.radar import RadarConfig
+
+__all__ = ["Bridge", "BridgeArgs", "BridgeResult"]
+
+_CSV_FIELDS = (
+    "wall_s",
+    "vehicle_s",
+    "event",
+    "x_n_m",
+    "y_e_m",
+    "psi_deg",
+    "action",
+    "psi_ref_deg",
+    "speed_mps",
+    "latency_ms",
+    "detail",
+)
+
+
+@dataclass(frozen=True)
+class BridgeArgs:
+    """Let a helmsman steer an ArduPilot Rover boat (or usvsim sitl) over MAVLink."""
+
+    connect: str = "tcp:127.0.0.1:5760"  # MAVLink URL: tcp:, udp:, udpin:, udpout:, serial dev
+    mission: str = ""  # mission file (JSON, or YAML with PyYAML): poles and goal as lat/lon
+    helmsman: str = "straight"  # baseline name (straight | random) or a checkpoint path
+    observation: str = "positional"  # observation kind the helmsman expects
+    action: str = "gaussian"  # action kind the helmsman returns: gaussian | categorical
+    arm: bool = False  # arm the vehicle (otherwise it must be armed already)
+    attitude_target: bool = False  # command SET_ATTITUDE_TARGET instead of position target
+    wp_speed_mps: float = 3.0  # vehicle WP_SPEED: thrust 1 in SET_ATTITUDE_TARGET (m/s)
+    decision_period_s: float = 2.0  # helmsman period, vehicle clock (s)
+    max_heading_change_deg: float = 30.0  # heading change of a full action (deg)
+    setpoint_rate_hz: float = 10.0  # setpoint re-send rate, vehicle clock (Hz)
+    telemetry_rate_hz: float = 10.0  # requested GLOBAL_POSITION_INT / ATTITUDE rate (Hz)
+    stale_s: float = 1.5  # telemetry older than this (vehicle clock) -> HOLD (s)
+    heartbeat_timeout_s: float = 30.0  # wait this long for the vehicle (wall clock, s)
+    command_timeout_s: float = 3.0  # wait this long for a COMMAND_ACK (wall clock, s)
+    max_duration_s: float = 0.0  # end with HOLD after this vehicle time (0 = no limit)
+    target_system: int = 0  # vehicle system id (0 = the first boat heard)
+    system_id: int = 255  # our MAVLink system id (GCS)
+    signing_key: str = ""  # file with a 32-byte MAVLink2 signing key ('' = unsigned)
+    log_csv: str = "usvsim-results/bridge/decisions.csv"  # decisions and failsafes
+    tlog: str = "usvsim-results/bridge/link.tlog"  # link recording ('' = none)
+
+
+@dataclass
+class BridgeResult:
+    """How a bridge run ended and what it measured (latencies in wall-clock seconds)."""
+
+    reason: str = ""
+    decisions: int = 0
+    path_ne: list[tuple[float, float, float]] = field(default_factory=list)  # t_s, x_N, y_E
+    latencies_s: list[float] = field(default_factory=list)  # telemetry in -> setpoint out
+    telemetry_ticks: int = 0
+    telemetry_wall_s: float = 0.0
+    hold_acknowledged: bool = False
+
+    def latency_summary(self) -> tuple[float, float]:
+        """Median and 99th percentile of the decision latency (s)."""
+        lat = sorted(self.latencies_s)
+        if not lat:
+            return math.nan, math.nan
+        return statistics.median(lat), float(np.percentile(lat, 99))
+
+
+class FailsafeError(Exception):
+    """Internal: a condition that ends the run with HOLD (the message says which)."""
+
+
+class Bridge:
+    """One bridge session (see the module docstring); :meth:`run` does everything.
+
+    ``link`` and ``clock`` may be injected (tests); ``helmsman`` is any
+    :class:`usvsim.evaluation.episodes.Helmsman`.
+    """
+
+    def __init__(
+        self,
+        args: BridgeArgs,
+        mission: Mission,
+        helmsman: Helmsman,
+        link: MavlinkLink | None = None,
+        clock: Callable[[], float] = time.perf_counter,
+    ) -> None:
+        self.args = args
+        self.mission = mission
+        self.helmsman = helmsman
+        self._clock = clock
+        if link is None:
+            key = load_signing_key(args.signing_key) if args.signing_key else None
+            tlog = args.tlog or None
+            if tlog:
+                Path(tlog).parent.mkdir(parents=True, exist_ok=True)
+            link = MavlinkLink(
+                args.connect, system_id=args.system_id, signing_key=key, tlog_path=tlog
+            )
+        self.link = link
+        self.poles_ne = mission.poles_ne
+        self.goal_ne = mission.goal_ne
+        self.estimator = TelemetryEstimator()
+        self.radar = RadarConfig()
+        self._rng = np.random.default_rng(0)  # radar speckle for radar observations
+        self.target = args.target_system
+        self.result = BridgeResult()
+        self._attitude: Attitude | None = None
+        self._last_rx_wall: float | None = None
+        self._rate_window: deque[tuple[float, int]] = deque()  # (wall s, vehicle ms)
+        self.clock_rate = 1.0  # vehicle seconds per wall second, estimated
+        self._setpoint: tuple[float, float] | None = None  # ψ_ref (rad), speed (m/s)
+        self._next = {"decision": 0, "setpoint": 0, "heartbeat": 0}
+        self._start_ms: int | None = None
+        self._log_file: IO[str] | None = None
+        self._log: Any = None
+        if args.log_csv:
+            Path(args.log_csv).parent.mkdir(parents=True, exist_ok=True)
+            self._log_file = open(args.log_csv, "w", newline="")
+            self._log = csv.DictWriter(self._log_file, fieldnames=_CSV_FIELDS)
+            self._log.writeheader()
+
+    # --- logging ---------------------------------------------------------------------------
+
+    def _write(self, event: str, detail: str = "", **values: float | str) -> None:
+        if self._log is None:
+            return
+        row: dict[str, Any] = dict.fromkeys(_CSV_FIELDS, "")
+        row.update(wall_s=f"{self._clock():.6f}", event=event, detail=detail)
+        if self.estimator.last_ms is not None:
+            row["vehicle_s"] = f"{self.estimator.last_ms / 1000.0:.3f}"
+        row.update({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in values.items()})
+        self._log.writerow(row)
+        assert self._log_file is not None
+        self._log_file.flush()
+
+    # --- connection ------------------------------------------------------------------------
+
+    def _accept(self, r: Received) -> bool:
+        """Only the target vehicle's autopilot counts; other systems are ignored."""
+        return r.src_system == self.target and r.src_component == 1
+
+    def _wait_ack(self, command: int, timeout_s: float | None = None) -> bool:
+        wait = self.args.command_timeout_s if timeout_s is None else timeout_s
+        deadline = time.monotonic() + wait
+        while time.monotonic() < deadline:
+            for r in self.link.poll(0.05):
+                if (
+                    self._accept(r)
+                    and isinstance(r.message, CommandAck)
+                    and r.message.command == command
+                ):
+                    return r.message.result == MAV_RESULT_ACCEPTED
+        return False
+
+    def connect(self) -> None:
+        """Heartbeat, type check, telemetry rates, GUIDED, arming.
+
+        Raises
+        ------
+        RuntimeError
+            If the vehicle is not a boat/rover or refuses GUIDED or arming.
+        TimeoutError
+            If no heartbeat arrives within ``heartbeat_timeout_s``.
+        """
+        want = self.args.target_system
+
+        def is_vehicle(r: Received) -> bool:
+            hb = r.message
+            return (
+                isinstance(hb, Heartbeat)
+                and hb.type != 6
+                and r.src_component == 1
+                and (want == 0 or r.src_system == want)
+            )
+
+        first = self.link.wait_heartbeat(self.args.heartbeat_timeout_s, is_vehicle)
+        hb = first.message
+        assert isinstance(hb, Heartbeat)
+        if not hb.is_boat_or_rover:
+            raise RuntimeError(
+                f"vehicle {first.src_system} is MAV_TYPE {hb.type}, not a surface "
+                "boat (11) or ground rover (10)"
+            )
+        self.target = first.src_system
+        self._write("info", f"vehicle {self.target} type {hb.type} mode {hb.custom_mode}")
+        for name in ("GLOBAL_POSITION_INT", "ATTITUDE"):
+            self.link.request_message_interval(self.target, name, self.args.telemetry_rate_hz)
+            self._wait_ack(MavCommand.SET_MESSAGE_INTERVAL)
+        self.link.set_mode(self.target, RoverMode.GUIDED)
+        if not self._wait_ack(MavCommand.DO_SET_MODE):
+            raise RuntimeError("vehicle refused GUIDED mode")
+        if self.args.arm:
+            self.link.arm(self.target)
+            if not self._wait_ack(MavCommand.COMPONENT_ARM_DISARM):
+                raise RuntimeError("vehicle refused to arm")
+        self._write("info", "GUIDED" + (", armed" if self.args.arm else ""))
+
+    # --- the loop --------------------------------------------------------------------------
+
+    def telemetry_age_s(self, now_wall: float) -> float:
+        """Age of the last telemetry on the vehicle clock, extrapolated at the measured rate.
+
+        ``(wall now − wall at receipt) · max(ρ, 1)`` with ρ the vehicle-clock rate (vehicle s
+        per wall s) measured over the telemetry: the vehicle clock when it runs faster than
+        real time, the wall clock otherwise (never later than real time).
+        """
+        if self._last_rx_wall is None:
+            return 0.0
+        return (now_wall - self._last_rx_wall) * max(self.clock_rate, 1.0)
+
+    def _on_telemetry(self, r: Received, rx_wall: float) -> None:
+        msg = r.message
+        if isinstance(msg, Attitude):
+            self._attitude = msg
+            return
+        if not isinstance(msg, GlobalPosition) or self._attitude is None:
+            return
+        t_ms = msg.time_boot_ms
+        if self.estimator.last_ms is not None and t_ms <= self.estimator.last_ms:
+            return  # old or repeated sample
+        # vehicle-clock rate over the last ~1 s of wall clock (a sliding window, so a burst of
+        # queued packets at the start does not bias it for long)
+        self._rate_window.append((rx_wall, t_ms))
+        while rx_wall - self._rate_window[0][0] > 1.0:
+            self._rate_window.popleft()
+        w0, m0 = self._rate_window[0]
+        if rx_wall - w0 > 0.05:
+            self.clock_rate = (t_ms - m0) / 1000.0 / (rx_wall - w0)
+        self._last_rx_wall = rx_wall
+        self.result.telemetry_ticks += 1
+        pos = ned_from_geodetic(msg.lat_deg, msg.lon_deg, self.mission.origin)
+        a = self._attitude
+        self.estimator.update(
+            t_ms, pos, np.array([msg.vn_mps, msg.ve_mps]), a.yaw_rad, a.yaw_rate_radps
+        )
+        if self._start_ms is None:
+            self._start_ms = t_ms
+            self._next = dict.fromkeys(self._next, t_ms)
+        est = self.estimator.pos_ne
+        self.result.path_ne.append((t_ms / 1000.0, float(est[0]), float(est[1])))
+        self._tick(t_ms, rx_wall)
+
+    def _tick(self, t_ms: int, rx_wall: float) -> None:
+        """Decide, stream and heartbeat on the vehicle clock; raise FailsafeError to stop."""
+        pos, psi = self.estimator.pos_ne, self.estimator.psi
+        if float(np.hypot(*(pos - self.goal_ne))) <= self.mission.goal_radius_m:
+            raise FailsafeError("goal reached")
+        assert self._start_ms is not None
+        if self.args.max_duration_s > 0 and t_ms - self._start_ms > self.args.max_duration_s * 1e3:
+            raise FailsafeError("max duration")
+        sent = False
+        if t_ms >= self._next["decision"]:
+            self._decide(pos, psi)
+            self._next["decision"] += round(self.args.decision_period_s * 1000)
+            self._send_setpoint()
+            sent = True
+            self.result.latencies_s.append(self._clock() - rx_wall)
+            self._next["setpoint"] = t_ms
+        if t_ms >= self._next["setpoint"]:
+            if not sent:
+                self._send_setpoint()
+            self._next["setpoint"] += round(1000.0 / self.args.setpoint_rate_hz)
+        if t_ms >= self._next["heartbeat"]:
+            self.link.send_gcs_heartbeat()
+            self._next["heartbeat"] += 1000
+
+    def _decide(self, pos: np.ndarray, psi: float) -> None:
+        poles = self.poles_ne
+        pole = poles[np.argmin(np.hypot(*(poles - pos).T))]  # the nearest pole is "the" pole
+        obs = build_observation(
+            self.args.observation,
+            pos[None],
+            np.array([psi]),
+            pole[None],
+            self.goal_ne[None],
+            self.mission.pole_radius_m,
+            self.radar,
+            self._rng,
+        )
+        try:
+            actions = self.helmsman.act(obs)
+        except Exception as err:  # any helmsman failure must end in HOLD, and is logged
+            raise FailsafeError(f"helmsman error: {type(err).__name__}: {err}") from err
+        try:
+            dpsi = heading_change_rad(
+                self.args.action, actions, 1, math.radians(self.args.max_heading_change_deg)
+            )
+        except ValueError as err:
+            raise FailsafeError(f"invalid action: {err}") from err
+        psi_ref = float(ssa(psi + dpsi[0]))
+        self._setpoint = (psi_ref, self.mission.cruise_speed_mps)
+        self.result.decisions += 1
+        self._write(
+            "decision",
+            x_n_m=float(pos[0]),
+            y_e_m=float(pos[1]),
+            psi_deg=math.degrees(psi),
+            action=str(np.asarray(actions).ravel().tolist()),
+            psi_ref_deg=math.degrees(psi_ref),
+            speed_mps=self.mission.cruise_speed_mps,
+        )
+
+    def _send_setpoint(self) -> None:
+        if self._setpoint is None:
+            return
+        psi_ref, speed = self._setpoint
+        if self.args.attitude_target:
+            thrust = min(1.0, speed / self.args.wp_speed_mps)
+            self.link.send_attitude_target(self.target, psi_ref, thrust)
+        else:
+            self.link.send_heading(self.target, psi_ref, speed)
+
+    def hold(self, reason: str) -> None:
+        """Command HOLD (re-sent up to 3 times until acknowledged) and stop streaming."""
+        self._setpoint = None
+        for _ in range(3):
+            self.link.set_mode(self.target, RoverMode.HOLD)
+            if self._wait_ack(MavCommand.DO_SET_MODE, timeout_s=0.5):
+                self.result.hold_acknowledged = True
+                break
+        self.result.reason = reason
+        self._write("done" if reason == "goal reached" else "failsafe", reason)
+
+    def loop(self, max_wall_s: float = math.inf) -> BridgeResult:
+        """Run until a failsafe, the goal, Ctrl-C, or ``max_wall_s``; always ends in HOLD."""
+        start = self._clock()
+        try:
+            while True:
+                now = self._clock()
+                if now - start > max_wall_s:
+                    raise FailsafeError("wall-clock limit")
+                if self.telemetry_age_s(now) > self.args.stale_s:
+                    raise FailsafeError(
+                        f"stale telemetry ({self.telemetry_age_s(now):.2f} s vehicle clock)"
+                    )
+                if self._last_rx_wall is None and now - start > self.args.heartbeat_timeout_s:
+                    raise FailsafeError("no telemetry")
+                for r in self.link.poll(0.01):
+                    if self._accept(r):
+                        self._on_telemetry(r, self._clock())
+        except FailsafeError as stop:
+            self.hold(str(stop))
+        except KeyboardInterrupt:
+            self.hold("interrupted (Ctrl-C)")
+            raise
+        finally:
+            self.result.telemetry_wall_s = self._clock() - start
+        return self.result
+
+    def close(self) -> None:
+        self.link.close()
+        if self._log_file is not None:
+            self._log_file.close()
+            self._log_file = None
+
+    def run(self, max_wall_s: float = math.inf) -> BridgeResult:
+        """connect, reset the helmsman, loop; the link and the log are closed at the end."""
+        try:
+            self.connect()
+            self.helmsman.reset(1)
+            return self.loop(max_wall_s)
+        finally:
+            self.close()

@@ -1,0 +1,707 @@
+"""The one module that imports pymavlink: a narrow, typed MAVLink 2 link for both ends.
+
+Both the companion-computer side (:mod:`usvsim.mavlink.bridge`) and the vehicle side
+(:mod:`usvsim.mavlink.sitl`) talk through :class:`MavlinkLink`: incoming packets are decoded into small
+frozen dataclasses (:class:`Received` wrapping :class:`Heartbeat`, :class:`GlobalPosition`, ...),
+outgoing ones are built by typed methods (``send_heading(psi_rad, speed_mps)``). No pymavlink
+object leaves this module.
+
+Protocol choices (ArduPilot Rover, boat frame; checked against ``Rover/GCS_Mavlink.cpp``):
+
+* Heading + speed in GUIDED: ``SET_POSITION_TARGET_LOCAL_NED`` in ``MAV_FRAME_LOCAL_NED`` with
+  ``type_mask`` :data:`TYPE_MASK_VELOCITY_YAW` (position, vz, acceleration and yaw rate ignored).
+  Rover takes the speed as ``|(vx, vy)|`` and the *sign of vx* as the driving direction, and the
+  heading from ``yaw`` (absolute in LOCAL_NED; BODY frames would make it relative). We therefore
+  send ``vx = speed, vy = 0, yaw = ψ``: forward at ``speed`` on absolute heading ψ.
+* Alternative: ``SET_ATTITUDE_TARGET`` with the yaw quaternion, body rates ignored and thrust
+  used (:data:`ATTITUDE_MASK_YAW_THRUST`); Rover maps ``thrust ∈ [-1, 1]`` to ``thrust · WP_SPEED``.
+* Neither is acknowledged by Rover, and GUIDED drops a heading/speed target after ~3 s: senders
+  must stream them (5-10 Hz).
+* MAVLink 2 always (the v2 parser also reads v1 packets); optional signing with a 32-byte key.
+
+The tlog written with ``tlog_path`` is the standard format (MAVProxy, pymavlink ``mavlogdump``):
+per packet an 8-byte big-endian wall-clock time in µs, then the raw packet, both directions.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+import struct
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mav2
+
+__all__ = [
+    "ATTITUDE_MASK_YAW_THRUST",
+    "TYPE_MASK_VELOCITY_YAW",
+    "Attitude",
+    "CommandAck",
+    "CommandLong",
+    "GlobalPosition",
+    "GpsRaw",
+    "Heartbeat",
+    "MavCommand",
+    "MavlinkLink",
+    "Message",
+    "Received",
+    "RoverMode",
+    "SetAttitudeTarget",
+    "SetMode",
+    "SetPositionTarget",
+    "StatusText",
+    "SysStatus",
+    "VfrHud",
+    "load_signing_key",
+    "message_id",
+    "read_tlog",
+]
+
+# POSITION_TARGET_TYPEMASK bits (MAVLink common.xml): 1 x, 2 y, 4 z, 8 vx, 16 vy, 32 vz,
+# 64 ax, 128 ay, 256 az, 512 force, 1024 yaw, 2048 yaw rate.
+_POS_IGNORE = 1 | 2 | 4
+_VZ_IGNORE = 32
+_ACC_IGNORE = 64 | 128 | 256
+_YAW_IGNORE = 1024
+_YAW_RATE_IGNORE = 2048
+TYPE_MASK_VELOCITY_YAW = _POS_IGNORE | _VZ_IGNORE | _ACC_IGNORE | _YAW_RATE_IGNORE  # 2535
+# ATTITUDE_TARGET_TYPEMASK bits: 1 roll rate, 2 pitch rate, 4 yaw rate, 64 throttle, 128 attitude
+ATTITUDE_MASK_YAW_THRUST = 1 | 2 | 4
+
+MAV_TYPE_GCS = mav2.MAV_TYPE_GCS
+MAV_TYPE_SURFACE_BOAT = mav2.MAV_TYPE_SURFACE_BOAT
+MAV_TYPE_GROUND_ROVER = mav2.MAV_TYPE_GROUND_ROVER
+MAV_AUTOPILOT_ARDUPILOTMEGA = mav2.MAV_AUTOPILOT_ARDUPILOTMEGA
+MAV_RESULT_ACCEPTED = mav2.MAV_RESULT_ACCEPTED
+MAV_RESULT_DENIED = mav2.MAV_RESULT_DENIED
+MAV_RESULT_UNSUPPORTED = mav2.MAV_RESULT_UNSUPPORTED
+MAV_RESULT_FAILED = mav2.MAV_RESULT_FAILED
+_FLAG_CUSTOM_MODE = mav2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+_FLAG_ARMED = mav2.MAV_MODE_FLAG_SAFETY_ARMED
+_FLAG_GUIDED = mav2.MAV_MODE_FLAG_GUIDED_ENABLED
+_UNSIGNED_OK = frozenset({mav2.MAVLINK_MSG_ID_RADIO_STATUS})  # as ArduPilot accepts
+
+
+class RoverMode(enum.IntEnum):
+    """ArduPilot Rover custom modes (``Rover/mode.h``)."""
+
+    MANUAL = 0
+    ACRO = 1
+    STEERING = 3
+    HOLD = 4
+    LOITER = 5
+    FOLLOW = 6
+    SIMPLE = 7
+    AUTO = 10
+    RTL = 11
+    SMART_RTL = 12
+    GUIDED = 15
+    INITIALISING = 16
+
+
+class MavCommand(enum.IntEnum):
+    """The MAV_CMD values used here (MAVLink common.xml)."""
+
+    DO_SET_MODE = mav2.MAV_CMD_DO_SET_MODE  # 176
+    COMPONENT_ARM_DISARM = mav2.MAV_CMD_COMPONENT_ARM_DISARM  # 400
+    SET_MESSAGE_INTERVAL = mav2.MAV_CMD_SET_MESSAGE_INTERVAL  # 511
+    SET_MODE_MESSAGE = mav2.MAVLINK_MSG_ID_SET_MODE  # 11: ArduPilot acks SET_MODE with this id
+
+
+def message_id(name: str) -> int:
+    """MAVLink message id of ``name`` (e.g. ``"GLOBAL_POSITION_INT"`` -> 33)."""
+    try:
+        return int(getattr(mav2, f"MAVLINK_MSG_ID_{name}"))
+    except AttributeError:
+        raise ValueError(f"unknown MAVLink message {name!r}") from None
+
+
+# --- typed messages ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    """HEARTBEAT: vehicle type, autopilot, modes and status."""
+
+    type: int
+    autopilot: int
+    base_mode: int
+    custom_mode: int
+    system_status: int
+
+    @property
+    def armed(self) -> bool:
+        return bool(self.base_mode & _FLAG_ARMED)
+
+    @property
+    def is_boat_or_rover(self) -> bool:
+        return self.type in (MAV_TYPE_SURFACE_BOAT, MAV_TYPE_GROUND_ROVER)
+
+
+@dataclass(frozen=True)
+class GlobalPosition:
+    """GLOBAL_POSITION_INT: fused position (deg), NED ground velocity (m/s), heading (rad)."""
+
+    time_boot_ms: int
+    lat_deg: float
+    lon_deg: float
+    vn_mps: float
+    ve_mps: float
+    heading_rad: float  # NaN when the vehicle reports it unknown (UINT16_MAX)
+
+
+@dataclass(frozen=True)
+class Attitude:
+    """ATTITUDE: Euler angles (rad) and rates (rad/s)."""
+
+    time_boot_ms: int
+    roll_rad: float
+    pitch_rad: float
+    yaw_rad: float
+    yaw_rate_radps: float
+
+
+@dataclass(frozen=True)
+class VfrHud:
+    groundspeed_mps: float
+    heading_deg: int
+    throttle_pct: int
+
+
+@dataclass(frozen=True)
+class GpsRaw:
+    time_usec: int
+    fix_type: int
+    lat_deg: float
+    lon_deg: float
+    satellites: int
+
+
+@dataclass(frozen=True)
+class SysStatus:
+    voltage_v: float
+
+
+@dataclass(frozen=True)
+class StatusText:
+    severity: int
+    text: str
+
+
+@dataclass(frozen=True)
+class CommandAck:
+    command: int
+    result: int
+
+
+@dataclass(frozen=True)
+class CommandLong:
+    target_system: int
+    target_component: int
+    command: int
+    params: tuple[float, float, float, float, float, float, float]
+
+
+@dataclass(frozen=True)
+class SetMode:
+    target_system: int
+    base_mode: int
+    custom_mode: int
+
+
+@dataclass(frozen=True)
+class SetPositionTarget:
+    """SET_POSITION_TARGET_LOCAL_NED or _GLOBAL_INT (``frame`` tells which); SI units."""
+
+    target_system: int
+    frame: int
+    type_mask: int
+    vx_mps: float
+    vy_mps: float
+    yaw_rad: float
+    yaw_rate_radps: float
+    is_global: bool
+
+    @property
+    def uses_velocity_and_yaw(self) -> bool:
+        """Position and yaw rate ignored, velocity and yaw used (Rover: heading + speed)."""
+        m = self.type_mask
+        return bool(
+            m & _POS_IGNORE == _POS_IGNORE
+            and not m & (8 | 16)
+            and m & _ACC_IGNORE == _ACC_IGNORE
+            and not m & _YAW_IGNORE
+            and m & _YAW_RATE_IGNORE
+        )
+
+
+@dataclass(frozen=True)
+class SetAttitudeTarget:
+    target_system: int
+    type_mask: int
+    q: tuple[float, float, float, float]
+    thrust: float
+    body_yaw_rate_radps: float
+
+    @property
+    def yaw_rad(self) -> float:
+        """Yaw of the quaternion [w, x, y, z] (ZYX Euler)."""
+        w, x, y, z = self.q
+        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+Message = (
+    Heartbeat
+    | GlobalPosition
+    | Attitude
+    | VfrHud
+    | GpsRaw
+    | SysStatus
+    | StatusText
+    | CommandAck
+    | CommandLong
+    | SetMode
+    | SetPositionTarget
+    | SetAttitudeTarget
+)
+
+
+@dataclass(frozen=True)
+class Received:
+    """One decoded packet and who sent it."""
+
+    src_system: int
+    src_component: int
+    message: Message
+
+
+def _decode(m: Any) -> Message | None:
+    """Typed view of a pymavlink message; ``None`` for types this project does not use."""
+    kind = m.get_type()
+    if kind == "HEARTBEAT":
+        return Heartbeat(m.type, m.autopilot, m.base_mode, m.custom_mode, m.system_status)
+    if kind == "GLOBAL_POSITION_INT":
+        hdg = math.nan if m.hdg == 65535 else math.radians(m.hdg / 100.0)
+        return GlobalPosition(
+            m.time_boot_ms, m.lat * 1e-7, m.lon * 1e-7, m.vx / 100.0, m.vy / 100.0, hdg
+        )
+    if kind == "ATTITUDE":
+        return Attitude(m.time_boot_ms, m.roll, m.pitch, m.yaw, m.yawspeed)
+    if kind == "VFR_HUD":
+        return VfrHud(m.groundspeed, m.heading, m.throttle)
+    if kind == "GPS_RAW_INT":
+        return GpsRaw(m.time_usec, m.fix_type, m.lat * 1e-7, m.lon * 1e-7, m.satellites_visible)
+    if kind == "SYS_STATUS":
+        return SysStatus(m.voltage_battery / 1000.0)
+    if kind == "STATUSTEXT":
+        text = m.text if isinstance(m.text, str) else bytes(m.text).decode("ascii", "replace")
+        return StatusText(m.severity, text.rstrip("\x00"))
+    if kind == "COMMAND_ACK":
+        return CommandAck(m.command, m.result)
+    if kind == "COMMAND_LONG":
+        p = (m.param1, m.param2, m.param3, m.param4, m.param5, m.param6, m.param7)
+        return CommandLong(m.target_system, m.target_component, m.command, p)
+    if kind == "SET_MODE":
+        return SetMode(m.target_system, m.base_mode, m.custom_mode)
+    if kind in ("SET_POSITION_TARGET_LOCAL_NED", "SET_POSITION_TARGET_GLOBAL_INT"):
+        return SetPositionTarget(
+            m.target_system,
+            m.coordinate_frame,
+            m.type_mask,
+            m.vx,
+            m.vy,
+            m.yaw,
+            m.yaw_rate,
+            kind.endswith("GLOBAL_INT"),
+        )
+    if kind == "SET_ATTITUDE_TARGET":
+        q = (float(m.q[0]), float(m.q[1]), float(m.q[2]), float(m.q[3]))
+        return SetAttitudeTarget(m.target_system, m.type_mask, q, m.thrust, m.body_yaw_rate)
+    return None
+
+
+def read_tlog(path: str | Path) -> list[tuple[float, Received]]:
+    """Decoded packets of a tlog (both directions), with their wall-clock stamps (s).
+
+    Packets of types this module does not decode are skipped; signatures are not checked.
+    """
+    data = Path(path).read_bytes()
+    parser = mav2.MAVLink(None)
+    parser.robust_parsing = True
+    out: list[tuple[float, Received]] = []
+    i = 0
+    while i + 8 + 12 <= len(data):
+        stamp = struct.unpack_from(">Q", data, i)[0] / 1e6
+        i += 8
+        if data[i] == 0xFD:  # MAVLink 2: 10-byte header, payload, CRC, optional signature
+            size = 12 + data[i + 1] + (13 if data[i + 2] & 1 else 0)
+        else:  # MAVLink 1
+            size = 8 + data[i + 1]
+        for m in parser.parse_buffer(data[i : i + size]) or []:
+            typed = None if m.get_type() == "BAD_DATA" else _decode(m)
+            if typed is not None:
+                out.append((stamp, Received(m.get_srcSystem(), m.get_srcComponent(), typed)))
+        i += size
+    return out
+
+
+def load_signing_key(path: str | Path) -> bytes:
+    """A 32-byte MAVLink 2 signing key from a file: 32 raw bytes or 64 hex digits.
+
+    The error messages never contain the key material.
+    """
+    data = Path(path).read_bytes()
+    if len(data) == 32:
+        return data
+    text = data.strip()
+    if len(text) == 64:
+        try:
+            return bytes.fromhex(text.decode("ascii"))
+        except (UnicodeDecodeError, ValueError):
+            pass
+    raise ValueError(
+        f"{path}: a signing key must be 32 raw bytes or 64 hex digits (file has {len(data)} bytes)"
+    )
+
+
+class MavlinkLink:
+    """A MAVLink 2 connection (``tcp:``, ``tcpin:``, ``udp:``, ``udpin:``, ``udpout:``, serial).
+
+    Parameters
+    ----------
+    url : str
+        pymavlink connection string; a port of 0 in ``udpin:``/``tcpin:`` lets the OS choose
+        (read it back from :attr:`local_port`).
+    system_id, component_id : int
+        Our own ids (GCS default 255/190; a vehicle uses 1/1).
+    signing_key : bytes, optional
+        32-byte key: outgoing packets are signed and unsigned incoming ones are rejected
+        (counted in :attr:`rejected_unsigned`), except RADIO_STATUS as in ArduPilot.
+    tlog_path : path, optional
+        Record every packet in and out (see the module docstring).
+    clock : callable, optional
+        Wall clock for tlog stamps (s); default :func:`time.time`.
+    """
+
+    def __init__(
+        self,
+        url: str,
+        *,
+        system_id: int = 255,
+        component_id: int = 190,
+        signing_key: bytes | None = None,
+        tlog_path: str | Path | None = None,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        if not (1 <= system_id <= 255 and 0 <= component_id <= 255):
+            raise ValueError(f"bad MAVLink ids {system_id}/{component_id}")
+        self.url = url
+        self.system_id = system_id
+        self.component_id = component_id
+        self._clock = clock
+        self._conn = mavutil.mavlink_connection(
+            url, source_system=system_id, source_component=component_id
+        )
+        mav = mav2.MAVLink(self._conn, srcSystem=system_id, srcComponent=component_id)
+        mav.robust_parsing = True  # malformed bytes become BAD_DATA, never an exception
+        # Force MAVLink 2 (pymavlink picks v1 unless an environment variable says otherwise).
+        self._conn.mav = mav
+        self._conn.first_byte = False
+        self._conn.WIRE_PROTOCOL_VERSION = "2.0"
+        self._mav = mav
+        self._tlog: IO[bytes] | None = None
+        if tlog_path is not None:
+            self._tlog = open(tlog_path, "wb")
+            mav.set_send_callback(self._record_out)
+        if signing_key is not None:
+            if len(signing_key) != 32:
+                raise ValueError("signing key must be 32 bytes")
+            self._conn.setup_signing(
+                signing_key,
+                sign_outgoing=True,
+                allow_unsigned_callback=self._allow_unsigned,
+                link_id=0,
+            )
+        self.bad_packets = 0
+        self.packets_in = 0
+        self._boot = time.monotonic()
+
+    # --- housekeeping ----------------------------------------------------------------------
+
+    @property
+    def local_port(self) -> int:
+        """Port our socket is bound to (for ``udpin:``/``tcpin:`` with port 0)."""
+        sock = getattr(self._conn, "listen", None) or self._conn.port
+        return int(sock.getsockname()[1])
+
+    @property
+    def rejected_unsigned(self) -> int:
+        """Incoming packets rejected because signing is on and they were unsigned or bad."""
+        return int(self._mav.signing.reject_count)
+
+    @staticmethod
+    def _allow_unsigned(_mav: Any, msg_id: int) -> bool:
+        return msg_id in _UNSIGNED_OK
+
+    def _record(self, buf: bytes) -> None:
+        if self._tlog is not None:
+            self._tlog.write(struct.pack(">Q", int(self._clock() * 1e6)) + bytes(buf))
+
+    def _record_out(self, msg: Any) -> None:
+        self._record(msg.get_msgbuf())
+
+    def close(self) -> None:
+        """Close the socket and the tlog."""
+        self._conn.close()
+        if self._tlog is not None:
+            self._tlog.close()
+            self._tlog = None
+
+    def __enter__(self) -> MavlinkLink:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- receiving -------------------------------------------------------------------------
+
+    def poll(self, timeout_s: float = 0.0, max_packets: int = 1000) -> list[Received]:
+        """Everything that has arrived (waiting up to ``timeout_s`` for the first byte).
+
+        Malformed packets (bad CRC, unknown id, truncated, bad or missing signature) are
+        counted in :attr:`bad_packets` and dropped; types this module does not decode are
+        dropped too.
+        """
+        out: list[Received] = []
+        if timeout_s > 0:
+            self._conn.select(timeout_s)
+        for m in self._read(max_packets):
+            if m.get_type() == "BAD_DATA":
+                self.bad_packets += 1
+                continue
+            self.packets_in += 1
+            self._record(m.get_msgbuf())
+            typed = _decode(m)
+            if typed is not None:
+                out.append(Received(m.get_srcSystem(), m.get_srcComponent(), typed))
+        return out
+
+    def _read(self, max_packets: int) -> list[Any]:
+        """Raw pymavlink messages available now.
+
+        On UDP every datagram is parsed on its own: a truncated or garbage frame is dropped at
+        the datagram's end instead of swallowing the valid packets of the next datagrams.
+        """
+        msgs: list[Any] = []
+        if not isinstance(self._conn, mavutil.mavudp):
+            while len(msgs) < max_packets and (m := self._conn.recv_msg()) is not None:
+                msgs.append(m)
+            return msgs
+        while len(msgs) < max_packets:
+            data = self._conn.recv()
+            if not data:
+                break
+            msgs += self._mav.parse_buffer(data) or []
+            if self._mav.buf_len() > 0:  # partial frame left: the datagram ended mid-packet
+                self._mav.buf, self._mav.buf_index = bytearray(), 0
+                self._mav.expected_length = mav2.HEADER_LEN_V1 + 2
+                self._mav.have_prefix_error = False
+                self.bad_packets += 1
+        return msgs
+
+    def wait_heartbeat(
+        self, timeout_s: float, accept: Callable[[Received], bool] | None = None
+    ) -> Received:
+        """First HEARTBEAT from a non-GCS system (or one ``accept`` takes), wall-clock deadline.
+
+        Raises
+        ------
+        TimeoutError
+            If none arrives within ``timeout_s``.
+        """
+        deadline = time.monotonic() + timeout_s
+        while (left := deadline - time.monotonic()) > 0:
+            self.send_gcs_heartbeat()  # UDP servers learn our address from this
+            for r in self.poll(min(left, 0.25)):
+                if not isinstance(r.message, Heartbeat):
+                    continue
+                ok = accept(r) if accept else r.message.type != MAV_TYPE_GCS
+                if ok:
+                    return r
+        raise TimeoutError(f"no vehicle HEARTBEAT on {self.url} within {timeout_s} s")
+
+    # --- sending: companion computer / GCS side --------------------------------------------
+
+    def _ms(self) -> int:
+        return int((time.monotonic() - self._boot) * 1000.0) & 0xFFFFFFFF
+
+    def send_gcs_heartbeat(self) -> None:
+        self._mav.heartbeat_send(
+            MAV_TYPE_GCS, mav2.MAV_AUTOPILOT_INVALID, 0, 0, mav2.MAV_STATE_ACTIVE
+        )
+
+    def send_heading(
+        self, target_system: int, psi_rad: float, speed_mps: float, target_component: int = 1
+    ) -> None:
+        """Rover GUIDED heading + speed: SET_POSITION_TARGET_LOCAL_NED, velocity + yaw.
+
+        ``psi_rad`` absolute heading (rad, clockwise from north), ``speed_mps`` >= 0 forward.
+        """
+        if not (math.isfinite(psi_rad) and math.isfinite(speed_mps) and speed_mps >= 0):
+            raise ValueError(f"bad heading setpoint psi={psi_rad!r} speed={speed_mps!r}")
+        self._mav.set_position_target_local_ned_send(
+            self._ms(),
+            target_system,
+            target_component,
+            mav2.MAV_FRAME_LOCAL_NED,
+            TYPE_MASK_VELOCITY_YAW,
+            0.0,
+            0.0,
+            0.0,
+            speed_mps,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            psi_rad,
+            0.0,
+        )
+
+    def send_attitude_target(
+        self, target_system: int, psi_rad: float, thrust: float, target_component: int = 1
+    ) -> None:
+        """Rover GUIDED alternative: SET_ATTITUDE_TARGET, yaw quaternion, thrust in [0, 1]
+        (Rover: speed = thrust · WP_SPEED)."""
+        if not (math.isfinite(psi_rad) and math.isfinite(thrust) and 0 <= thrust <= 1):
+            raise ValueError(f"bad attitude setpoint psi={psi_rad!r} thrust={thrust!r}")
+        q = [math.cos(psi_rad / 2.0), 0.0, 0.0, math.sin(psi_rad / 2.0)]
+        self._mav.set_attitude_target_send(
+            self._ms(),
+            target_system,
+            target_component,
+            ATTITUDE_MASK_YAW_THRUST,
+            q,
+            0.0,
+            0.0,
+            0.0,
+            thrust,
+        )
+
+    def set_mode(self, target_system: int, mode: RoverMode, target_component: int = 1) -> None:
+        """MAV_CMD_DO_SET_MODE with the Rover custom mode (acknowledged by COMMAND_ACK)."""
+        self._command(
+            target_system,
+            target_component,
+            MavCommand.DO_SET_MODE,
+            float(_FLAG_CUSTOM_MODE),
+            float(int(mode)),
+        )
+
+    def send_set_mode_message(self, target_system: int, mode: RoverMode) -> None:
+        """The older SET_MODE message (ArduPilot acks it with command id 11)."""
+        self._mav.set_mode_send(target_system, _FLAG_CUSTOM_MODE, int(mode))
+
+    def arm(self, target_system: int, arm: bool = True, target_component: int = 1) -> None:
+        self._command(
+            target_system, target_component, MavCommand.COMPONENT_ARM_DISARM, 1.0 if arm else 0.0
+        )
+
+    def request_message_interval(
+        self, target_system: int, message: str, rate_hz: float, target_component: int = 1
+    ) -> None:
+        """MAV_CMD_SET_MESSAGE_INTERVAL for ``message`` at ``rate_hz`` (0 disables)."""
+        interval_us = -1.0 if rate_hz <= 0 else 1e6 / rate_hz
+        self._command(
+            target_system,
+            target_component,
+            MavCommand.SET_MESSAGE_INTERVAL,
+            float(message_id(message)),
+            interval_us,
+        )
+
+    def _command(
+        self, target_system: int, target_component: int, command: int, *params: float
+    ) -> None:
+        p = [*params, *([0.0] * (7 - len(params)))]
+        self._mav.command_long_send(target_system, target_component, int(command), 0, *p)
+
+    def send_raw(self, data: bytes) -> None:
+        """Write raw bytes (tests: malformed input)."""
+        self._conn.write(data)
+
+    # --- sending: vehicle side -------------------------------------------------------------
+
+    def send_vehicle_heartbeat(
+        self, mode: RoverMode, armed: bool, vehicle_type: int = MAV_TYPE_SURFACE_BOAT
+    ) -> None:
+        base = _FLAG_CUSTOM_MODE | (_FLAG_ARMED if armed else 0)
+        if mode == RoverMode.GUIDED:
+            base |= _FLAG_GUIDED
+        state = mav2.MAV_STATE_ACTIVE if armed else mav2.MAV_STATE_STANDBY
+        self._mav.heartbeat_send(vehicle_type, MAV_AUTOPILOT_ARDUPILOTMEGA, base, int(mode), state)
+
+    def send_global_position(self, p: GlobalPosition) -> None:
+        hdg = (
+            65535
+            if not math.isfinite(p.heading_rad)
+            else round(math.degrees(p.heading_rad) % 360.0 * 100.0) % 36000
+        )
+        self._mav.global_position_int_send(
+            p.time_boot_ms & 0xFFFFFFFF,
+            round(p.lat_deg * 1e7),
+            round(p.lon_deg * 1e7),
+            0,
+            0,
+            round(p.vn_mps * 100.0),
+            round(p.ve_mps * 100.0),
+            0,
+            hdg,
+        )
+
+    def send_attitude(self, a: Attitude) -> None:
+        self._mav.attitude_send(
+            a.time_boot_ms & 0xFFFFFFFF,
+            a.roll_rad,
+            a.pitch_rad,
+            a.yaw_rad,
+            0.0,
+            0.0,
+            a.yaw_rate_radps,
+        )
+
+    def send_vfr_hud(self, v: VfrHud) -> None:
+        self._mav.vfr_hud_send(
+            0.0, v.groundspeed_mps, v.heading_deg % 360, v.throttle_pct, 0.0, 0.0
+        )
+
+    def send_gps_raw(self, g: GpsRaw, speed_mps: float, course_rad: float) -> None:
+        cog = round(math.degrees(course_rad) % 360.0 * 100.0) % 36000
+        self._mav.gps_raw_int_send(
+            g.time_usec,
+            g.fix_type,
+            round(g.lat_deg * 1e7),
+            round(g.lon_deg * 1e7),
+            0,
+            80,
+            120,
+            round(speed_mps * 100.0),
+            cog,
+            g.satellites,
+        )
+
+    def send_sys_status(self, s: SysStatus) -> None:
+        self._mav.sys_status_send(0, 0, 0, 0, round(s.voltage_v * 1000.0), -1, -1, 0, 0, 0, 0, 0, 0)
+
+    def send_statustext(self, severity: int, text: str) -> None:
+        self._mav.statustext_send(severity, text[:50].encode("ascii", "replace"))
+
+    def send_command_ack(
+        self, command: int, result: int, target_system: int = 0, target_component: int = 0
+    ) -> None:
+        self._mav.command_ack_send(int(command), int(result), 0, 0, target_system, target_component)

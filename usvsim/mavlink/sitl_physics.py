@@ -1,0 +1,230 @@
+"""``usvsim sitl-physics``: the usvsim vessel model as a JSON physics backend for ArduPilot SITL.
+
+ArduPilot's SITL ``JSON`` model (``libraries/SITL/SIM_JSON.cpp``) runs the autopilot and sends
+the servo outputs of every physics frame over UDP; the backend integrates its physics for one
+frame and answers with the vehicle state as JSON. ArduPilot's own controllers (Rover steering
+and throttle, AR_AttitudeControl, L1/S-curve navigation) then steer the Fossen model.
+
+Servo frame (little endian), ``struct servo_packet``::
+
+    uint16 magic        18458 (16 channels) or 29569 (32 channels)
+    uint16 frame_rate   physics rate (Hz): one frame advances the physics by 1/frame_rate s
+    uint32 frame_count  +1 per frame; a repeat is a re-send, a decrease a SITL restart
+    uint16 pwm[16|32]   µs
+
+Reply: one JSON object per frame between newlines, ``timestamp`` (s, physics time),
+``imu.gyro`` (rad/s, body FRD), ``imu.accel_body`` (m/s², body FRD, specific force, so
+[0, 0, -9.81] at rest), ``position`` and ``velocity`` (m, m/s, NED from the start point),
+``attitude`` ([roll, pitch, yaw], rad).
+
+Actuator mapping (Rover ``motorboat`` defaults): SERVO1 = GroundSteering (function 26), SERVO3 =
+Throttle (function 70), both 1100-1900 µs around a 1500 µs trim. Steering +1 (1900 µs) turns to
+starboard: nozzle angle ``δ = s · δ_max``; throttle ``t ∈ [-1, 1]`` gives thrust ``t · T_max``
+for t ≥ 0 and none astern (the default vessel's waterjet has no reversing bucket). For
+``forces`` vessels: ``F_x = t · F_x,max`` (``t · |F_x,min|`` astern), ``F_y = s · F_y,max``.
+
+Start ArduPilot against it (ArduPilot source tree, Rover)::
+
+    usvsim sitl-physics --port 9002 &
+    sim_vehicle.py -v Rover -f motorboat --model JSON:127.0.0.1 --console --map
+    usvsim bridge --connect tcp:127.0.0.1:5760 --mission m.json --arm
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import socket
+import struct
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from numpy.typing import NDArray
+
+from usvsim.common.angles import ssa
+from usvsim.vessel.model import NX, build_dynamics, build_rk4_step
+from usvsim.vessel.vessels import Actuation, VesselParams
+
+__all__ = [
+    "JsonPhysics",
+    "ServoFrame",
+    "SitlPhysicsArgs",
+    "actuator_command",
+    "parse_servo_frame",
+]
+
+MAGIC_16 = 18458
+MAGIC_32 = 29569
+GRAVITY_MPS2 = 9.80665  # m/s², standard gravity
+_HEADER = struct.Struct("<HHI")
+
+
+@dataclass(frozen=True)
+class SitlPhysicsArgs:
+    """Serve the usvsim vessel model to ArduPilot SITL (--model JSON)."""
+
+    bind: str = "127.0.0.1"  # address to listen on for ArduPilot's servo frames
+    port: int = 9002  # UDP port (ArduPilot's JSON backend sends to 9002)
+    vessel: str = "default"  # vessel preset (see usvsim demo)
+    heading_deg: float = 0.0  # start heading (deg, clockwise from north)
+    steering_channel: int = 1  # servo channel of the steering (1-based; Rover SERVO1)
+    throttle_channel: int = 3  # servo channel of the throttle (1-based; Rover SERVO3)
+    duration_s: float = 0.0  # stop after this much physics time (0 = until Ctrl-C)
+
+
+@dataclass(frozen=True)
+class ServoFrame:
+    """One decoded servo packet."""
+
+    frame_rate_hz: int
+    frame_count: int
+    pwm_us: tuple[int, ...]  # 16 or 32 channels
+
+
+def parse_servo_frame(data: bytes) -> ServoFrame:
+    """Decode ``struct servo_packet`` (16 or 32 channels).
+
+    Raises
+    ------
+    ValueError
+        On a wrong magic, a size that does not match it, or a zero frame rate.
+    """
+    if len(data) < _HEADER.size:
+        raise ValueError(f"servo frame too short: {len(data)} bytes")
+    magic, rate, count = _HEADER.unpack_from(data)
+    channels = {MAGIC_16: 16, MAGIC_32: 32}.get(magic)
+    if channels is None:
+        raise ValueError(f"bad servo frame magic {magic} (want {MAGIC_16} or {MAGIC_32})")
+    if len(data) != _HEADER.size + 2 * channels:
+        raise ValueError(
+            f"servo frame with magic {magic} must be {_HEADER.size + 2 * channels} "
+            f"bytes, got {len(data)}"
+        )
+    if rate == 0:
+        raise ValueError("servo frame rate is 0 Hz")
+    pwm = struct.unpack_from(f"<{channels}H", data, _HEADER.size)
+    return ServoFrame(rate, count, tuple(pwm))
+
+
+def pack_servo_frame(frame: ServoFrame) -> bytes:
+    """Encode a servo packet (what ArduPilot sends; used by tests and tools)."""
+    magic = MAGIC_16 if len(frame.pwm_us) == 16 else MAGIC_32
+    n = len(frame.pwm_us)
+    return _HEADER.pack(magic, frame.frame_rate_hz, frame.frame_count) + struct.pack(
+        f"<{n}H", *frame.pwm_us
+    )
+
+
+def _normalised(pwm_us: int) -> float:
+    """PWM (µs) → [-1, 1] around 1500 µs with ±400 µs travel (Rover SERVOn_MIN/MAX 1100/1900).
+
+    0 µs (channel not driven) is neutral.
+    """
+    if pwm_us == 0:
+        return 0.0
+    return max(-1.0, min(1.0, (pwm_us - 1500) / 400.0))
+
+
+def actuator_command(steering_pwm: int, throttle_pwm: int, act: Actuation) -> tuple[float, float]:
+    """Actuator command ``a_cmd = [a1, a2]`` of the vessel model from steering/throttle PWM."""
+    s = _normalised(steering_pwm)
+    t = _normalised(throttle_pwm)
+    if act.kind == "waterjet":
+        return max(t, 0.0) * act.a1_max, s * act.a2_max
+    a1 = t * act.a1_max if t >= 0 else -t * act.a1_min
+    return a1, s * act.a2_max
+
+
+class JsonPhysics:
+    """The vessel model stepped frame by frame from servo frames (no sockets: see :func:`run`).
+
+    State ``x`` (8,) as in :mod:`usvsim.vessel.model`; physics time ``time_s``.
+    """
+
+    def __init__(
+        self,
+        vessel: VesselParams,
+        heading_rad: float = 0.0,
+        steering_channel: int = 1,
+        throttle_channel: int = 3,
+    ) -> None:
+        self.vessel = vessel
+        self._f = build_dynamics(vessel)
+        self._steps: dict[int, ca.Function] = {}
+        self._ch = (steering_channel - 1, throttle_channel - 1)
+        self._heading0 = heading_rad
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to rest at the start pose, time 0 (a SITL restart)."""
+        self.x: NDArray[np.float64] = np.zeros(NX)
+        self.x[2] = self._heading0
+        self.time_s = 0.0
+        self.last_count: int | None = None
+        self._last_reply = ""
+        self._xdot = np.zeros(NX)
+
+    def _step_function(self, rate_hz: int) -> ca.Function:
+        if rate_hz not in self._steps:
+            self._steps[rate_hz] = build_rk4_step(self._f, 1.0 / rate_hz)
+        return self._steps[rate_hz]
+
+    def handle(self, frame: ServoFrame) -> str:
+        """Advance one frame (unless it repeats the last count) and return the JSON reply."""
+        if self.last_count is not None and frame.frame_count == self.last_count:
+            return self._last_reply  # a re-send of the same frame: same answer
+        if self.last_count is not None and frame.frame_count < self.last_count:
+            self.reset()  # SITL restarted
+        steer, throttle = (frame.pwm_us[i] if i < len(frame.pwm_us) else 0 for i in self._ch)
+        a_cmd = actuator_command(steer, throttle, self.vessel.actuation)
+        p = [0.0, 0.0]
+        x_next = np.asarray(self._step_function(frame.frame_rate_hz)(self.x, a_cmd, p)).ravel()
+        self._xdot = (x_next - self.x) * frame.frame_rate_hz  # mean rate over the frame
+        x_next[2] = float(ssa(x_next[2]))
+        self.x = x_next
+        self.time_s += 1.0 / frame.frame_rate_hz
+        self.last_count = frame.frame_count
+        self._last_reply = "\n" + json.dumps(self.state_dict()) + "\n"
+        return self._last_reply
+
+    def state_dict(self) -> dict[str, object]:
+        """The JSON reply fields (see the module docstring)."""
+        x_n, y_e, psi, u, v, r = (float(a) for a in self.x[:6])
+        u_dot, v_dot = float(self._xdot[3]), float(self._xdot[4])
+        c, s = math.cos(psi), math.sin(psi)
+        # body acceleration of a rotating frame: a = ν̇ + r × ν (Fossen 2021, eq. 3.?)
+        ax, ay = u_dot - r * v, v_dot + r * u
+        return {
+            "timestamp": self.time_s,
+            "imu": {"gyro": [0.0, 0.0, r], "accel_body": [ax, ay, -GRAVITY_MPS2]},
+            "position": [x_n, y_e, 0.0],
+            "velocity": [c * u - s * v, s * u + c * v, 0.0],
+            "attitude": [0.0, 0.0, psi],
+        }
+
+
+def serve(
+    physics: JsonPhysics, sock: socket.socket, duration_s: float = 0.0, should_stop: object = None
+) -> int:
+    """Answer servo frames on ``sock`` until ``duration_s`` physics time or ``should_stop``.
+
+    Returns the number of frames handled; malformed datagrams are skipped.
+    """
+    handled = 0
+    sock.settimeout(0.2)
+    while True:
+        if should_stop is not None and should_stop.is_set():  # type: ignore[attr-defined]
+            return handled
+        if duration_s > 0 and physics.time_s >= duration_s:
+            return handled
+        try:
+            data, addr = sock.recvfrom(512)
+        except TimeoutError:
+            continue
+        try:
+            frame = parse_servo_frame(data)
+        except ValueError:
+            continue
+        sock.sendto(physics.handle(frame).encode("ascii"), addr)
+        handled += 1

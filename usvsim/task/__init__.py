@@ -1,0 +1,3 @@
+"""The task block: scenario, observations, radar image, reward, the batch simulator and the
+Gymnasium environments.
+"""

@@ -1,0 +1,146 @@
+"""Observations of the pole-avoidance task, built for N boats from the navigation estimate.
+
+Every observation is computed from the *estimated* position and heading (``usvsim.nav.filter``),
+never the true state: a policy sees what a real boat's sensors would give it.
+
+==============  ===========================================  =====================================
+name            single-boat value                            space
+==============  ===========================================  =====================================
+``positional``  ``[r_pole, φ_pole, r_goal, φ_goal]``         ``Box((4,), float32)``, raw m and rad
+``radar``       image (:mod:`usvsim.task.radar`)                  ``Box(0, 255, (1, 50, 119), uint8)``
+``radar+goal``  ``{"radar": image, "goal": ĝ}``              ``Dict``; ĝ the standardised goal
+==============  ===========================================  =====================================
+
+Ranges in m; bearings in rad relative to the estimated heading, clockwise positive, in [-π, π)
+(:func:`usvsim.common.angles.ssa`). The positional observation is left raw (the study's definition);
+networks standardise it with :data:`POSITIONAL_STANDARDISATION`. The goal vector of ``radar+goal``
+is standardised inside the observation because it joins the CNN late (study, Sect. "Networks").
+
+Standardisation constants: the mean and standard deviation of a uniform distribution over each
+quantity's natural range in the default scenario — r_pole over [0, 100] m (the start range),
+r_goal over [0, 220] m (start to goal), bearings over [-π, π) — so ``(x - mean) / std`` is
+roughly zero-mean, unit-variance over an episode. Fixed numbers, not fitted to data: a policy's
+inputs mean the same thing in every run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from usvsim.common.angles import ssa
+from usvsim.task.radar import RadarConfig, UniformSource, render_radar
+
+__all__ = [
+    "GOAL_STANDARDISATION",
+    "OBSERVATION_KINDS",
+    "POSITIONAL_STANDARDISATION",
+    "ObservationKind",
+    "Standardisation",
+    "build_observation",
+    "observation_space",
+    "relative_polar",
+]
+
+ObservationKind = Literal["positional", "radar", "radar+goal"]
+OBSERVATION_KINDS: tuple[str, ...] = get_args(ObservationKind)
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Standardisation:
+    """``(x - mean) / std`` element-wise over the last axis."""
+
+    mean: tuple[float, ...]
+    std: tuple[float, ...]
+
+    def apply(self, x: NDArray[np.floating]) -> NDArray[np.float32]:
+        """Standardised ``x`` (..., len(mean)) as float32."""
+        return ((x - np.asarray(self.mean)) / np.asarray(self.std)).astype(np.float32)
+
+
+MAX_RANGE_M = 10_000.0  # m, Box bound on ranges: far beyond any area (an episode ends first)
+_BEARING_STD = math.pi / math.sqrt(3.0)  # std of U[-π, π)
+GOAL_STANDARDISATION = Standardisation(
+    mean=(110.0, 0.0), std=(220.0 / math.sqrt(12.0), _BEARING_STD)
+)
+POSITIONAL_STANDARDISATION = Standardisation(
+    mean=(50.0, 0.0, 110.0, 0.0),
+    std=(100.0 / math.sqrt(12.0), _BEARING_STD, 220.0 / math.sqrt(12.0), _BEARING_STD),
+)
+
+
+def relative_polar(
+    pos_ne: FloatArray, psi_rad: FloatArray, target_ne: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Range (m) and bearing relative to heading (rad, [-π, π)) from ``pos_ne`` to ``target_ne``.
+
+    Shapes: ``pos_ne`` (N, 2), ``psi_rad`` (N,), ``target_ne`` (N, 2) or (N, K, 2) → (N,) or
+    (N, K).
+
+    >>> r, b = relative_polar(np.zeros((1, 2)), np.zeros(1), np.array([[0.0, 10.0]]))
+    >>> float(r[0]), round(float(np.degrees(b[0])), 6)
+    (10.0, 90.0)
+    """
+    if target_ne.ndim == 3:
+        pos_ne, psi_rad = pos_ne[:, None, :], psi_rad[:, None]
+    d = target_ne - pos_ne
+    return np.hypot(d[..., 0], d[..., 1]), ssa(np.arctan2(d[..., 1], d[..., 0]) - psi_rad)
+
+
+def _check_kind(kind: str) -> None:
+    if kind not in OBSERVATION_KINDS:
+        raise ValueError(f"observation must be one of {OBSERVATION_KINDS}, got {kind!r}")
+
+
+def observation_space(kind: str, radar: RadarConfig | None = None) -> spaces.Space:
+    """The single-boat observation space of ``kind`` (see the module table)."""
+    _check_kind(kind)
+    radar = radar or RadarConfig()
+    image = spaces.Box(0, 255, radar.shape, dtype=np.uint8)
+    if kind == "positional":
+        high = np.array([MAX_RANGE_M, np.pi, MAX_RANGE_M, np.pi], dtype=np.float32)
+        low = np.array([0.0, -np.pi, 0.0, -np.pi], dtype=np.float32)
+        return spaces.Box(low, high, dtype=np.float32)
+    if kind == "radar":
+        return image
+    goal_high = GOAL_STANDARDISATION.apply(np.array([MAX_RANGE_M, np.pi]))
+    goal_low = GOAL_STANDARDISATION.apply(np.array([0.0, -np.pi]))
+    goal = spaces.Box(goal_low, goal_high, dtype=np.float32)
+    return spaces.Dict({"radar": image, "goal": goal})
+
+
+def build_observation(
+    kind: str,
+    pos_ne: FloatArray,
+    psi_rad: FloatArray,
+    pole_ne: FloatArray,
+    goal_ne: FloatArray,
+    pole_radius_m: float,
+    radar: RadarConfig | None = None,
+    noise: UniformSource | None = None,
+) -> NDArray[np.generic] | dict[str, NDArray[np.generic]]:
+    """Batched observation of N boats (leading axis N) from their estimated pose.
+
+    ``pos_ne`` (N, 2) m and ``psi_rad`` (N,) rad are the navigation estimate; ``pole_ne`` and
+    ``goal_ne`` (N, 2) m. Returns an array or, for ``radar+goal``, a dict of arrays.
+    """
+    _check_kind(kind)
+    if kind == "positional":
+        # pole and goal in one pass: r, b (N, 2) → rows [r_pole, φ_pole, r_goal, φ_goal]
+        r, b = relative_polar(pos_ne, psi_rad, np.stack([pole_ne, goal_ne], axis=1))
+        obs = np.empty((r.shape[0], 4), dtype=np.float32)
+        obs[:, 0::2], obs[:, 1::2] = r, b
+        return obs
+    r_p, b_p = relative_polar(pos_ne, psi_rad, pole_ne)
+    image = render_radar(r_p, b_p, pole_radius_m, radar, noise)
+    if kind == "radar":
+        return image
+    r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
+    goal = GOAL_STANDARDISATION.apply(np.stack([r_g, b_g], axis=-1))
+    return {"radar": image, "goal": goal}

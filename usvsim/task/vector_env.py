@@ -1,0 +1,108 @@
+"""The pole-avoidance task as a native ``gymnasium.vector.VectorEnv`` (autoreset ``SAME_STEP``).
+
+:class:`PoleAvoidanceVectorEnv` wraps :class:`usvsim.task.batch.PoleAvoidanceBatch`: when a boat's
+episode ends, ``step`` returns the reward and flags of the finished episode, puts its last
+observation in ``info["final_obs"]`` (object array, ``None`` for running boats) and its info in
+``info["final_info"]`` (masked by ``info["_final_info"]``), and returns the *new* episode's first
+observation in ``obs``. The top-level info arrays describe the step just taken for every boat,
+finished or not.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from usvsim.task.batch import (
+    Observation,
+    PoleAvoidanceBatch,
+    observation_rows,
+    write_observation_rows,
+)
+from usvsim.task.scenario import draw_episode
+
+__all__ = ["PoleAvoidanceVectorEnv"]
+
+FloatArray = NDArray[np.float64]
+
+
+class PoleAvoidanceVectorEnv(VectorEnv):
+    """Native batched pole-avoidance environment: ``num_envs`` boats, one plant call per step.
+
+    Autoreset mode ``SAME_STEP`` (see the module docstring). Boat i draws its episodes from its
+    own generator, seeded ``seed + i`` by ``reset(seed=seed)`` (or ``seed[i]`` for a list), which
+    is what a single :class:`usvsim.task.env.PoleAvoidanceEnv` reset with ``seed + i`` draws: the
+    batch equals N single environments. ``reset(options={"episodes": [spec, ...]})`` starts the
+    given :class:`usvsim.task.scenario.EpisodeSpec` (one per boat); later autoresets draw again.
+
+    Keyword arguments are those of :class:`PoleAvoidanceBatch`.
+    """
+
+    def __init__(
+        self,
+        num_envs: int,
+        observation: str = "positional",
+        action: str = "gaussian",
+        **kwargs: Any,
+    ) -> None:
+        self.metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+        self.sim = PoleAvoidanceBatch(num_envs, observation=observation, action=action, **kwargs)
+        self.num_envs = self.sim.n_boats
+        self.single_observation_space = self.sim.single_observation_space
+        self.single_action_space = self.sim.single_action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._boat_rngs = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
+        self._obs: Observation | None = None
+
+    def reset(
+        self, *, seed: int | Sequence[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        """Reset every boat; ``seed`` int → boat i uses ``seed + i``; ``options``: ``episodes``."""
+        super().reset(seed=seed if isinstance(seed, int) or seed is None else None)
+        if seed is not None:
+            seeds = [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else seed
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"need {self.num_envs} seeds, got {len(seeds)}")
+            self._boat_rngs = [seeding.np_random(int(s))[0] for s in seeds]
+        options = dict(options or {})
+        specs = options.pop("episodes", None)
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}; known: ['episodes']")
+        if specs is None:
+            specs = [draw_episode(g, self.sim.scenario) for g in self._boat_rngs]
+        self._obs = self.sim.reset(None, list(specs))
+        return self._obs, {"pole_ne": self.sim.pole_ne.copy(), "goal_ne": self.sim.goal_ne.copy()}
+
+    def step(
+        self, actions: Any
+    ) -> tuple[Observation, FloatArray, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        res = self.sim.step(actions)
+        info: dict[str, Any] = {}
+        everyone = np.ones(self.num_envs, dtype=bool)
+        arrays = res.info_arrays()
+        for key, value in arrays.items():
+            info[key], info[f"_{key}"] = value, everyone
+        obs = res.observation
+        done = res.terminated | res.truncated
+        if done.any():
+            idx = np.flatnonzero(done)
+            final_obs = np.full(self.num_envs, None, dtype=object)
+            for i in idx:
+                final_obs[i] = observation_rows(obs, i)
+            final_info: dict[str, Any] = {}
+            for key, value in arrays.items():
+                final_info[key], final_info[f"_{key}"] = value.copy(), done
+            info.update(
+                final_obs=final_obs, _final_obs=done, final_info=final_info, _final_info=done
+            )
+            specs = [draw_episode(self._boat_rngs[i], self.sim.scenario) for i in idx]
+            write_observation_rows(obs, idx, self.sim.reset(idx, specs))
+        self._obs = obs
+        return obs, res.reward, res.terminated, res.truncated, info

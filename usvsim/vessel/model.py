@@ -1,0 +1,268 @@
+"""The vessel model as pure CasADi functions, and the operations on it.
+
+State and input layout (one boat; the batched code uses arrays of shape (N, ·)):
+
+=========  =====================================================  =====================
+symbol     meaning                                                 units
+=========  =====================================================  =====================
+x[0:3]     η = [x_N, y_E, ψ]: NED position and heading            m, m, rad
+x[3:6]     ν = [u, v, r]: body velocities over ground              m/s, m/s, rad/s
+x[6:8]     a: actual actuator values (see ``vessels.Actuation``)  N, N | N, rad
+u[0:2]     a_cmd: commanded actuator values (saturated here)      as a
+p[0:2]     ocean current: speed V_c and direction β_c (going to)  m/s, rad
+=========  =====================================================  =====================
+
+Equations (Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd ed.):
+
+* kinematics η̇ = R(ψ) ν (eq. 2.?; 3-DOF rotation about z);
+* kinetics with an irrotational, constant current (§10.3, Property 10.1): with ν_r = ν − ν_c and
+  ν_c = R(ψ)ᵀ [V_c cos β_c, V_c sin β_c, 0]ᵀ,
+  M ν̇_r + C_RB(ν_r) ν_r + C_A(ν_r) ν_r + D(ν_r) ν_r = τ, and ν̇ = ν̇_r − S(r) ν_c;
+* M = M_RB + M_A (eqs. 6.?), C_RB and C_A the 3-DOF Coriolis–centripetal matrices (eqs. 6.43,
+  6.44), D(ν_r) linear + modulus-quadratic + cubic damping;
+* first-order actuators ȧ = (sat(a_cmd) − a) / T_a; with T_a = 0 the actuator is instantaneous.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from numpy.typing import NDArray
+
+from usvsim.vessel.vessels import Actuation, VesselParams
+
+__all__ = [
+    "NX",
+    "NomotoModel",
+    "build_dynamics",
+    "build_rk4_step",
+    "damping_forces",
+    "generalized_forces",
+    "linearize",
+    "mass_matrix",
+    "nomoto_from_linear",
+]
+
+NX = 8  # plant state size
+NU = 2  # actuator command size
+NP = 2  # parameter size: current speed (m/s) and direction (rad)
+
+
+def mass_matrix(v: VesselParams) -> NDArray[np.float64]:
+    """System inertia matrix M = M_RB + M_A (3×3), Fossen (2021) eqs. (6.?) for 3 DOF."""
+    M_RB = np.array([[v.m, 0.0, 0.0], [0.0, v.m, v.m * v.xg], [0.0, v.m * v.xg, v.Iz]])
+    M_A = -np.array([[v.X_udot, 0.0, 0.0], [0.0, v.Y_vdot, v.Y_rdot], [0.0, v.N_vdot, v.N_rdot]])
+    return M_RB + M_A
+
+
+def _coriolis(v: VesselParams, nu_r: Any) -> Any:
+    """C_RB(ν_r) ν_r + C_A(ν_r) ν_r (3-vector), Fossen (2021) eqs. (6.43)-(6.44), 3 DOF."""
+    u, vv, r = nu_r[0], nu_r[1], nu_r[2]
+    # rigid body (CO not at CG: xg)
+    c_rb = ca.vertcat(
+        -v.m * (v.xg * r + vv) * r,
+        v.m * u * r,
+        v.m * (v.xg * r + vv) * u - v.m * u * vv,
+    )
+    # added mass (Y_rdot = N_vdot assumed symmetric in C_A, Fossen 2021 eq. 6.44)
+    a_y = v.Y_vdot * vv + 0.5 * (v.Y_rdot + v.N_vdot) * r
+    c_a = ca.vertcat(
+        a_y * r,
+        -v.X_udot * u * r,
+        -a_y * u + v.X_udot * u * vv,
+    )
+    return c_rb + c_a
+
+
+def damping_forces(v: VesselParams, nu_r: Any) -> Any:
+    """Damping D(ν_r) ν_r (3-vector of positive-opposing forces, N and N m)."""
+    u, vv, r = nu_r[0], nu_r[1], nu_r[2]
+    au, av, ar = ca.fabs(u), ca.fabs(vv), ca.fabs(r)
+    X = v.X_u * u + v.X_uu * au * u + v.X_uuu * u**3
+    Y = (
+        v.Y_v * vv
+        + v.Y_r * r
+        + v.Y_vv * av * vv
+        + v.Y_rv * ar * vv
+        + v.Y_vr * av * r
+        + v.Y_rr * ar * r
+        + v.Y_vvv * vv**3
+    )
+    N = (
+        v.N_v * vv
+        + v.N_r * r
+        + v.N_vv * av * vv
+        + v.N_rv * ar * vv
+        + v.N_vr * av * r
+        + v.N_rr * ar * r
+        + v.N_rrr * r**3
+    )
+    return -ca.vertcat(X, Y, N)
+
+
+def generalized_forces(act: Actuation, a: Any) -> Any:
+    """τ = [X, Y, N] (N, N, N m) produced by the actuator values ``a`` (see module docstring)."""
+    if act.kind == "forces":
+        return ca.vertcat(a[0], a[1], act.lever_m * a[1])
+    thrust, nozzle = a[0], a[1]
+    side = thrust * ca.sin(nozzle)
+    return ca.vertcat(thrust * ca.cos(nozzle), -side, act.lever_m * side)
+
+
+def saturate_command(act: Actuation, a_cmd: Any) -> Any:
+    """Clip the actuator command to its limits (element-wise)."""
+    return ca.vertcat(
+        ca.fmin(ca.fmax(a_cmd[0], act.a1_min), act.a1_max),
+        ca.fmin(ca.fmax(a_cmd[1], act.a2_min), act.a2_max),
+    )
+
+
+def _rigid_body_rates(v: VesselParams, x: Any, tau: Any, p: Any) -> tuple[Any, Any]:
+    """Return (η̇, ν̇) for state ``x`` (≥ 6 entries) under generalised force ``tau``."""
+    psi = x[2]
+    nu = x[3:6]
+    c, s = ca.cos(psi), ca.sin(psi)
+    # current in NED -> body (irrotational, constant in NED)
+    vc_n = p[0] * ca.cos(p[1])
+    vc_e = p[0] * ca.sin(p[1])
+    nu_c = ca.vertcat(c * vc_n + s * vc_e, -s * vc_n + c * vc_e, 0.0)
+    nu_r = nu - nu_c
+    Minv = np.linalg.inv(mass_matrix(v))
+    nu_r_dot = ca.mtimes(ca.DM(Minv), tau - _coriolis(v, nu_r) - damping_forces(v, nu_r))
+    r = nu[2]
+    nu_c_dot = ca.vertcat(r * nu_c[1], -r * nu_c[0], 0.0)  # -S(r) ν_c
+    eta_dot = ca.vertcat(c * nu[0] - s * nu[1], s * nu[0] + c * nu[1], nu[2])
+    return eta_dot, nu_r_dot + nu_c_dot
+
+
+def build_dynamics(v: VesselParams) -> ca.Function:
+    """The plant as one pure CasADi Function ``f(x[8], u[2], p[2]) -> xdot[8]``.
+
+    Inputs named ``x``, ``u``, ``p``; output ``xdot``. See the module docstring for the layout.
+    """
+    x = ca.SX.sym("x", NX)
+    u = ca.SX.sym("u", NU)
+    p = ca.SX.sym("p", NP)
+    act = v.actuation
+    a_cmd = saturate_command(act, u)
+    a_dot = []
+    a_eff = []
+    for i in range(2):
+        lag = act.lag_s[i]
+        if lag > 0:
+            a_dot.append((a_cmd[i] - x[6 + i]) / lag)
+            a_eff.append(x[6 + i])
+        else:  # instantaneous actuator: the state just records the applied command
+            a_dot.append(ca.SX(0.0))
+            a_eff.append(a_cmd[i])
+    tau = generalized_forces(act, ca.vertcat(*a_eff))
+    eta_dot, nu_dot = _rigid_body_rates(v, x, tau, p)
+    xdot = ca.vertcat(eta_dot, nu_dot, *a_dot)
+    return ca.Function("f", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+
+
+def build_force_dynamics(v: VesselParams) -> ca.Function:
+    """Rigid-body model with generalised force input: ``f_tau(x[6], tau[3], p[2]) -> xdot[6]``.
+
+    Used for linearisation and autopilot design (the actuator is a separate, allocated layer).
+    """
+    x = ca.SX.sym("x", 6)
+    tau = ca.SX.sym("tau", 3)
+    p = ca.SX.sym("p", NP)
+    eta_dot, nu_dot = _rigid_body_rates(v, x, tau, p)
+    return ca.Function(
+        "f_tau", [x, tau, p], [ca.vertcat(eta_dot, nu_dot)], ["x", "tau", "p"], ["xdot"]
+    )
+
+
+def rk4_expr(f: ca.Function, x: Any, u: Any, p: Any, dt_s: float) -> Any:
+    """One classical Runge–Kutta-4 step of ``f`` with ``u`` held (zero-order hold) over dt_s."""
+    k1 = f(x, u, p)
+    k2 = f(x + 0.5 * dt_s * k1, u, p)
+    k3 = f(x + 0.5 * dt_s * k2, u, p)
+    k4 = f(x + dt_s * k3, u, p)
+    return x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
+def build_rk4_step(f: ca.Function, dt_s: float = 0.1, n_sub: int = 1) -> ca.Function:
+    """Discrete plant ``F(x, u, p) -> x_next`` over dt_s, with ``n_sub`` RK4 sub-steps."""
+    if dt_s <= 0 or n_sub < 1:
+        raise ValueError("dt_s must be > 0 and n_sub >= 1")
+    x = ca.SX.sym("x", f.size1_in(0))
+    u = ca.SX.sym("u", f.size1_in(1))
+    p = ca.SX.sym("p", f.size1_in(2))
+    xn = x
+    h = dt_s / n_sub
+    for _ in range(n_sub):
+        xn = rk4_expr(f, xn, u, p, h)
+    return ca.Function("F", [x, u, p], [xn], ["x", "u", "p"], ["x_next"])
+
+
+@dataclass(frozen=True)
+class NomotoModel:
+    """First-order Nomoto model r/τ_N(s) = K / (1 + T s) (Fossen 2021, §7.2).
+
+    Equivalent mass–damper form used by the PID design: ``m ṙ + d r = τ_N`` with m = T/K
+    (kg m²) and d = 1/K (N m s/rad).
+    """
+
+    K: float  # rad/s per N m
+    T: float  # s
+
+    @property
+    def m(self) -> float:
+        return self.T / self.K
+
+    @property
+    def d(self) -> float:
+        return 1.0 / self.K
+
+
+def linearize(
+    v: VesselParams, speed_mps: float, current: tuple[float, float] = (0.0, 0.0)
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Linearise the sway–yaw dynamics at straight-line cruise with CasADi Jacobians.
+
+    Returns (A, B) with state [v, r] (m/s, rad/s) and input τ_N (N m), evaluated at
+    ν = [speed_mps, 0, 0], ψ = 0 and the given current (V_c m/s, β_c rad).
+    """
+    f_tau = build_force_dynamics(v)
+    x = ca.SX.sym("x", 6)
+    tau = ca.SX.sym("tau", 3)
+    p = ca.DM(list(current))
+    xdot = f_tau(x, tau, p)
+    A_full = ca.Function("A", [x, tau], [ca.jacobian(xdot, x)])
+    B_full = ca.Function("B", [x, tau], [ca.jacobian(xdot, tau)])
+    x0 = ca.DM([0.0, 0.0, 0.0, speed_mps, 0.0, 0.0])
+    # τ_X balancing surge drag at the operating point; τ_Y = τ_N = 0
+    drag = damping_forces(v, ca.DM([speed_mps, 0.0, 0.0]))
+    tau0 = ca.vertcat(drag[0], 0.0, 0.0)
+    A = np.array(A_full(x0, tau0))[np.ix_([4, 5], [4, 5])]
+    B = np.array(B_full(x0, tau0))[np.ix_([4, 5], [2])]
+    return A, B
+
+
+def nomoto_from_linear(A: NDArray[np.float64], B: NDArray[np.float64]) -> NomotoModel:
+    """First-order Nomoto (K, T) from the sway–yaw (A, B) (Fossen 2021, eqs. 7.?).
+
+    The second-order model r/τ_N = K (1 + T3 s) / ((1 + T1 s)(1 + T2 s)) is reduced to first order
+    with T = T1 + T2 − T3 and the same static gain K. Handles the decoupled case (B's sway row 0
+    and A's coupling 0) where the model already is first order.
+    """
+    import control
+
+    sys = control.ss(A, B, np.array([[0.0, 1.0]]), np.zeros((1, 1)))
+    tf = control.ss2tf(sys)
+    num = np.trim_zeros(np.asarray(tf.num[0][0], dtype=float), "f")
+    den = np.trim_zeros(np.asarray(tf.den[0][0], dtype=float), "f")
+    K = float(num[-1] / den[-1])
+    # time constants from roots: den = c (1 + T1 s)(1 + T2 s) -> T_i = -1/p_i
+    poles = np.roots(den)
+    zeros = np.roots(num) if len(num) > 1 else np.array([])
+    T_sum = float(np.sum(-1.0 / poles.real))
+    T3 = float(np.sum(-1.0 / zeros.real)) if len(zeros) else 0.0
+    # cancel a pole–zero pair that lies on top of each other (decoupled sway)
+    return NomotoModel(K=K, T=T_sum - T3)
