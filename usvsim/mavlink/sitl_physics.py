@@ -193,7 +193,7 @@ class JsonPhysics:
         x_n, y_e, psi, u, v, r = (float(a) for a in self.x[:6])
         u_dot, v_dot = float(self._xdot[3]), float(self._xdot[4])
         c, s = math.cos(psi), math.sin(psi)
-        # body acceleration of a rotating frame: a = ν̇ + r × ν (Fossen 2021, eq. 3.?)
+        # body acceleration of a rotating frame: a = ν̇ + r × ν (Fossen 2021, §3.1)
         ax, ay = u_dot - r * v, v_dot + r * u
         return {
             "timestamp": self.time_s,

@@ -14,11 +14,11 @@ p[0:2]     ocean current: speed V_c and direction β_c (going to)  m/s, rad
 
 Equations (Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd ed.):
 
-* kinematics η̇ = R(ψ) ν (eq. 2.?; 3-DOF rotation about z);
+* kinematics η̇ = R(ψ) ν (§2.2; 3-DOF rotation about z);
 * kinetics with an irrotational, constant current (§10.3, Property 10.1): with ν_r = ν − ν_c and
   ν_c = R(ψ)ᵀ [V_c cos β_c, V_c sin β_c, 0]ᵀ,
   M ν̇_r + C_RB(ν_r) ν_r + C_A(ν_r) ν_r + D(ν_r) ν_r = τ, and ν̇ = ν̇_r − S(r) ν_c;
-* M = M_RB + M_A (eqs. 6.?), C_RB and C_A the 3-DOF Coriolis–centripetal matrices (eqs. 6.43,
+* M = M_RB + M_A (eq. 6.54), C_RB and C_A the 3-DOF Coriolis–centripetal matrices (eqs. 6.43,
   6.44), D(ν_r) linear + modulus-quadratic + cubic damping;
 * first-order actuators ȧ = (sat(a_cmd) − a) / T_a; with T_a = 0 the actuator is instantaneous.
 """
@@ -52,7 +52,7 @@ NP = 2  # parameter size: current speed (m/s) and direction (rad)
 
 
 def mass_matrix(v: VesselParams) -> NDArray[np.float64]:
-    """System inertia matrix M = M_RB + M_A (3×3), Fossen (2021) eqs. (6.?) for 3 DOF."""
+    """System inertia matrix M = M_RB + M_A (3×3), Fossen (2021) eq. (6.54) for 3 DOF."""
     M_RB = np.array([[v.m, 0.0, 0.0], [0.0, v.m, v.m * v.xg], [0.0, v.m * v.xg, v.Iz]])
     M_A = -np.array([[v.X_udot, 0.0, 0.0], [0.0, v.Y_vdot, v.Y_rdot], [0.0, v.N_vdot, v.N_rdot]])
     return M_RB + M_A
@@ -246,7 +246,7 @@ def linearize(
 
 
 def nomoto_from_linear(A: NDArray[np.float64], B: NDArray[np.float64]) -> NomotoModel:
-    """First-order Nomoto (K, T) from the sway–yaw (A, B) (Fossen 2021, eqs. 7.?).
+    """First-order Nomoto (K, T) from the sway–yaw (A, B) (Fossen 2021, §7.2).
 
     The second-order model r/τ_N = K (1 + T3 s) / ((1 + T1 s)(1 + T2 s)) is reduced to first order
     with T = T1 + T2 − T3 and the same static gain K. Handles the decoupled case (B's sway row 0

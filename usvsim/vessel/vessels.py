@@ -70,7 +70,7 @@ class Actuation:
 
 @dataclass(frozen=True)
 class VesselParams:
-    """3-DOF manoeuvring coefficients of one vessel (Fossen 2021, eqs. 6.x, 7.x).
+    """3-DOF manoeuvring coefficients of one vessel (Fossen 2021, ch. 6).
 
     Every field is in SI units; derivatives follow SNAME notation (``X_uu`` is X_|u|u, etc.).
     ``xg`` is the x coordinate of the centre of gravity relative to the coordinate origin.
@@ -149,7 +149,7 @@ def froude_scale(base: VesselParams, length_m: float, name: str) -> VesselParams
     """Scale a vessel geometrically to ``length_m`` with Froude similarity.
 
     With λ = length_m / base.length_m, Froude scaling keeps U/√(gL) constant, so (Fossen 2021,
-    §7.? / ITTC 7.5-02-06-01): length λ, speed λ^0.5, time λ^0.5, mass and force λ³, moment λ⁴,
+    App. D / ITTC 7.5-02-06-01): length λ, speed λ^0.5, time λ^0.5, mass and force λ³, moment λ⁴,
     inertia λ⁵. A coefficient of force per speedⁿ scales as λ^(3 - n/2); moment per speedⁿ as
     λ^(4 - n/2); moment per (rad/s)ⁿ as λ^(4 + n/2); force per (rad/s)ⁿ as λ^(3 + n/2).
     Actuation is not scaled (set it on the result).
