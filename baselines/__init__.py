@@ -1,4 +1,6 @@
-"""Classical helmsmen with the interface of learned policies (:class:`usvsim.evaluation.episodes.Helmsman`).
+"""Classical helmsmen with the interface of learned policies.
+
+They satisfy the :class:`usvsim.helm.protocol.Helmsman` protocol.
 
 :mod:`baselines.los` — ``los``: line-of-sight guidance from the start to the goal (it hits the
 pole, as the reference study expects of a helmsman that does not look out).

@@ -27,7 +27,8 @@ Human imperfections (all drawn per run from :class:`ExpertParams`):
   helmsman swings at most ``max_turn_rate_radps`` (a smooth hand on the wheel);
 * perception noise — bearing noise on every look;
 * occasional lapses — with probability ``p_late_turn`` the turn starts far too late (these runs
-  pass close to the pole and the quality filter of :mod:`learning.imitation.demonstrations` rejects them).
+  pass close to the pole and the quality filter of :mod:`learning.imitation.demonstrations`
+  rejects them).
 
 The helmsman looks at the true pose (a person sees the pole and the water, not a filter
 estimate); the run itself is the real simulator (:class:`usvsim.task.batch.PoleAvoidanceBatch`,

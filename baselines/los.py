@@ -121,7 +121,8 @@ class LOSHelmsman:
         A jump of the goal range above this (m) in one period also means a new goal (the boat
         covers ~6 m per period).
 
-    ``observation`` and ``action`` tell :func:`usvsim.evaluation.episodes.evaluate` what this helmsman needs.
+    ``observation`` and ``action`` tell :func:`usvsim.evaluation.episodes.evaluate` what this
+    helmsman needs.
     ``last_output`` holds the latest :class:`guidance.los.GuidanceOutput` (cross-track errors).
     """
 

@@ -1,11 +1,11 @@
 """Training wall-clock benchmark of the four IL setups (GAIL), as ``train_rl.py`` for RL.
 
 For each setup this runs the recorded training command (``usvsim train SETUP --seed S``, the
-setup's defaults otherwise; :mod:`learning.cli.train`, :mod:`learning.experiments.il_setups`) on this
-machine's CPU with ``--threads`` torch threads, then evaluates the run's ``best.pt`` on the 15
-validation and 200 held-out episodes (:mod:`learning.cli.evaluate`) and for expert-likeness on
-the validation starts (:mod:`usvsim.evaluation.likeness`), and writes ``train_il.md`` (a Markdown table)
-and ``train_il.json`` (everything, with each run's ``summary.json``) into ``--out``::
+setup's defaults otherwise; :mod:`learning.cli.train`, :mod:`learning.experiments.il_setups`) on
+this machine's CPU with ``--threads`` torch threads, then evaluates the run's ``best.pt`` on the
+15 validation and 200 held-out episodes (:mod:`learning.cli.evaluate`) and for expert-likeness on
+the validation starts (:mod:`usvsim.evaluation.likeness`), and writes ``train_il.md`` (a Markdown
+table) and ``train_il.json`` (everything, with each run's ``summary.json``) into ``--out``::
 
     python benchmarks/train_il.py                       # all four setups (run as a script)
     python benchmarks/train_il.py --setups il-gaussian-positional --out /tmp/bench

@@ -35,7 +35,7 @@ def test_make_helmsman_knows_every_kind_of_name(tmp_path: Path) -> None:
         make_helmsman("nope")
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"not a model")
-    with pytest.raises(ValueError, match="bad.pt"):
+    with pytest.raises(ValueError, match=r"bad\.pt"):
         make_helmsman(str(bad))
 
 

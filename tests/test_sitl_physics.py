@@ -1,4 +1,4 @@
-"""ArduPilot SITL JSON backend (usvsim.mavlink.sitl_physics) against a fake SITL sending PWM frames."""
+"""ArduPilot SITL JSON backend (usvsim.mavlink.sitl_physics) against a fake SITL sending PWM."""
 
 import json
 import math

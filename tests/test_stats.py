@@ -1,4 +1,5 @@
-"""usvsim.evaluation.stats: the Wilson score interval against published values and a second implementation."""
+"""usvsim.evaluation.stats: the Wilson score interval against published values and a second
+implementation."""
 
 from __future__ import annotations
 

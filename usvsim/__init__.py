@@ -1,10 +1,12 @@
 """usvsim: learning and testing steering policies for unmanned surface vehicles.
 
-Modules (the architecture, bottom up): :mod:`usvsim.vessel.vessels` (parameters), :mod:`usvsim.vessel.model`
-(CasADi 3-DOF model), :mod:`usvsim.vessel.autopilot` (heading autopilot, speed control),
-:mod:`usvsim.vessel.plant` (batched closed-loop plant), :mod:`usvsim.nav.sensors` and
-:mod:`usvsim.nav.filter` (GPS/compass/gyro and the Kalman filter), then the task, environments,
-evaluation and command-line interface.
+Modules (the architecture, bottom up): :mod:`usvsim.vessel.vessels` (parameters),
+:mod:`usvsim.vessel.model` (CasADi 3-DOF model), :mod:`usvsim.vessel.autopilot` (heading
+autopilot, speed control), :mod:`usvsim.vessel.plant` (batched closed-loop plant),
+:mod:`usvsim.nav.sensors` and :mod:`usvsim.nav.filter` (GPS/compass/gyro and the Kalman filter),
+then the task and environments (:mod:`usvsim.task`), the helmsmen (:mod:`usvsim.helm`),
+evaluation (:mod:`usvsim.evaluation`), the MAVLink link (:mod:`usvsim.mavlink`) and the
+command-line interface (:mod:`usvsim.cli`).
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@ validation episodes and the 200 held-out episodes of the pole task (each set is 
 ==========================  ===================================================================
 column                      meaning
 ==========================  ===================================================================
-success [95 % CI]           strict successes / episodes, Wilson score interval (usvsim.evaluation.stats)
+success [95 % CI]           strict successes / episodes, Wilson score interval
+                            (:mod:`usvsim.evaluation.stats`)
 min d_pole min / median     closest approach to the pole (m) over every episode: the worst
                             episode and the median episode (< 10 m fails, ≈ 2.5 m is a hit)
 t_goal                      mean time to the goal (s), successful episodes
@@ -19,9 +20,9 @@ path                        mean path length (m), successful episodes
 validation and ``--heldout`` held-out courses; t_goal is then the time to the last waypoint).
 
 Results go to ``--out`` (default ``usvsim-results/bench/``), every file written atomically
-(:mod:`usvsim.common.fileio`): ``bench[-waypoints].md``, ``bench[-waypoints].csv`` and one path plot per
-helmsman and set, ``paths[-waypoints]-<helmsman>-<set>.png``. ``--json`` prints only JSON on
-stdout (NaN as ``null``); the progress bar goes to stderr.
+(:mod:`usvsim.common.fileio`): ``bench[-waypoints].md``, ``bench[-waypoints].csv`` and one path
+plot per helmsman and set, ``paths[-waypoints]-<helmsman>-<set>.png``. ``--json`` prints only
+JSON on stdout (NaN as ``null``); the progress bar goes to stderr.
 """
 
 from __future__ import annotations
@@ -104,7 +105,7 @@ class BenchRow:
     path_length_mean_m: float  # successful episodes; NaN if none
     smoothness_mean_deg: float  # successful episodes; NaN if none
     wall_s: float  # evaluation time of the set (s)
-    # expert-likeness (usvsim.evaluation.likeness) on the validation set of the pole scenario, else NaN:
+    # expert-likeness (usvsim.evaluation.likeness) on the pole scenario's validation set, else NaN:
     expert_path_distance_m: float = math.nan  # mean distance to the nearest expert path, m
     expert_side_agreement: float = math.nan  # fraction of expert samples passing the same side
     expert_action_distance_deg: float = math.nan  # Wasserstein distance of 2 s heading changes

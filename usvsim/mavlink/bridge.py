@@ -8,7 +8,7 @@ GUIDED, arm only with ``--arm``; then on every telemetry tick:
    simulator's Kalman filter models (:class:`TelemetryEstimator`);
 2. every ``decision_period_s`` of *vehicle* time, build the observation with the simulator's
    builder (:func:`usvsim.task.observations.build_observation`), ask the helmsman
-   (:class:`usvsim.evaluation.episodes.Helmsman`), map the action to a heading change exactly as the
+   (:class:`usvsim.helm.protocol.Helmsman`), map the action to a heading change exactly as the
    environment does (:func:`usvsim.task.batch.heading_change_rad`), and command
    ``ψ_ref = ssa(ψ̂ + Δψ)`` at the mission's cruise speed;
 3. re-send the setpoint at ``setpoint_rate_hz`` (Rover drops GUIDED targets after ~3 s and
@@ -130,7 +130,7 @@ class Bridge:
     """One bridge session (see the module docstring); :meth:`run` does everything.
 
     ``link`` and ``clock`` may be injected (tests); ``helmsman`` is any
-    :class:`usvsim.evaluation.episodes.Helmsman`.
+    :class:`usvsim.helm.protocol.Helmsman`.
     """
 
     def __init__(

@@ -1,10 +1,10 @@
 """The one module that imports pymavlink: a narrow, typed MAVLink 2 link for both ends.
 
 Both the companion-computer side (:mod:`usvsim.mavlink.bridge`) and the vehicle side
-(:mod:`usvsim.mavlink.sitl`) talk through :class:`MavlinkLink`: incoming packets are decoded into small
-frozen dataclasses (:class:`Received` wrapping :class:`Heartbeat`, :class:`GlobalPosition`, ...),
-outgoing ones are built by typed methods (``send_heading(psi_rad, speed_mps)``). No pymavlink
-object leaves this module.
+(:mod:`usvsim.mavlink.sitl`) talk through :class:`MavlinkLink`: incoming packets are decoded into
+small frozen dataclasses (:class:`Received` wrapping :class:`Heartbeat`, :class:`GlobalPosition`,
+...), outgoing ones are built by typed methods (``send_heading(psi_rad, speed_mps)``). No
+pymavlink object leaves this module.
 
 Protocol choices (ArduPilot Rover, boat frame; checked against ``Rover/GCS_Mavlink.cpp``):
 

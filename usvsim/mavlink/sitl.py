@@ -18,9 +18,9 @@ real ArduPilot boat can be tested against it, and MAVProxy or QGroundControl can
 
 Modes: MANUAL without an RC transmitter = neutral controls; HOLD = motors stop; LOITER = stop,
 then stay within ``loiter_radius_m`` of where the boat came to rest. Disarmed: motors stop
-whatever the mode. "Motors stop" integrates the vessel model (:func:`usvsim.vessel.model.build_dynamics`)
-with zero thrust and a centred nozzle: the boat coasts to rest (the plant's autopilot would keep
-the waterjet at idle thrust).
+whatever the mode. "Motors stop" integrates the vessel model
+(:func:`usvsim.vessel.model.build_dynamics`) with zero thrust and a centred nozzle: the boat coasts
+to rest (the plant's autopilot would keep the waterjet at idle thrust).
 
 The simulation steps at the plant's 0.1 s; the vehicle clock (``time_boot_ms``) is simulated
 time, paced at ``speedup`` × wall-clock time. Everything runs in one thread.

@@ -1,8 +1,9 @@
 """The pole-avoidance task for N boats at once: the batch simulator.
 
 :class:`PoleAvoidanceBatch` is the one implementation of the task's step (the single-boat
-:class:`usvsim.task.env.PoleAvoidanceEnv` is its N = 1 case, :func:`usvsim.evaluation.episodes.evaluate` runs a
-whole episode set through it). One decision step of all N boats is::
+:class:`usvsim.task.env.PoleAvoidanceEnv` is its N = 1 case,
+:func:`usvsim.evaluation.episodes.evaluate` runs a whole episode set through it). One decision
+step of all N boats is::
 
     Δψ     = action → heading change (rad)                       (N,)
     ψ_ref  = ssa(ψ̂ + Δψ)                 ψ̂: ESTIMATED heading at the decision

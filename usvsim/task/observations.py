@@ -7,7 +7,7 @@ never the true state: a policy sees what a real boat's sensors would give it.
 name            single-boat value                            space
 ==============  ===========================================  =====================================
 ``positional``  ``[r_pole, φ_pole, r_goal, φ_goal]``         ``Box((4,), float32)``, raw m and rad
-``radar``       image (:mod:`usvsim.task.radar`)                  ``Box(0, 255, (1, 50, 119), uint8)``
+``radar``       image (:mod:`usvsim.task.radar`)             ``Box(0, 255, (1, 50, 119), uint8)``
 ``radar+goal``  ``{"radar": image, "goal": ĝ}``              ``Dict``; ĝ the standardised goal
 ==============  ===========================================  =====================================
 

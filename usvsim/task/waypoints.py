@@ -36,8 +36,8 @@ How the pole-task machinery is reused
   are ignored. Goal switches, collisions with any pole, the closest approach to any pole, the
   course's time limit and success are judged here from the true trajectory the batch returns
   (every 0.1 s plant step).
-* :func:`evaluate_waypoints` mirrors :func:`usvsim.evaluation.episodes.evaluate`: all courses in one batch,
-  one :class:`WaypointRecord` each, with the metric names of
+* :func:`evaluate_waypoints` mirrors :func:`usvsim.evaluation.episodes.evaluate`: all courses in
+  one batch, one :class:`WaypointRecord` each, with the metric names of
   :class:`usvsim.evaluation.episodes.EpisodeRecord` (``success``, ``min_pole_distance_m``,
   ``time_to_goal_s``, ``path_length_m``, ``smoothness_rad``), so the same summaries apply.
 """
