@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from usvsim.mavlink.bridge import Bridge, BridgeArgs
-from usvsim.mavlink.link import GlobalPosition, MavlinkLink, RoverMode
+from usvsim.mavlink.link import MavlinkLink
+from usvsim.mavlink.messages import GlobalPosition, RoverMode
 from usvsim.mavlink.mission import Mission
 from usvsim.mavlink.sitl import RoverSitl, SitlArgs
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned

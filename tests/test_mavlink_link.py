@@ -6,19 +6,20 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mav2
 
-from usvsim.mavlink.link import (
+from usvsim.mavlink import messages
+from usvsim.mavlink.link import MavlinkLink, load_signing_key, read_tlog
+from usvsim.mavlink.messages import (
     TYPE_MASK_VELOCITY_YAW,
     CommandLong,
     GlobalPosition,
     Heartbeat,
-    MavlinkLink,
+    MavCommand,
     Received,
     RoverMode,
     SetAttitudeTarget,
     SetPositionTarget,
-    load_signing_key,
-    read_tlog,
 )
 
 KEY = bytes(range(32))
@@ -46,6 +47,26 @@ def collect(
 def test_type_mask_is_rovers_velocity_and_yaw() -> None:
     # ignore x y z (7), vz (32), ax ay az (448), yaw rate (2048); use vx, vy, yaw
     assert TYPE_MASK_VELOCITY_YAW == 2535
+
+
+@pytest.mark.parametrize(
+    "name",
+    [n for n in messages.__all__ if n.startswith("MAV_")],
+)
+def test_message_constants_equal_pymavlinks(name: str) -> None:
+    """The pure-Python enum values of usvsim.mavlink.messages are MAVLink common.xml's."""
+    assert getattr(messages, name) == getattr(mav2, name)
+
+
+def test_mav_commands_equal_pymavlinks() -> None:
+    ours = [int(c) for c in MavCommand]
+    assert ours == [176, 400, 511, 11]
+    assert ours == [
+        mav2.MAV_CMD_DO_SET_MODE,
+        mav2.MAV_CMD_COMPONENT_ARM_DISARM,
+        mav2.MAV_CMD_SET_MESSAGE_INTERVAL,
+        mav2.MAVLINK_MSG_ID_SET_MODE,
+    ]
 
 
 def test_heading_setpoint_is_forward_speed_with_absolute_yaw(pair) -> None:

@@ -17,7 +17,8 @@ from learning.imitation.preprocess import (
     interpolate_position,
     recording_from_tlog,
 )
-from usvsim.mavlink.link import Attitude, GlobalPosition, MavlinkLink
+from usvsim.mavlink.link import MavlinkLink
+from usvsim.mavlink.messages import Attitude, GlobalPosition
 from usvsim.nav.geo import geodetic_from_ned
 from usvsim.task.observations import relative_polar
 

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usvsim.mavlink.link import (
+from usvsim.mavlink.link import MavlinkLink
+from usvsim.mavlink.messages import (
     CommandAck,
     GlobalPosition,
     Heartbeat,
-    MavlinkLink,
     Received,
     RoverMode,
     StatusText,

@@ -48,7 +48,8 @@ from numpy.typing import NDArray
 
 from learning.imitation.demonstrations import FORMAT, Recording
 from usvsim.common.angles import ssa
-from usvsim.mavlink.link import Attitude, GlobalPosition, VfrHud, read_tlog
+from usvsim.mavlink.link import read_tlog
+from usvsim.mavlink.messages import Attitude, GlobalPosition, VfrHud
 from usvsim.nav.geo import GeoOrigin
 from usvsim.task.batch import N_CATEGORIES
 from usvsim.task.observations import build_observation

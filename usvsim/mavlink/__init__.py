@@ -1,3 +1,3 @@
-"""The MAVLink block: the pymavlink adapter, missions, the bridge, and the plant as a MAVLink
-vehicle or physics backend.
+"""The MAVLink block: the typed messages, the pymavlink adapter, missions, the bridge, and the
+plant as a MAVLink vehicle or physics backend.
 """

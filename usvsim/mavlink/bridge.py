@@ -39,17 +39,16 @@ import numpy as np
 
 from usvsim.common.angles import ssa
 from usvsim.helm.protocol import Helmsman
-from usvsim.mavlink.link import (
+from usvsim.mavlink.link import MavlinkLink, load_signing_key
+from usvsim.mavlink.messages import (
     MAV_RESULT_ACCEPTED,
     Attitude,
     CommandAck,
     GlobalPosition,
     Heartbeat,
     MavCommand,
-    MavlinkLink,
     Received,
     RoverMode,
-    load_signing_key,
 )
 from usvsim.mavlink.mission import Mission
 from usvsim.nav.geo import ned_from_geodetic

@@ -2,9 +2,9 @@
 
 Both the companion-computer side (:mod:`usvsim.mavlink.bridge`) and the vehicle side
 (:mod:`usvsim.mavlink.sitl`) talk through :class:`MavlinkLink`: incoming packets are decoded into
-small frozen dataclasses (:class:`Received` wrapping :class:`Heartbeat`, :class:`GlobalPosition`,
-...), outgoing ones are built by typed methods (``send_heading(psi_rad, speed_mps)``). No
-pymavlink object leaves this module.
+the small frozen dataclasses of :mod:`usvsim.mavlink.messages` (:class:`Received` wrapping
+:class:`Heartbeat`, :class:`GlobalPosition`, ...), outgoing ones are built by typed methods
+(``send_heading(psi_rad, speed_mps)``). No pymavlink object leaves this module.
 
 Protocol choices (ArduPilot Rover, boat frame; checked against ``Rover/GCS_Mavlink.cpp``):
 
@@ -25,92 +25,21 @@ per packet an 8-byte big-endian wall-clock time in µs, then the raw packet, bot
 
 from __future__ import annotations
 
-import enum
 import math
 import struct
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mav2
 
-__all__ = [
-    "ATTITUDE_MASK_YAW_THRUST",
-    "TYPE_MASK_VELOCITY_YAW",
-    "Attitude",
-    "CommandAck",
-    "CommandLong",
-    "GlobalPosition",
-    "GpsRaw",
-    "Heartbeat",
-    "MavCommand",
-    "MavlinkLink",
-    "Message",
-    "Received",
-    "RoverMode",
-    "SetAttitudeTarget",
-    "SetMode",
-    "SetPositionTarget",
-    "StatusText",
-    "SysStatus",
-    "VfrHud",
-    "load_signing_key",
-    "message_id",
-    "read_tlog",
-]
+from usvsim.mavlink import messages as msgs
 
-# POSITION_TARGET_TYPEMASK bits (MAVLink common.xml): 1 x, 2 y, 4 z, 8 vx, 16 vy, 32 vz,
-# 64 ax, 128 ay, 256 az, 512 force, 1024 yaw, 2048 yaw rate.
-_POS_IGNORE = 1 | 2 | 4
-_VZ_IGNORE = 32
-_ACC_IGNORE = 64 | 128 | 256
-_YAW_IGNORE = 1024
-_YAW_RATE_IGNORE = 2048
-TYPE_MASK_VELOCITY_YAW = _POS_IGNORE | _VZ_IGNORE | _ACC_IGNORE | _YAW_RATE_IGNORE  # 2535
-# ATTITUDE_TARGET_TYPEMASK bits: 1 roll rate, 2 pitch rate, 4 yaw rate, 64 throttle, 128 attitude
-ATTITUDE_MASK_YAW_THRUST = 1 | 2 | 4
+__all__ = ["MavlinkLink", "load_signing_key", "message_id", "read_tlog"]
 
-MAV_TYPE_GCS = mav2.MAV_TYPE_GCS
-MAV_TYPE_SURFACE_BOAT = mav2.MAV_TYPE_SURFACE_BOAT
-MAV_TYPE_GROUND_ROVER = mav2.MAV_TYPE_GROUND_ROVER
-MAV_AUTOPILOT_ARDUPILOTMEGA = mav2.MAV_AUTOPILOT_ARDUPILOTMEGA
-MAV_RESULT_ACCEPTED = mav2.MAV_RESULT_ACCEPTED
-MAV_RESULT_DENIED = mav2.MAV_RESULT_DENIED
-MAV_RESULT_UNSUPPORTED = mav2.MAV_RESULT_UNSUPPORTED
-MAV_RESULT_FAILED = mav2.MAV_RESULT_FAILED
-_FLAG_CUSTOM_MODE = mav2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-_FLAG_ARMED = mav2.MAV_MODE_FLAG_SAFETY_ARMED
-_FLAG_GUIDED = mav2.MAV_MODE_FLAG_GUIDED_ENABLED
 _UNSIGNED_OK = frozenset({mav2.MAVLINK_MSG_ID_RADIO_STATUS})  # as ArduPilot accepts
-
-
-class RoverMode(enum.IntEnum):
-    """ArduPilot Rover custom modes (``Rover/mode.h``)."""
-
-    MANUAL = 0
-    ACRO = 1
-    STEERING = 3
-    HOLD = 4
-    LOITER = 5
-    FOLLOW = 6
-    SIMPLE = 7
-    AUTO = 10
-    RTL = 11
-    SMART_RTL = 12
-    GUIDED = 15
-    INITIALISING = 16
-
-
-class MavCommand(enum.IntEnum):
-    """The MAV_CMD values used here (MAVLink common.xml)."""
-
-    DO_SET_MODE = mav2.MAV_CMD_DO_SET_MODE  # 176
-    COMPONENT_ARM_DISARM = mav2.MAV_CMD_COMPONENT_ARM_DISARM  # 400
-    SET_MESSAGE_INTERVAL = mav2.MAV_CMD_SET_MESSAGE_INTERVAL  # 511
-    SET_MODE_MESSAGE = mav2.MAVLINK_MSG_ID_SET_MODE  # 11: ArduPilot acks SET_MODE with this id
 
 
 def message_id(name: str) -> int:
@@ -121,195 +50,38 @@ def message_id(name: str) -> int:
         raise ValueError(f"unknown MAVLink message {name!r}") from None
 
 
-# --- typed messages ------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Heartbeat:
-    """HEARTBEAT: vehicle type, autopilot, modes and status."""
-
-    type: int
-    autopilot: int
-    base_mode: int
-    custom_mode: int
-    system_status: int
-
-    @property
-    def armed(self) -> bool:
-        return bool(self.base_mode & _FLAG_ARMED)
-
-    @property
-    def is_boat_or_rover(self) -> bool:
-        return self.type in (MAV_TYPE_SURFACE_BOAT, MAV_TYPE_GROUND_ROVER)
-
-
-@dataclass(frozen=True)
-class GlobalPosition:
-    """GLOBAL_POSITION_INT: fused position (deg), NED ground velocity (m/s), heading (rad)."""
-
-    time_boot_ms: int
-    lat_deg: float
-    lon_deg: float
-    vn_mps: float
-    ve_mps: float
-    heading_rad: float  # NaN when the vehicle reports it unknown (UINT16_MAX)
-
-
-@dataclass(frozen=True)
-class Attitude:
-    """ATTITUDE: Euler angles (rad) and rates (rad/s)."""
-
-    time_boot_ms: int
-    roll_rad: float
-    pitch_rad: float
-    yaw_rad: float
-    yaw_rate_radps: float
-
-
-@dataclass(frozen=True)
-class VfrHud:
-    groundspeed_mps: float
-    heading_deg: int
-    throttle_pct: int
-
-
-@dataclass(frozen=True)
-class GpsRaw:
-    time_usec: int
-    fix_type: int
-    lat_deg: float
-    lon_deg: float
-    satellites: int
-
-
-@dataclass(frozen=True)
-class SysStatus:
-    voltage_v: float
-
-
-@dataclass(frozen=True)
-class StatusText:
-    severity: int
-    text: str
-
-
-@dataclass(frozen=True)
-class CommandAck:
-    command: int
-    result: int
-
-
-@dataclass(frozen=True)
-class CommandLong:
-    target_system: int
-    target_component: int
-    command: int
-    params: tuple[float, float, float, float, float, float, float]
-
-
-@dataclass(frozen=True)
-class SetMode:
-    target_system: int
-    base_mode: int
-    custom_mode: int
-
-
-@dataclass(frozen=True)
-class SetPositionTarget:
-    """SET_POSITION_TARGET_LOCAL_NED or _GLOBAL_INT (``frame`` tells which); SI units."""
-
-    target_system: int
-    frame: int
-    type_mask: int
-    vx_mps: float
-    vy_mps: float
-    yaw_rad: float
-    yaw_rate_radps: float
-    is_global: bool
-
-    @property
-    def uses_velocity_and_yaw(self) -> bool:
-        """Position and yaw rate ignored, velocity and yaw used (Rover: heading + speed)."""
-        m = self.type_mask
-        return bool(
-            m & _POS_IGNORE == _POS_IGNORE
-            and not m & (8 | 16)
-            and m & _ACC_IGNORE == _ACC_IGNORE
-            and not m & _YAW_IGNORE
-            and m & _YAW_RATE_IGNORE
-        )
-
-
-@dataclass(frozen=True)
-class SetAttitudeTarget:
-    target_system: int
-    type_mask: int
-    q: tuple[float, float, float, float]
-    thrust: float
-    body_yaw_rate_radps: float
-
-    @property
-    def yaw_rad(self) -> float:
-        """Yaw of the quaternion [w, x, y, z] (ZYX Euler)."""
-        w, x, y, z = self.q
-        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-Message = (
-    Heartbeat
-    | GlobalPosition
-    | Attitude
-    | VfrHud
-    | GpsRaw
-    | SysStatus
-    | StatusText
-    | CommandAck
-    | CommandLong
-    | SetMode
-    | SetPositionTarget
-    | SetAttitudeTarget
-)
-
-
-@dataclass(frozen=True)
-class Received:
-    """One decoded packet and who sent it."""
-
-    src_system: int
-    src_component: int
-    message: Message
-
-
-def _decode(m: Any) -> Message | None:
+def _decode(m: Any) -> msgs.Message | None:
     """Typed view of a pymavlink message; ``None`` for types this project does not use."""
     kind = m.get_type()
     if kind == "HEARTBEAT":
-        return Heartbeat(m.type, m.autopilot, m.base_mode, m.custom_mode, m.system_status)
+        return msgs.Heartbeat(m.type, m.autopilot, m.base_mode, m.custom_mode, m.system_status)
     if kind == "GLOBAL_POSITION_INT":
         hdg = math.nan if m.hdg == 65535 else math.radians(m.hdg / 100.0)
-        return GlobalPosition(
+        return msgs.GlobalPosition(
             m.time_boot_ms, m.lat * 1e-7, m.lon * 1e-7, m.vx / 100.0, m.vy / 100.0, hdg
         )
     if kind == "ATTITUDE":
-        return Attitude(m.time_boot_ms, m.roll, m.pitch, m.yaw, m.yawspeed)
+        return msgs.Attitude(m.time_boot_ms, m.roll, m.pitch, m.yaw, m.yawspeed)
     if kind == "VFR_HUD":
-        return VfrHud(m.groundspeed, m.heading, m.throttle)
+        return msgs.VfrHud(m.groundspeed, m.heading, m.throttle)
     if kind == "GPS_RAW_INT":
-        return GpsRaw(m.time_usec, m.fix_type, m.lat * 1e-7, m.lon * 1e-7, m.satellites_visible)
+        return msgs.GpsRaw(
+            m.time_usec, m.fix_type, m.lat * 1e-7, m.lon * 1e-7, m.satellites_visible
+        )
     if kind == "SYS_STATUS":
-        return SysStatus(m.voltage_battery / 1000.0)
+        return msgs.SysStatus(m.voltage_battery / 1000.0)
     if kind == "STATUSTEXT":
         text = m.text if isinstance(m.text, str) else bytes(m.text).decode("ascii", "replace")
-        return StatusText(m.severity, text.rstrip("\x00"))
+        return msgs.StatusText(m.severity, text.rstrip("\x00"))
     if kind == "COMMAND_ACK":
-        return CommandAck(m.command, m.result)
+        return msgs.CommandAck(m.command, m.result)
     if kind == "COMMAND_LONG":
         p = (m.param1, m.param2, m.param3, m.param4, m.param5, m.param6, m.param7)
-        return CommandLong(m.target_system, m.target_component, m.command, p)
+        return msgs.CommandLong(m.target_system, m.target_component, m.command, p)
     if kind == "SET_MODE":
-        return SetMode(m.target_system, m.base_mode, m.custom_mode)
+        return msgs.SetMode(m.target_system, m.base_mode, m.custom_mode)
     if kind in ("SET_POSITION_TARGET_LOCAL_NED", "SET_POSITION_TARGET_GLOBAL_INT"):
-        return SetPositionTarget(
+        return msgs.SetPositionTarget(
             m.target_system,
             m.coordinate_frame,
             m.type_mask,
@@ -321,11 +93,11 @@ def _decode(m: Any) -> Message | None:
         )
     if kind == "SET_ATTITUDE_TARGET":
         q = (float(m.q[0]), float(m.q[1]), float(m.q[2]), float(m.q[3]))
-        return SetAttitudeTarget(m.target_system, m.type_mask, q, m.thrust, m.body_yaw_rate)
+        return msgs.SetAttitudeTarget(m.target_system, m.type_mask, q, m.thrust, m.body_yaw_rate)
     return None
 
 
-def read_tlog(path: str | Path) -> list[tuple[float, Received]]:
+def read_tlog(path: str | Path) -> list[tuple[float, msgs.Received]]:
     """Decoded packets of a tlog (both directions), with their wall-clock stamps (s).
 
     Packets of types this module does not decode are skipped; signatures are not checked.
@@ -333,7 +105,7 @@ def read_tlog(path: str | Path) -> list[tuple[float, Received]]:
     data = Path(path).read_bytes()
     parser = mav2.MAVLink(None)
     parser.robust_parsing = True
-    out: list[tuple[float, Received]] = []
+    out: list[tuple[float, msgs.Received]] = []
     i = 0
     while i + 8 + 12 <= len(data):
         stamp = struct.unpack_from(">Q", data, i)[0] / 1e6
@@ -345,7 +117,7 @@ def read_tlog(path: str | Path) -> list[tuple[float, Received]]:
         for m in parser.parse_buffer(data[i : i + size]) or []:
             typed = None if m.get_type() == "BAD_DATA" else _decode(m)
             if typed is not None:
-                out.append((stamp, Received(m.get_srcSystem(), m.get_srcComponent(), typed)))
+                out.append((stamp, msgs.Received(m.get_srcSystem(), m.get_srcComponent(), typed)))
         i += size
     return out
 
@@ -470,14 +242,14 @@ class MavlinkLink:
 
     # --- receiving -------------------------------------------------------------------------
 
-    def poll(self, timeout_s: float = 0.0, max_packets: int = 1000) -> list[Received]:
+    def poll(self, timeout_s: float = 0.0, max_packets: int = 1000) -> list[msgs.Received]:
         """Everything that has arrived (waiting up to ``timeout_s`` for the first byte).
 
         Malformed packets (bad CRC, unknown id, truncated, bad or missing signature) are
         counted in :attr:`bad_packets` and dropped; types this module does not decode are
         dropped too.
         """
-        out: list[Received] = []
+        out: list[msgs.Received] = []
         if timeout_s > 0:
             self._conn.select(timeout_s)
         for m in self._read(max_packets):
@@ -488,7 +260,7 @@ class MavlinkLink:
             self._record(m.get_msgbuf())
             typed = _decode(m)
             if typed is not None:
-                out.append(Received(m.get_srcSystem(), m.get_srcComponent(), typed))
+                out.append(msgs.Received(m.get_srcSystem(), m.get_srcComponent(), typed))
         return out
 
     def _read(self, max_packets: int) -> list[Any]:
@@ -515,8 +287,8 @@ class MavlinkLink:
         return msgs
 
     def wait_heartbeat(
-        self, timeout_s: float, accept: Callable[[Received], bool] | None = None
-    ) -> Received:
+        self, timeout_s: float, accept: Callable[[msgs.Received], bool] | None = None
+    ) -> msgs.Received:
         """First HEARTBEAT from a non-GCS system (or one ``accept`` takes), wall-clock deadline.
 
         Raises
@@ -528,9 +300,9 @@ class MavlinkLink:
         while (left := deadline - time.monotonic()) > 0:
             self.send_gcs_heartbeat()  # UDP servers learn our address from this
             for r in self.poll(min(left, 0.25)):
-                if not isinstance(r.message, Heartbeat):
+                if not isinstance(r.message, msgs.Heartbeat):
                     continue
-                ok = accept(r) if accept else r.message.type != MAV_TYPE_GCS
+                ok = accept(r) if accept else r.message.type != msgs.MAV_TYPE_GCS
                 if ok:
                     return r
         raise TimeoutError(f"no vehicle HEARTBEAT on {self.url} within {timeout_s} s")
@@ -542,7 +314,7 @@ class MavlinkLink:
 
     def send_gcs_heartbeat(self) -> None:
         self._mav.heartbeat_send(
-            MAV_TYPE_GCS, mav2.MAV_AUTOPILOT_INVALID, 0, 0, mav2.MAV_STATE_ACTIVE
+            msgs.MAV_TYPE_GCS, msgs.MAV_AUTOPILOT_INVALID, 0, 0, msgs.MAV_STATE_ACTIVE
         )
 
     def send_heading(
@@ -558,8 +330,8 @@ class MavlinkLink:
             self._ms(),
             target_system,
             target_component,
-            mav2.MAV_FRAME_LOCAL_NED,
-            TYPE_MASK_VELOCITY_YAW,
+            msgs.MAV_FRAME_LOCAL_NED,
+            msgs.TYPE_MASK_VELOCITY_YAW,
             0.0,
             0.0,
             0.0,
@@ -585,7 +357,7 @@ class MavlinkLink:
             self._ms(),
             target_system,
             target_component,
-            ATTITUDE_MASK_YAW_THRUST,
+            msgs.ATTITUDE_MASK_YAW_THRUST,
             q,
             0.0,
             0.0,
@@ -593,23 +365,26 @@ class MavlinkLink:
             thrust,
         )
 
-    def set_mode(self, target_system: int, mode: RoverMode, target_component: int = 1) -> None:
+    def set_mode(self, target_system: int, mode: msgs.RoverMode, target_component: int = 1) -> None:
         """MAV_CMD_DO_SET_MODE with the Rover custom mode (acknowledged by COMMAND_ACK)."""
         self._command(
             target_system,
             target_component,
-            MavCommand.DO_SET_MODE,
-            float(_FLAG_CUSTOM_MODE),
+            msgs.MavCommand.DO_SET_MODE,
+            float(msgs.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED),
             float(int(mode)),
         )
 
-    def send_set_mode_message(self, target_system: int, mode: RoverMode) -> None:
+    def send_set_mode_message(self, target_system: int, mode: msgs.RoverMode) -> None:
         """The older SET_MODE message (ArduPilot acks it with command id 11)."""
-        self._mav.set_mode_send(target_system, _FLAG_CUSTOM_MODE, int(mode))
+        self._mav.set_mode_send(target_system, msgs.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, int(mode))
 
     def arm(self, target_system: int, arm: bool = True, target_component: int = 1) -> None:
         self._command(
-            target_system, target_component, MavCommand.COMPONENT_ARM_DISARM, 1.0 if arm else 0.0
+            target_system,
+            target_component,
+            msgs.MavCommand.COMPONENT_ARM_DISARM,
+            1.0 if arm else 0.0,
         )
 
     def request_message_interval(
@@ -620,7 +395,7 @@ class MavlinkLink:
         self._command(
             target_system,
             target_component,
-            MavCommand.SET_MESSAGE_INTERVAL,
+            msgs.MavCommand.SET_MESSAGE_INTERVAL,
             float(message_id(message)),
             interval_us,
         )
@@ -638,15 +413,19 @@ class MavlinkLink:
     # --- sending: vehicle side -------------------------------------------------------------
 
     def send_vehicle_heartbeat(
-        self, mode: RoverMode, armed: bool, vehicle_type: int = MAV_TYPE_SURFACE_BOAT
+        self, mode: msgs.RoverMode, armed: bool, vehicle_type: int = msgs.MAV_TYPE_SURFACE_BOAT
     ) -> None:
-        base = _FLAG_CUSTOM_MODE | (_FLAG_ARMED if armed else 0)
-        if mode == RoverMode.GUIDED:
-            base |= _FLAG_GUIDED
-        state = mav2.MAV_STATE_ACTIVE if armed else mav2.MAV_STATE_STANDBY
-        self._mav.heartbeat_send(vehicle_type, MAV_AUTOPILOT_ARDUPILOTMEGA, base, int(mode), state)
+        base = msgs.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (
+            msgs.MAV_MODE_FLAG_SAFETY_ARMED if armed else 0
+        )
+        if mode == msgs.RoverMode.GUIDED:
+            base |= msgs.MAV_MODE_FLAG_GUIDED_ENABLED
+        state = msgs.MAV_STATE_ACTIVE if armed else msgs.MAV_STATE_STANDBY
+        self._mav.heartbeat_send(
+            vehicle_type, msgs.MAV_AUTOPILOT_ARDUPILOTMEGA, base, int(mode), state
+        )
 
-    def send_global_position(self, p: GlobalPosition) -> None:
+    def send_global_position(self, p: msgs.GlobalPosition) -> None:
         hdg = (
             65535
             if not math.isfinite(p.heading_rad)
@@ -664,7 +443,7 @@ class MavlinkLink:
             hdg,
         )
 
-    def send_attitude(self, a: Attitude) -> None:
+    def send_attitude(self, a: msgs.Attitude) -> None:
         self._mav.attitude_send(
             a.time_boot_ms & 0xFFFFFFFF,
             a.roll_rad,
@@ -675,12 +454,12 @@ class MavlinkLink:
             a.yaw_rate_radps,
         )
 
-    def send_vfr_hud(self, v: VfrHud) -> None:
+    def send_vfr_hud(self, v: msgs.VfrHud) -> None:
         self._mav.vfr_hud_send(
             0.0, v.groundspeed_mps, v.heading_deg % 360, v.throttle_pct, 0.0, 0.0
         )
 
-    def send_gps_raw(self, g: GpsRaw, speed_mps: float, course_rad: float) -> None:
+    def send_gps_raw(self, g: msgs.GpsRaw, speed_mps: float, course_rad: float) -> None:
         cog = round(math.degrees(course_rad) % 360.0 * 100.0) % 36000
         self._mav.gps_raw_int_send(
             g.time_usec,
@@ -695,7 +474,7 @@ class MavlinkLink:
             g.satellites,
         )
 
-    def send_sys_status(self, s: SysStatus) -> None:
+    def send_sys_status(self, s: msgs.SysStatus) -> None:
         self._mav.sys_status_send(0, 0, 0, 0, round(s.voltage_v * 1000.0), -1, -1, 0, 0, 0, 0, 0, 0)
 
     def send_statustext(self, severity: int, text: str) -> None:

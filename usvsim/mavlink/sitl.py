@@ -44,7 +44,8 @@ from typing import cast
 import numpy as np
 
 from usvsim.common.angles import ssa
-from usvsim.mavlink.link import (
+from usvsim.mavlink.link import MavlinkLink, load_signing_key, message_id
+from usvsim.mavlink.messages import (
     MAV_RESULT_ACCEPTED,
     MAV_RESULT_DENIED,
     MAV_RESULT_FAILED,
@@ -54,15 +55,12 @@ from usvsim.mavlink.link import (
     GlobalPosition,
     GpsRaw,
     MavCommand,
-    MavlinkLink,
     RoverMode,
     SetAttitudeTarget,
     SetMode,
     SetPositionTarget,
     SysStatus,
     VfrHud,
-    load_signing_key,
-    message_id,
 )
 from usvsim.nav.filter import NavConfig, Navigator
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned
