@@ -1,11 +1,18 @@
-"""Angle helpers shared by the whole package (radians internally)."""
+"""Angle helpers shared by the whole package (radians internally): one smallest signed angle.
+
+:func:`ssa` works on numbers and NumPy arrays, :func:`ssa_casadi` builds the same map as a
+CasADi expression for the compiled plant and filter steps. Both follow Fossen (2021),
+*Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd ed. (MSS ``ssa``).
+"""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ssa"]
+__all__ = ["ssa", "ssa_casadi"]
 
 
 def ssa(angle_rad: ArrayLike) -> NDArray[np.float64]:
@@ -19,3 +26,20 @@ def ssa(angle_rad: ArrayLike) -> NDArray[np.float64]:
     """
     a = np.asarray(angle_rad, dtype=float)
     return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+
+
+def ssa_casadi(angle_rad: Any) -> Any:
+    """:func:`ssa` as a CasADi expression (``SX``/``MX``/``DM``): map an angle (rad) to [-π, π).
+
+    C's ``fmod`` keeps the sign of the dividend, so the first remainder lies in (-2π, 2π); adding
+    2π and taking ``fmod`` again gives NumPy's ``mod`` (a result in [0, 2π)) before the shift by π.
+    The compiled fast path is generated from this exact expression: changing its form changes
+    the simulation's bits (``usvsim bench`` rows).
+
+    >>> import casadi as ca
+    >>> float(ssa_casadi(ca.DM(3 * np.pi / 2)))
+    -1.5707963267948966
+    """
+    import casadi as ca  # lazily: the rest of usvsim.common needs no CasADi
+
+    return ca.fmod(ca.fmod(angle_rad + ca.pi, 2 * ca.pi) + 2 * ca.pi, 2 * ca.pi) - ca.pi

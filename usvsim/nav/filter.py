@@ -87,7 +87,7 @@ import numpy as np
 from filterpy.common import Q_discrete_white_noise
 from numpy.typing import NDArray
 
-from usvsim.common.angles import ssa
+from usvsim.common.angles import ssa, ssa_casadi
 from usvsim.nav.sensors import (
     SensorConfig,
     _as_checked,
@@ -767,9 +767,6 @@ def build_nav_step(cfg: NavConfig) -> Any:
     def add(a: tuple[Any, Any], b: tuple[Any, Any]) -> tuple[Any, Any]:
         return (a[0] + b[0], a[1] + b[1])
 
-    def ssa_sx(a: Any) -> Any:
-        return ca.fmod(ca.fmod(a + ca.pi, 2 * ca.pi) + 2 * ca.pi, 2 * ca.pi) - ca.pi
-
     p, w = (n[0], n[1]), (n[2], n[3])
     L_pp, L_pw, L_ww = n[4], (n[5], n[6]), n[7]
     psi, b, P_psi, P_pb, P_b, bias = n[8], n[9], n[10], n[11], n[12], n[13]
@@ -832,7 +829,7 @@ def build_nav_step(cfg: NavConfig) -> Any:
         L_pw = (pick(gps_on, L_pw_u[0], L_pw[0]), pick(gps_on, L_pw_u[1], L_pw[1]))
     # compass update (innovation wrapped)
     S = P_psi + r_c
-    y_c = ssa_sx(x[2] + s.compass_sigma_rad * e[5] - psi)
+    y_c = ssa_casadi(x[2] + s.compass_sigma_rad * e[5] - psi)
     k_psi, k_b = P_psi / S, P_pb / S
     psi_u, b_u = psi + k_psi * y_c, b + k_b * y_c
     P_b_u, P_pb_u, P_psi_u = P_b - k_b * P_pb, P_pb * (1.0 - k_psi), r_c * k_psi
@@ -840,5 +837,5 @@ def build_nav_step(cfg: NavConfig) -> Any:
     P_b, P_pb = pick(compass_on, P_b_u, P_b), pick(compass_on, P_pb_u, P_pb)
     P_psi = pick(compass_on, P_psi_u, P_psi)
     out = ca.vertcat(p[0], p[1], w[0], w[1], L_pp, L_pw[0], L_pw[1], L_ww,
-                     ssa_sx(psi), b, P_psi, P_pb, P_b, bias, gyro - b)  # fmt: skip
+                     ssa_casadi(psi), b, P_psi, P_pb, P_b, bias, gyro - b)  # fmt: skip
     return ca.Function("nav_step", [n, x, e], [out], ["n", "x", "e"], ["n_next"])

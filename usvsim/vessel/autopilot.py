@@ -29,6 +29,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
+from usvsim.common.angles import ssa_casadi
 from usvsim.vessel.model import (
     NomotoModel,
     damping_forces,
@@ -200,11 +201,6 @@ def _sat(x: Any, lim: Any) -> Any:
     return ca.fmin(ca.fmax(x, -lim), lim)
 
 
-def _ssa(a: Any) -> Any:
-    # smallest signed angle in CasADi, same as usvsim.common.angles.ssa: fmod with a positive result
-    return ca.fmod(ca.fmod(a + ca.pi, 2 * ca.pi) + 2 * ca.pi, 2 * ca.pi) - ca.pi
-
-
 def _allocate(act: Actuation, tau_x: Any, tau_n: Any, thrust_cap: Any) -> tuple[Any, Any]:
     """Map desired surge force and yaw moment to (actuator command, yaw moment it gives).
 
@@ -281,7 +277,7 @@ def control_law(
 
     if kind == "pid":
         psi_d, r_d, a_d, z_psi = c[0], c[1], c[2], c[3]
-        err = _ssa(psi - psi_d)
+        err = ssa_casadi(psi - psi_d)
         tau_n_des = m_ff * a_d + d_ff * r_d - Kp * err - Kd * (r - r_d) - Ki * z_psi
         tau_n = _sat(tau_n_des, tau_n_max)
         # moments that stop a turn may use brake_factor × the cap (stopping must not be starved)
@@ -291,13 +287,15 @@ def control_law(
         unsaturated = ca.fabs(tau_n_given - tau_n_des) < 0.01 * tau_n_max
         z_next = _sat(ca.if_else(unsaturated, z_psi + dt_s * err, z_psi), z_max)
         # 3rd-order reference model, Euler-discretised with velocity/acceleration limits
-        jerk = w**3 * _ssa(psi_ref - psi_d) - (2 * zr + 1) * w * a_d - (2 * zr + 1) * w**2 * r_d
+        jerk = (
+            w**3 * ssa_casadi(psi_ref - psi_d) - (2 * zr + 1) * w * a_d - (2 * zr + 1) * w**2 * r_d
+        )
         a_next = _sat(a_d + dt_s * jerk, a_max)
         r_next = _sat(r_d + dt_s * a_d, r_max)
-        psi_next = _ssa(psi_d + dt_s * r_d)
+        psi_next = ssa_casadi(psi_d + dt_s * r_d)
         c_next = ca.vertcat(psi_next, r_next, a_next, z_next, z_u)
     else:
-        r_des = _sat(ang_p * _ssa(psi_ref - psi), rr_max)
+        r_des = _sat(ang_p * ssa_casadi(psi_ref - psi), rr_max)
         # ATC_STR_ACC_MAX: the desired turn rate changes by at most acc_max dt per update
         r_des = ca.fmin(ca.fmax(r_des, c[1] - r_acc * dt_s), c[1] + r_acc * dt_s)
         r_err = r_des - r

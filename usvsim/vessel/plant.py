@@ -26,7 +26,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from usvsim.common.angles import ssa
+from usvsim.common.angles import ssa, ssa_casadi
 from usvsim.vessel.autopilot import (
     NC,
     NG,
@@ -59,7 +59,7 @@ def build_closed_loop_step(vessel: VesselParams, kind: AutopilotKind, dt_s: floa
     x, c = s[:NX], s[NX:]
     a_cmd, c_next = control_law(vessel, kind, x, c, w[0:2], g, dt_s)
     x_next = rk4_expr(f, x, a_cmd, w[2:4], dt_s)
-    x_next[2] = ca.fmod(ca.fmod(x_next[2] + ca.pi, 2 * ca.pi) + 2 * ca.pi, 2 * ca.pi) - ca.pi
+    x_next[2] = ssa_casadi(x_next[2])
     return ca.Function(
         "usv_cl_step", [s, w, g], [ca.vertcat(x_next, c_next)], ["s", "w", "g"], ["s_next"]
     )
