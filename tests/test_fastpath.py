@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from usvsim.nav.filter import NavConfig
+from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import NavigatedPlant
 from usvsim.vessel.codegen import BatchStepper, GatheredSteps
 from usvsim.vessel.plant import Plant

@@ -17,10 +17,9 @@ from filterpy.kalman import KalmanFilter
 from scipy.linalg import expm
 
 from usvsim.common.angles import ssa
-from usvsim.nav.filter import (
+from usvsim.nav.filter import NavEstimate, Navigator
+from usvsim.nav.models import (
     NavConfig,
-    NavEstimate,
-    Navigator,
     heading_filter_model,
     position_filter_model,
     position_transition,

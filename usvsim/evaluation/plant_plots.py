@@ -103,7 +103,8 @@ def kalman_figure(seed: int = 0, seconds: float = 120.0) -> Figure:
 
     The raw GPS shown is an independent draw at the same noise level as the filter's input.
     """
-    from usvsim.nav.filter import NavConfig, Navigator
+    from usvsim.nav.filter import Navigator
+    from usvsim.nav.models import NavConfig
 
     plant = Plant("default")
     rng = np.random.default_rng(seed)

@@ -62,8 +62,9 @@ from usvsim.mavlink.messages import (
     SysStatus,
     VfrHud,
 )
-from usvsim.nav.filter import NavConfig, Navigator
+from usvsim.nav.filter import Navigator
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned
+from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import sample_gps
 from usvsim.task.scenario import BoatNoise
 from usvsim.vessel.autopilot import AutopilotConfig, initial_controller_state

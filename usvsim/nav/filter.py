@@ -3,36 +3,8 @@
 Everything downstream (guidance, observations, the MAVLink bridge) reads the vessel's state from
 here, never from the plant's true state.
 
-Choice of filter
-----------------
-Two *linear* filters that share no state (so no EKF linearisation and no vessel parameters: the
-sensors measure position and heading directly and the gyro measures the heading rate):
-
-1. **Position** — state ``x = [x_N, y_E, v_N, v_E]`` (m, m, m/s, m/s), discrete white-noise
-   acceleration process noise (Bar-Shalom, Li & Kirubarajan 2001, *Estimation with Applications
-   to Tracking and Navigation*, Sect. 6.3.2; ``Q`` from filterpy's ``Q_discrete_white_noise``),
-   GNSS measurements ``z = [x_N, y_E]``, ``R = σ_gps² I``, and (``NavConfig.gnss_velocity``,
-   default on) the receiver's Doppler velocity ``z_v = [v_N, v_E]``, ``R_v = σ_v² I``, fused
-   sequentially with each fix. The transition is the coordinated-turn
-   model with *known* rate (ibid., Ch. 11), the rate being the bias-corrected gyro
-   ``ω = g − b̂`` from the heading filter (:func:`position_transition`); with
-   ``NavConfig(turn_rate_aided=False)`` it is the plain constant-velocity (CV) model.
-
-   Why turn-rate aiding: a plain CV filter lags in a turn by about ``a σ_gps / σ_a``
-   (centripetal ``a = U r ≈ 0.52 m/s²`` for 3 m/s at 10 °/s), so σ_a must be large and the
-   smoothing is lost. On the test manoeuvre (3 m/s, 30 s straight, 20 s at 10 °/s, straight) the
-   best plain CV filter (σ_a ≈ 1-1.5 m/s²) reaches position RMSE / raw GNSS RMSE ≈ 0.45; the aided
-   one reaches ≈ 0.26 at σ_a = 0.2 m/s². The model stays linear: ω is a known input, only F
-   becomes time-varying and different per boat.
-
-2. **Heading** — state ``x = [ψ, b]`` (rad, rad/s), the gyro ``g = r + b + n_g`` as process input
-   and the compass as measurement: the classic compass / rate-gyro filter with a bias state (Farrell
-   2008, *Aided Navigation: GPS with High Rate Sensors*; Fossen 2021, *Handbook of Marine Craft
-   Hydrodynamics and Motion Control*, 2nd ed.)::
-
-       ψ_k = ψ_{k-1} + dt (g_k − b_{k-1}),  b_k = b_{k-1} + n_b
-       F = [[1, −dt], [0, 1]],  B = [dt, 0]ᵀ,  Q = diag((dt σ_g)², σ_bw² dt)
-       z_k = ψ_k + v,  H = [1 0],  R = σ_c²,  innovation wrapped: y = ssa(z − ψ⁻)
+The filter models and their configuration are in :mod:`usvsim.nav.models`; the compiled
+CasADi twin of :meth:`Navigator.step` in :mod:`usvsim.nav.compiled`.
 
 Batching (exact, no loop over boats)
 ------------------------------------
@@ -80,18 +52,15 @@ name              shape           meaning
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
 from numpy.typing import NDArray
 
-from usvsim.common.angles import ssa, ssa_casadi
+from usvsim.common.angles import ssa
+from usvsim.nav.models import NavConfig, heading_filter_model, position_filter_model, turn_factors
 from usvsim.nav.sensors import (
-    SensorConfig,
     _as_checked,
-    _check_positive,
     _check_step_index,
     _draw_compass,
     _draw_gps,
@@ -102,194 +71,16 @@ from usvsim.nav.sensors import (
 )
 
 __all__ = [
-    "LinearModel",
-    "NavConfig",
+    "NAV_NS",
+    "NAV_STATE_FIELDS",
     "NavEstimate",
     "Navigator",
-    "heading_filter_model",
-    "position_filter_model",
-    "position_transition",
+    "export_nav_state",
+    "import_nav_state",
 ]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
-
-
-@dataclass(frozen=True)
-class NavConfig:
-    """Configuration of the navigation filters (sensor noise, process noise, plant step).
-
-    Raises
-    ------
-    ValueError
-        If a number is not finite and > 0, or a sensor rate does not divide the plant rate.
-    """
-
-    sensors: SensorConfig = field(default_factory=SensorConfig)
-    # sensor noise and rates, see usvsim.nav.sensors.SensorConfig
-    dt_s: float = 0.1
-    # s, fixed plant step (the simulator's integration step)
-    turn_rate_aided: bool = True
-    # rotate the velocity by the gyro yaw rate (coordinated turn with known rate, Bar-Shalom
-    # et al. 2001, Ch. 11); False gives the plain constant-velocity filter.
-    accel_sigma_mps2: float = 0.5
-    # m/s², σ_a of the discrete white-noise acceleration (Bar-Shalom et al. 2001, Sect. 6.3.3).
-    # With turn-rate aiding it covers speed changes and sideslip transients (the default hull
-    # sideslips strongly in turns). Measured on the plant's zig-zag with GNSS velocity: RMSE ratio
-    # to raw GNSS 0.18 (σ_a = 0.2), 0.14 (0.5), 0.14 (1.0). Position fixes only, on a kinematic
-    # turn: 0.26 at σ_a = 0.2, and a plain CV filter needs σ_a ≈ 1-1.5 (ratio 0.45).
-    gyro_bias_walk_sigma: float = float(np.deg2rad(0.001))
-    # rad/s/√s, bias random walk σ_bw that keeps the bias estimate alive; Groves (2013), Ch. 4:
-    # consumer MEMS in-run bias drift is of the order of 1-10 °/h over minutes.
-    gnss_velocity: bool = True
-    # fuse the GNSS Doppler velocity with each fix. Measured on the plant (zig-zag ±30°, box and
-    # avoidance manoeuvres of the default vessel, whose sideslip changes quickly in turns): the
-    # position RMSE / raw GNSS RMSE falls from 0.45-0.50 (position only, σ_a = 1.5) to ~0.3.
-    init_vel_sigma_mps: float = 0.1
-    # m/s, 1σ velocity of the first fix (GNSS Doppler velocity; u-blox NEO-M8 datasheet 0.05 m/s).
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.sensors, SensorConfig):
-            raise ValueError(f"NavConfig.sensors must be a SensorConfig, got {self.sensors!r}")
-        if not isinstance(self.gnss_velocity, bool):
-            raise ValueError(f"NavConfig.gnss_velocity must be a bool, got {self.gnss_velocity!r}")
-        if not isinstance(self.turn_rate_aided, bool):
-            raise ValueError(
-                f"NavConfig.turn_rate_aided must be a bool, got {self.turn_rate_aided!r}"
-            )
-        for f in fields(self):
-            if f.name not in ("sensors", "turn_rate_aided", "gnss_velocity"):
-                _check_positive(f"NavConfig.{f.name}", getattr(self, f.name))
-        # Both raise ValueError with the offending numbers if the rate does not fit dt_s.
-        period_steps(self.sensors.gps_rate_hz, self.dt_s)
-        period_steps(self.sensors.compass_rate_hz, self.dt_s)
-
-
-@dataclass(frozen=True)
-class LinearModel:
-    """Matrices of a discrete linear-Gaussian model ``x⁺ = F x + B u + w``, ``z = H x + v``.
-
-    Attributes
-    ----------
-    F : ndarray, shape (n, n)
-        State transition over one plant step (for the position filter: the ω = 0 member).
-    B : ndarray, shape (n, 1)
-        Input matrix (zeros when there is no input).
-    Q : ndarray, shape (n, n)
-        Process noise covariance ``E[w wᵀ]`` per plant step.
-    H : ndarray, shape (m, n)
-        Measurement matrix; here always ``[I_m 0]`` (the leading m states are measured).
-    R : ndarray, shape (m, m)
-        Measurement noise covariance ``E[v vᵀ]``.
-    """
-
-    F: FloatArray
-    B: FloatArray
-    Q: FloatArray
-    H: FloatArray
-    R: FloatArray
-
-
-def _turn_factors(omega_radps: FloatArray, dt_s: float) -> tuple[ComplexArray, ComplexArray]:
-    """Complex turn factors ``G = ∫₀^dt e^{iωt} dt`` and ``E = e^{iω dt}`` over ``dt_s``.
-
-    ``G = dt e^{iθ/2} sin(θ/2) / (θ/2)`` with ``θ = ω dt``, i.e. ``sin(θ)/ω + i (1 − cos θ)/ω``;
-    ω = 0 gives ``G = dt``, ``E = 1`` exactly. Shapes follow ``omega_radps``.
-    """
-    half = (0.5 * dt_s) * omega_radps
-    sin_h = np.sin(half)
-    sinc_h = np.divide(sin_h, half, out=np.ones_like(half), where=half != 0.0)
-    E_half = np.empty(half.shape, dtype=np.complex128)
-    E_half.real, E_half.imag = np.cos(half), sin_h
-    return (dt_s * sinc_h) * E_half, E_half * E_half
-
-
-def position_transition(omega_radps: FloatArray, dt_s: float) -> FloatArray:
-    """Transition of ``[x_N, y_E, v_N, v_E]`` over ``dt_s`` for a turn at known rate ω.
-
-    Coordinated-turn model with known turn rate (Bar-Shalom et al. 2001, Ch. 11): the
-    velocity rotates by ``θ = ω dt`` (clockwise-positive, like ψ) and the position integrates it::
-
-        F = [[1, 0, S,     -C   ],        S = sin(θ)/ω,  C = (1 − cos θ)/ω
-             [0, 1, C,      S   ],
-             [0, 0, cos θ, -sin θ],
-             [0, 0, sin θ,  cos θ]]
-
-    ω = 0 gives the constant-velocity matrix exactly.
-
-    Parameters
-    ----------
-    omega_radps : ndarray, shape (N,)
-        Turn rate of the velocity vector (rad/s).
-    dt_s : float
-        Step (s).
-
-    Returns
-    -------
-    ndarray, shape (N, 4, 4)
-    """
-    G, E = _turn_factors(np.asarray(omega_radps, dtype=np.float64), dt_s)
-    F = np.zeros((*G.shape, 4, 4))
-    F[..., 0, 0] = F[..., 1, 1] = 1.0
-    F[..., 0, 2], F[..., 0, 3], F[..., 1, 2], F[..., 1, 3] = G.real, -G.imag, G.imag, G.real
-    F[..., 2, 2], F[..., 2, 3], F[..., 3, 2], F[..., 3, 3] = E.real, -E.imag, E.imag, E.real
-    return F
-
-
-def position_filter_model(cfg: NavConfig) -> LinearModel:
-    """CV model of ``[x_N, y_E, v_N, v_E]`` measured by GNSS (Bar-Shalom et al. 2001, 6.3.2).
-
-    Parameters
-    ----------
-    cfg : NavConfig
-
-    Returns
-    -------
-    LinearModel
-        n = 4, m = 2, no input; ``F`` is :func:`position_transition` at ω = 0.
-    """
-    dt = cfg.dt_s
-    eye2 = np.eye(2)
-    F = position_transition(np.zeros(()), dt)
-    # order_by_dim=False orders the blocks as [x, y, vx, vy], matching F.
-    Q = Q_discrete_white_noise(
-        dim=2, dt=dt, var=cfg.accel_sigma_mps2**2, block_size=2, order_by_dim=False
-    )
-    H = np.hstack([eye2, np.zeros((2, 2))])
-    R = cfg.sensors.gps_sigma_m**2 * eye2
-    return _frozen_model(F, np.zeros((4, 1)), Q, H, R)
-
-
-def heading_filter_model(cfg: NavConfig) -> LinearModel:
-    """Gyro-driven heading ``[ψ, b]`` with input ``g`` (gyro) and compass measurement.
-
-    Parameters
-    ----------
-    cfg : NavConfig
-
-    Returns
-    -------
-    LinearModel
-        n = 2, m = 1, one input (the gyro reading, rad/s).
-    """
-    dt = cfg.dt_s
-    F = np.array([[1.0, -dt], [0.0, 1.0]])
-    B = np.array([[dt], [0.0]])
-    # The gyro's white noise is held over dt (angle error dt·σ_g); the bias walks as σ_bw √dt.
-    Q = np.diag([(dt * cfg.sensors.gyro_sigma_radps) ** 2, cfg.gyro_bias_walk_sigma**2 * dt])
-    H = np.array([[1.0, 0.0]])
-    R = np.array([[cfg.sensors.compass_sigma_rad**2]])
-    return _frozen_model(F, B, Q, H, R)
-
-
-def _frozen_model(*mats: FloatArray) -> LinearModel:
-    """Build a :class:`LinearModel` whose arrays are read-only float64 copies."""
-    frozen = []
-    for m in mats:
-        a = np.array(m, dtype=np.float64)
-        a.flags.writeable = False
-        frozen.append(a)
-    return LinearModel(*frozen)
 
 
 @dataclass(frozen=True)
@@ -559,7 +350,7 @@ class Navigator:
         G: ComplexArray | float = dt
         E: ComplexArray | float = 1.0
         if self.cfg.turn_rate_aided:
-            G, E = _turn_factors(omega, dt)
+            G, E = turn_factors(omega, dt)
         L_pw_G = self._L_pw + G * self._L_ww  # Λ_pw + G Λ_ww
         # Λ_pp + 2 Re(Ḡ Λ_pw) + |G|² Λ_ww = Λ_pp + Re(Ḡ (Λ_pw + Λ_pw + G Λ_ww))
         self._L_pp = self._L_pp + (np.conjugate(G) * (self._L_pw + L_pw_G)).real + self._q_pp
@@ -667,16 +458,15 @@ class Navigator:
         return eta, nu
 
 
-# --- the same filter as one CasADi Function (for the compiled, fused simulation path) ----------
+# --- the filter state as a flat array (the compiled twin's layout, usvsim.nav.compiled) -------
 
-#: Layout of the navigation state vector used by :func:`build_nav_step` (15 entries per boat).
+#: Layout of the filter state of one boat (15 entries), as exported by :func:`export_nav_state`
+#: and stepped by :func:`usvsim.nav.compiled.build_nav_step`.
 NAV_STATE_FIELDS = (
     "p_n", "p_e", "w_n", "w_e", "L_pp", "L_pw_re", "L_pw_im", "L_ww",
     "psi", "b", "P_psi", "P_pb", "P_b", "gyro_bias", "yaw_rate",
 )  # fmt: skip
 NAV_NS = len(NAV_STATE_FIELDS)
-#: Standard normals one plant step consumes, in :meth:`Navigator.step`'s draw order.
-NAV_NOISE = ("gyro", "gps_n", "gps_e", "vel_n", "vel_e", "compass")
 
 
 def export_nav_state(nav: Navigator) -> FloatArray:
@@ -699,143 +489,3 @@ def import_nav_state(nav: Navigator, state: FloatArray) -> None:
     nav._psi, nav._b = s[:, 8].copy(), s[:, 9].copy()
     nav._P_psi, nav._P_pb, nav._P_b = s[:, 10].copy(), s[:, 11].copy(), s[:, 12].copy()
     nav._gyro_bias, nav._yaw_rate = s[:, 13].copy(), s[:, 14].copy()
-
-
-def nav_draws_per_step(cfg: NavConfig, step_index: int) -> tuple[bool, bool, int]:
-    """(GNSS fires, compass fires, standard normals drawn) at plant step ``step_index``."""
-    gps = step_index % period_steps(cfg.sensors.gps_rate_hz, cfg.dt_s) == 0
-    compass = step_index % period_steps(cfg.sensors.compass_rate_hz, cfg.dt_s) == 0
-    n = 1 + (2 + (2 if cfg.gnss_velocity else 0) if gps else 0) + (1 if compass else 0)
-    return gps, compass, n
-
-
-def nav_noise_block(
-    cfg: NavConfig, first_step_index: int, n_steps: int, normals: FloatArray
-) -> FloatArray:
-    """Arrange per-boat standard normals, drawn in :meth:`Navigator.step` order, per step.
-
-    ``normals`` (N, M) holds each boat's next M draws (M from :func:`nav_draws_per_step`);
-    returns (N, n_steps, 8): the 6 :data:`NAV_NOISE` entries (0 where a sensor is silent) and
-    the GNSS / compass firing flags.
-    """
-    n = normals.shape[0]
-    out = np.zeros((n, n_steps, 8))
-    col = 0
-    for j in range(n_steps):  # a loop over the few steps of a period, never over boats
-        gps, compass, _ = nav_draws_per_step(cfg, first_step_index + j)
-        out[:, j, 0] = normals[:, col]
-        col += 1
-        if gps:
-            out[:, j, 1:3] = normals[:, col : col + 2]
-            col += 2
-            if cfg.gnss_velocity:
-                out[:, j, 3:5] = normals[:, col : col + 2]
-                col += 2
-            out[:, j, 6] = 1.0
-        if compass:
-            out[:, j, 5] = normals[:, col]
-            col += 1
-            out[:, j, 7] = 1.0
-    if col != normals.shape[1]:
-        raise ValueError(f"expected {col} normals per boat for these steps, got {normals.shape[1]}")
-    return out
-
-
-def build_nav_step(cfg: NavConfig) -> Any:
-    """:meth:`Navigator.step` for one boat as a CasADi Function (same formulas, same order).
-
-    ``nav_step(n[15], x[8], e[8]) -> n_next[15]``: ``n`` the filter state
-    (:data:`NAV_STATE_FIELDS`), ``x`` the plant state after the step (true η, ν), ``e`` the
-    standard normals and sensor flags of :func:`nav_noise_block`. Complex quantities of the
-    circular position filter are carried as (real, imaginary) pairs.
-    """
-    import casadi as ca
-
-    s, dt = cfg.sensors, cfg.dt_s
-    pm, hm = position_filter_model(cfg), heading_filter_model(cfg)
-    q_pp, q_pw, q_ww = pm.Q[0, 0], pm.Q[0, 2], pm.Q[2, 2]
-    q_psi, q_bias, r_gps, r_c = hm.Q[0, 0], hm.Q[1, 1], pm.R[0, 0], hm.R[0, 0]
-    r_v = s.gps_velocity_sigma_mps**2
-    n, x, e = ca.SX.sym("n", NAV_NS), ca.SX.sym("x", 8), ca.SX.sym("e", 8)
-
-    def mul(a: tuple[Any, Any], b: tuple[Any, Any]) -> tuple[Any, Any]:
-        return (a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0])
-
-    def conj(a: tuple[Any, Any]) -> tuple[Any, Any]:
-        return (a[0], -a[1])
-
-    def add(a: tuple[Any, Any], b: tuple[Any, Any]) -> tuple[Any, Any]:
-        return (a[0] + b[0], a[1] + b[1])
-
-    p, w = (n[0], n[1]), (n[2], n[3])
-    L_pp, L_pw, L_ww = n[4], (n[5], n[6]), n[7]
-    psi, b, P_psi, P_pb, P_b, bias = n[8], n[9], n[10], n[11], n[12], n[13]
-    gyro = x[5] + bias + s.gyro_sigma_radps * e[0]
-    omega = gyro - b
-    # heading predict
-    psi = psi + dt * omega
-    P_pb_new = P_pb - dt * P_b
-    P_psi = P_psi - dt * (P_pb + P_pb_new) + q_psi
-    P_pb, P_b = P_pb_new, P_b + q_bias
-    # position predict (coordinated turn at the gyro rate, or constant velocity)
-    G: tuple[Any, Any]
-    E: tuple[Any, Any]
-    if cfg.turn_rate_aided:
-        half = (0.5 * dt) * omega
-        sinc = ca.if_else(half != 0, ca.sin(half) / half, 1.0)
-        E_half = (ca.cos(half), ca.sin(half))
-        G = (dt * sinc * E_half[0], dt * sinc * E_half[1])
-        E = mul(E_half, E_half)
-    else:
-        G, E = (dt, 0.0), (1.0, 0.0)
-    L_pw_G = add(L_pw, (G[0] * L_ww, G[1] * L_ww))
-    L_pp = L_pp + mul(conj(G), add(L_pw, L_pw_G))[0] + q_pp
-    L_pw = add(mul(L_pw_G, conj(E)), (q_pw, 0.0))
-    L_ww = L_ww + q_ww
-    p = add(p, mul(G, w))
-    w = mul(E, w)
-    gps_on, compass_on = e[6] > 0.5, e[7] > 0.5
-
-    def pick(cond: Any, new: Any, old: Any) -> Any:
-        return ca.if_else(cond, new, old)
-
-    # GNSS position update
-    S = L_pp + r_gps
-    y = (x[0] + s.gps_sigma_m * e[1] - p[0], x[1] + s.gps_sigma_m * e[2] - p[1])
-    k_p, k_w = L_pp / S, (L_pw[0] / S, -L_pw[1] / S)
-    p_u = (p[0] + k_p * y[0], p[1] + k_p * y[1])
-    w_u = add(w, mul(k_w, y))
-    L_ww_u = L_ww - mul(k_w, L_pw)[0]
-    L_pw_u = (L_pw[0] * (1 - k_p), L_pw[1] * (1 - k_p))
-    L_pp_u = r_gps * k_p
-    p = (pick(gps_on, p_u[0], p[0]), pick(gps_on, p_u[1], p[1]))
-    w = (pick(gps_on, w_u[0], w[0]), pick(gps_on, w_u[1], w[1]))
-    L_pp, L_ww = pick(gps_on, L_pp_u, L_pp), pick(gps_on, L_ww_u, L_ww)
-    L_pw = (pick(gps_on, L_pw_u[0], L_pw[0]), pick(gps_on, L_pw_u[1], L_pw[1]))
-    if cfg.gnss_velocity:  # GNSS velocity update, with each fix
-        vel = mul((x[3], x[4]), (ca.cos(x[2]), ca.sin(x[2])))
-        S = L_ww + r_v
-        y = (vel[0] + s.gps_velocity_sigma_mps * e[3] - w[0],
-             vel[1] + s.gps_velocity_sigma_mps * e[4] - w[1])  # fmt: skip
-        k_p, k_w2 = (L_pw[0] / S, L_pw[1] / S), L_ww / S
-        p_u = add(p, mul(k_p, y))
-        w_u = (w[0] + k_w2 * y[0], w[1] + k_w2 * y[1])
-        L_pp_u = L_pp - mul(k_p, conj(L_pw))[0]
-        L_pw_u = (L_pw[0] * (1 - k_w2), L_pw[1] * (1 - k_w2))
-        L_ww_u = r_v * k_w2
-        p = (pick(gps_on, p_u[0], p[0]), pick(gps_on, p_u[1], p[1]))
-        w = (pick(gps_on, w_u[0], w[0]), pick(gps_on, w_u[1], w[1]))
-        L_pp, L_ww = pick(gps_on, L_pp_u, L_pp), pick(gps_on, L_ww_u, L_ww)
-        L_pw = (pick(gps_on, L_pw_u[0], L_pw[0]), pick(gps_on, L_pw_u[1], L_pw[1]))
-    # compass update (innovation wrapped)
-    S = P_psi + r_c
-    y_c = ssa_casadi(x[2] + s.compass_sigma_rad * e[5] - psi)
-    k_psi, k_b = P_psi / S, P_pb / S
-    psi_u, b_u = psi + k_psi * y_c, b + k_b * y_c
-    P_b_u, P_pb_u, P_psi_u = P_b - k_b * P_pb, P_pb * (1.0 - k_psi), r_c * k_psi
-    psi, b = pick(compass_on, psi_u, psi), pick(compass_on, b_u, b)
-    P_b, P_pb = pick(compass_on, P_b_u, P_b), pick(compass_on, P_pb_u, P_pb)
-    P_psi = pick(compass_on, P_psi_u, P_psi)
-    out = ca.vertcat(p[0], p[1], w[0], w[1], L_pp, L_pw[0], L_pw[1], L_ww,
-                     ssa_casadi(psi), b, P_psi, P_pb, P_b, bias, gyro - b)  # fmt: skip
-    return ca.Function("nav_step", [n, x, e], [out], ["n", "x", "e"], ["n_next"])

@@ -1,7 +1,7 @@
 """Plant and navigation filter fused into one compiled step: the environments' hot path.
 
 Per boat and plant step, one CasADi Function runs the autopilot, the RK4 vessel step, then the
-sensors and the Kalman filter on the new true state (:func:`usvsim.nav.filter.build_nav_step`,
+sensors and the Kalman filter on the new true state (:func:`usvsim.nav.compiled.build_nav_step`,
 the same formulas as :class:`usvsim.nav.filter.Navigator`, which stays the reference and is
 tested equal to filterpy). The sensor noise is drawn beforehand in NumPy, in the navigator's draw
 order, so the fused path reproduces ``Plant.step`` followed by ``Navigator.run`` to rounding
@@ -21,16 +21,9 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-from usvsim.nav.filter import (
-    NAV_NS,
-    NavConfig,
-    Navigator,
-    build_nav_step,
-    export_nav_state,
-    import_nav_state,
-    nav_draws_per_step,
-    nav_noise_block,
-)
+from usvsim.nav.compiled import build_nav_step, nav_draws_per_step, nav_noise_block
+from usvsim.nav.filter import NAV_NS, Navigator, export_nav_state, import_nav_state
+from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import period_steps
 from usvsim.vessel.codegen import BatchStepper, GatheredSteps
 from usvsim.vessel.model import NX

@@ -11,8 +11,8 @@ import numpy as np
 from filterpy.kalman import KalmanFilter
 
 from usvsim.common.angles import ssa
-from usvsim.nav.filter import NavConfig, heading_filter_model, position_filter_model
-from usvsim.nav.filter import position_transition as turn_transition
+from usvsim.nav.models import NavConfig, heading_filter_model, position_filter_model
+from usvsim.nav.models import position_transition as turn_transition
 
 __all__ = ["TelemetryEstimator"]
 
