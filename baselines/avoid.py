@@ -52,6 +52,8 @@ from numpy.typing import NDArray
 
 from baselines.los import LOSHelmsman, heading_change_to_action
 from usvsim.common.angles import ssa
+from usvsim.task.batch import ActionKind
+from usvsim.task.observations import ObservationKind
 
 __all__ = ["AvoidHelmsman", "CollisionCone", "cone_heading_change"]
 
@@ -124,8 +126,8 @@ class AvoidHelmsman:
 
     los: LOSHelmsman = field(default_factory=LOSHelmsman)
     cone: CollisionCone = field(default_factory=CollisionCone)
-    observation: str = field(default="positional", init=False)
-    action: str = field(default="gaussian", init=False)
+    observation: ObservationKind = field(default="positional", init=False)
+    action: ActionKind = field(default="gaussian", init=False)
     last_blocked: NDArray[np.bool_] | None = field(default=None, init=False, repr=False)
 
     def reset(self, n_boats: int) -> None:

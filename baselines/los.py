@@ -41,6 +41,8 @@ from numpy.typing import NDArray
 from guidance.los import GuidanceOutput, LOSConfig, LOSGuidance
 from guidance.waypoints import WaypointPath
 from usvsim.common.angles import ssa
+from usvsim.task.batch import ActionKind
+from usvsim.task.observations import ObservationKind
 
 __all__ = [
     "DEFAULT_LOS_CONFIG",
@@ -131,8 +133,8 @@ class LOSHelmsman:
     max_heading_change_rad: float = math.radians(30.0)
     switch_tolerance_m: float = 0.5
     goal_jump_m: float = 20.0
-    observation: str = field(default="positional", init=False)
-    action: str = field(default="gaussian", init=False)
+    observation: ObservationKind = field(default="positional", init=False)
+    action: ActionKind = field(default="gaussian", init=False)
     last_output: GuidanceOutput | None = field(default=None, init=False, repr=False)
 
     def reset(self, n_boats: int) -> None:

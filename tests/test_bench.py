@@ -81,6 +81,16 @@ def test_bench_args_follow_the_cli_conventions() -> None:
     assert BenchArgs(**vars(parser.parse_args([]))) == BenchArgs()
 
 
+def test_literal_fields_accept_only_their_values(capsys: pytest.CaptureFixture[str]) -> None:
+    parser = argparse.ArgumentParser()
+    _add_dataclass_arguments(parser, BenchArgs)
+    with pytest.raises(SystemExit) as exit_info:
+        parser.parse_args(["--scenario", "pools"])
+    assert exit_info.value.code == 2
+    assert "invalid choice: 'pools' (choose from" in capsys.readouterr().err
+    assert bench.SCENARIOS == ("pole", "waypoints")
+
+
 def test_bench_json_parses_and_has_every_helmsman(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

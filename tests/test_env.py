@@ -10,9 +10,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import usvsim
-from usvsim.task.batch import heading_change_rad
+from usvsim.task.batch import ACTION_KINDS, heading_change_rad, parse_action_kind, within_radius
 from usvsim.task.env import PoleAvoidanceEnv
-from usvsim.task.observations import relative_polar
+from usvsim.task.observations import OBSERVATION_KINDS, parse_observation_kind, relative_polar
 from usvsim.task.scenario import EpisodeSpec, Scenario
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 from usvsim.vessel.plant import Plant
@@ -209,9 +209,20 @@ def test_batch_state_is_a_copy_of_the_true_state(plant):
     assert np.all(np.isfinite(env.sim.state.x))
 
 
-def test_goal_test_equals_hypot_at_the_boundary():
-    from usvsim.task.batch import _within
+def test_kinds_parse_only_known_names():
+    assert [parse_observation_kind(k) for k in OBSERVATION_KINDS] == [
+        "positional",
+        "radar",
+        "radar+goal",
+    ]
+    assert [parse_action_kind(k) for k in ACTION_KINDS] == ["gaussian", "categorical"]
+    with pytest.raises(ValueError, match="observation must be one of"):
+        parse_observation_kind("radar+gaol")
+    with pytest.raises(ValueError, match="action must be one of"):
+        parse_action_kind("gausian")
 
+
+def test_goal_test_equals_hypot_at_the_boundary():
     r = 10.0
     edge = np.array([6.0, 8.0, 10.0, 0.0, 7.0710678118654755, np.nextafter(10.0, 11.0)])
     dx = np.concatenate([edge, -edge, [np.nan, np.inf, 1e300, 3.0]])
@@ -222,5 +233,5 @@ def test_goal_test_equals_hypot_at_the_boundary():
     dx = np.concatenate([dx, radius * np.cos(angle)])[None, :]
     dy = np.concatenate([dy, radius * np.sin(angle)])[None, :]
     expected = np.hypot(dx, dy) <= r
-    np.testing.assert_array_equal(_within(dx, dy, r), expected)
+    np.testing.assert_array_equal(within_radius(dx, dy, r), expected)
     assert 0 < expected.sum() < expected.size

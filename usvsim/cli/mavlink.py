@@ -16,6 +16,8 @@ from usvsim.mavlink.bridge import Bridge, BridgeArgs
 from usvsim.mavlink.mission import load_mission
 from usvsim.mavlink.sitl import RoverSitl, SitlArgs
 from usvsim.mavlink.sitl_physics import JsonPhysics, SitlPhysicsArgs, serve
+from usvsim.task.batch import parse_action_kind
+from usvsim.task.observations import parse_observation_kind
 from usvsim.vessel.vessels import get_vessel
 
 __all__ = ["run_bridge", "run_sitl", "run_sitl_physics"]
@@ -74,14 +76,14 @@ def run_bridge(args: BridgeArgs) -> int:
     try:
         mission = load_mission(args.mission)
         helmsman = make_helmsman(args.helmsman, args.action)
+        # a trained policy or baseline declares the observation and action it was made for
+        args = dataclasses.replace(
+            args,
+            observation=parse_observation_kind(getattr(helmsman, "observation", args.observation)),
+            action=parse_action_kind(getattr(helmsman, "action", args.action)),
+        )
     except ValueError as err:
         raise SystemExit(f"usvsim bridge: {err}") from None
-    # a trained policy or baseline declares the observation and action it was made for
-    args = dataclasses.replace(
-        args,
-        observation=str(getattr(helmsman, "observation", args.observation)),
-        action=str(getattr(helmsman, "action", args.action)),
-    )
     bridge = Bridge(args, mission, helmsman)
     try:
         result = bridge.run()

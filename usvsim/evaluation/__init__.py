@@ -1,2 +1,1 @@
-"""The evaluation block: episode sets, the benchmark, statistics, throughput measurements, plots.
-"""
+"""The evaluation block: episode sets, the benchmark, statistics, throughput measurements, plots."""

@@ -36,16 +36,18 @@ import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol, get_args
 
 import numpy as np
 
 from usvsim.evaluation.stats import Proportion, finite_mean, finite_median, proportion
 
 __all__ = [
+    "SCENARIOS",
     "BenchArgs",
     "BenchResult",
     "BenchRow",
+    "ScenarioKind",
     "format_table",
     "plot_pole_paths",
     "plot_waypoint_paths",
@@ -57,7 +59,8 @@ __all__ = [
     "write_results",
 ]
 
-SCENARIOS = ("pole", "waypoints")
+ScenarioKind = Literal["pole", "waypoints"]
+SCENARIOS: tuple[str, ...] = get_args(ScenarioKind)
 SET_NAMES = ("validation", "held-out")
 
 
@@ -65,7 +68,7 @@ SET_NAMES = ("validation", "held-out")
 class BenchArgs:
     """Compare every available helmsman on the validation and held-out episodes (the table)."""
 
-    scenario: str = "pole"  # pole (the study's task) | waypoints (courses of waypoints and poles)
+    scenario: ScenarioKind = "pole"  # pole (the study's task) | waypoints (courses with poles)
     helmsmen: str = ""  # comma-separated helmsman names; empty: every available helmsman
     heldout: int = 200  # episodes (courses) in the held-out set
     out: str = "usvsim-results/bench"  # results folder: Markdown, CSV and path plots
@@ -150,13 +153,13 @@ def summarise_set(
 class BenchResult:
     """Rows of the table and the records behind them, keyed by (helmsman, set)."""
 
-    scenario: str
+    scenario: ScenarioKind
     rows: tuple[BenchRow, ...]
     records: dict[tuple[str, str], list[Any]]
     wall_s: float
 
 
-def _episode_sets(scenario: str, heldout: int) -> dict[str, Sequence[Any]]:
+def _episode_sets(scenario: ScenarioKind, heldout: int) -> dict[str, Sequence[Any]]:
     if scenario == "pole":
         from usvsim.evaluation.episodes import heldout_episodes, validation_episodes
 

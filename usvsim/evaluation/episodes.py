@@ -31,7 +31,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.helm.protocol import Helmsman
-from usvsim.task.batch import PoleAvoidanceBatch
+from usvsim.task.batch import ActionKind, PoleAvoidanceBatch
+from usvsim.task.observations import ObservationKind
 from usvsim.task.scenario import EpisodeSpec, Scenario, draw_episodes
 
 __all__ = [
@@ -123,8 +124,8 @@ def evaluate(
     helmsman: Helmsman,
     episodes: Sequence[EpisodeSpec],
     *,
-    observation: str = "positional",
-    action: str = "gaussian",
+    observation: ObservationKind = "positional",
+    action: ActionKind = "gaussian",
     **batch_kwargs: Any,
 ) -> list[EpisodeRecord]:
     """Run ``helmsman`` on every episode (all in one batch) and record each one.

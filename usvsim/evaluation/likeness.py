@@ -42,6 +42,8 @@ from baselines.expert import ExpertParams, run_expert
 from usvsim.common.angles import ssa
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
 from usvsim.helm.protocol import Helmsman
+from usvsim.task.batch import ActionKind
+from usvsim.task.observations import ObservationKind
 from usvsim.task.scenario import EpisodeSpec, Scenario
 
 __all__ = [
@@ -142,8 +144,8 @@ def likeness(records: Sequence[EpisodeRecord], reference: ExpertReference) -> Li
 def helmsman_likeness(
     helmsman: Helmsman,
     *,
-    observation: str = "positional",
-    action: str = "gaussian",
+    observation: ObservationKind = "positional",
+    action: ActionKind = "gaussian",
     reference: ExpertReference | None = None,
     **batch_kwargs: Any,
 ) -> Likeness:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from usvsim.task.observations import ObservationKind
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 from usvsim.vessel.plant import Plant
 
@@ -105,7 +106,7 @@ def _env_figures(seconds: float) -> dict[str, Any]:
     }
 
 
-def env_throughput(observation: str, n_envs: int, seconds: float = 2.0) -> float:
+def env_throughput(observation: ObservationKind, n_envs: int, seconds: float = 2.0) -> float:
     """Decision steps per second (each: 20 plant steps + navigation + observation, all boats).
 
     Runs :class:`PoleAvoidanceVectorEnv` with uniformly random Gaussian actions (autoresets

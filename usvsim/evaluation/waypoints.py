@@ -16,8 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.helm.protocol import Helmsman
-from usvsim.task.batch import PoleAvoidanceBatch
-from usvsim.task.observations import build_observation
+from usvsim.task.batch import ActionKind, PoleAvoidanceBatch
+from usvsim.task.observations import ObservationKind, build_observation
 from usvsim.task.scenario import EpisodeSpec, Scenario
 from usvsim.task.waypoints import WaypointCourse, WaypointScenario
 
@@ -89,8 +89,8 @@ def evaluate_waypoints(
     helmsman: Helmsman,
     courses: Sequence[WaypointCourse],
     *,
-    observation: str = "positional",
-    action: str = "gaussian",
+    observation: ObservationKind = "positional",
+    action: ActionKind = "gaussian",
     scenario: WaypointScenario | None = None,
     **batch_kwargs: Any,
 ) -> list[WaypointRecord]:

@@ -30,7 +30,8 @@ from pathlib import Path
 from typing import Any
 
 from usvsim.helm.protocol import Helmsman, RandomHelmsman, StraightAheadHelmsman
-from usvsim.task.batch import ActionKind
+from usvsim.task.batch import ActionKind, parse_action_kind
+from usvsim.task.observations import ObservationKind, parse_observation_kind
 
 __all__ = [
     "MODELS_DIR",
@@ -111,9 +112,15 @@ def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
     )
 
 
-def helmsman_kinds(helmsman: Any) -> tuple[str, str]:
-    """(observation kind, action kind) a helmsman declares; default (positional, gaussian)."""
+def helmsman_kinds(helmsman: Any) -> tuple[ObservationKind, ActionKind]:
+    """(observation kind, action kind) a helmsman declares; default (positional, gaussian).
+
+    Raises
+    ------
+    ValueError
+        If the helmsman declares a kind that does not exist.
+    """
     return (
-        str(getattr(helmsman, "observation", "positional")),
-        str(getattr(helmsman, "action", "gaussian")),
+        parse_observation_kind(getattr(helmsman, "observation", "positional")),
+        parse_action_kind(getattr(helmsman, "action", "gaussian")),
     )

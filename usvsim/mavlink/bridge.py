@@ -53,8 +53,8 @@ from usvsim.mavlink.messages import (
 from usvsim.mavlink.mission import Mission
 from usvsim.nav.geo import ned_from_geodetic
 from usvsim.nav.telemetry import TelemetryEstimator
-from usvsim.task.batch import heading_change_rad
-from usvsim.task.observations import build_observation
+from usvsim.task.batch import ActionKind, heading_change_rad
+from usvsim.task.observations import ObservationKind, build_observation
 from usvsim.task.radar import RadarConfig
 
 __all__ = ["Bridge", "BridgeArgs", "BridgeResult"]
@@ -81,8 +81,8 @@ class BridgeArgs:
     connect: str = "tcp:127.0.0.1:5760"  # MAVLink URL: tcp:, udp:, udpin:, udpout:, serial dev
     mission: str = ""  # mission file (JSON, or YAML with PyYAML): poles and goal as lat/lon
     helmsman: str = "straight"  # baseline name (straight | random) or a checkpoint path
-    observation: str = "positional"  # observation kind the helmsman expects
-    action: str = "gaussian"  # action kind the helmsman returns: gaussian | categorical
+    observation: ObservationKind = "positional"  # observation kind the helmsman expects
+    action: ActionKind = "gaussian"  # action kind the helmsman returns: gaussian | categorical
     arm: bool = False  # arm the vehicle (otherwise it must be armed already)
     attitude_target: bool = False  # command SET_ATTITUDE_TARGET instead of position target
     wp_speed_mps: float = 3.0  # vehicle WP_SPEED: thrust 1 in SET_ATTITUDE_TARGET (m/s)

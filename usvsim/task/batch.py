@@ -46,7 +46,7 @@ from usvsim.common.angles import ssa
 from usvsim.nav.filter import Navigator, export_nav_state
 from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import NavigatedPlant
-from usvsim.task.observations import build_observation, observation_space
+from usvsim.task.observations import ObservationKind, build_observation, observation_space
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction, RewardTerms
 from usvsim.task.scenario import BoatNoise, EpisodeSpec, Scenario, episode_geometry
@@ -64,6 +64,8 @@ __all__ = [
     "action_space",
     "heading_change_rad",
     "observation_rows",
+    "parse_action_kind",
+    "within_radius",
     "write_observation_rows",
 ]
 
@@ -74,7 +76,20 @@ FloatArray = NDArray[np.float64]
 Observation = NDArray[np.generic] | dict[str, NDArray[np.generic]]
 
 
-def action_space(kind: str) -> spaces.Space:
+def parse_action_kind(kind: object) -> ActionKind:
+    """``kind`` as an :data:`ActionKind` (e.g. a string read from a file or a flag).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of :data:`ACTION_KINDS`.
+    """
+    if kind not in ACTION_KINDS:
+        raise ValueError(f"action must be one of {ACTION_KINDS}, got {kind!r}")
+    return cast(ActionKind, kind)
+
+
+def action_space(kind: ActionKind) -> spaces.Space:
     """Single-boat action space: ``Box(-1, 1, (1,))`` or ``Discrete(41)``."""
     if kind == "gaussian":
         return spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
@@ -83,7 +98,9 @@ def action_space(kind: str) -> spaces.Space:
     raise ValueError(f"action must be one of {ACTION_KINDS}, got {kind!r}")
 
 
-def heading_change_rad(kind: str, actions: Any, n_boats: int, max_change_rad: float) -> FloatArray:
+def heading_change_rad(
+    kind: ActionKind, actions: Any, n_boats: int, max_change_rad: float
+) -> FloatArray:
     """Validate batched actions and map them to heading changes Δψ (rad), shape (N,).
 
     Raises
@@ -124,7 +141,7 @@ def heading_change_rad(kind: str, actions: Any, n_boats: int, max_change_rad: fl
     raise ValueError(f"action must be one of {ACTION_KINDS}, got {kind!r}")
 
 
-def _within(dx: FloatArray, dy: FloatArray, radius_m: float) -> NDArray[np.bool_]:
+def within_radius(dx: FloatArray, dy: FloatArray, radius_m: float) -> NDArray[np.bool_]:
     """``np.hypot(dx, dy) <= radius_m``, exactly, with hypot evaluated only inside the square
     ``|dx|, |dy| <= radius_m``: hypot (rounded faithfully) is never below ``max(|dx|, |dy|)``."""
     inside = (np.abs(dx) <= radius_m) & (np.abs(dy) <= radius_m)
@@ -213,8 +230,8 @@ class PoleAvoidanceBatch:
         self,
         n_boats: int,
         *,
-        observation: str = "positional",
-        action: str = "gaussian",
+        observation: ObservationKind = "positional",
+        action: ActionKind = "gaussian",
         scenario: Scenario | None = None,
         reward: RewardFunction | None = None,
         radar: RadarConfig | None = None,
@@ -346,7 +363,7 @@ class PoleAvoidanceBatch:
         d_pole = np.hypot(x_n - self.pole_ne[:, 0:1], y_e - self.pole_ne[:, 1:2])
         hit = d_pole < self._collision_m
         dx_goal, dy_goal = x_n - self.goal_ne[:, 0:1], y_e - self.goal_ne[:, 1:2]
-        in_goal = _within(dx_goal, dy_goal, sc.goal_radius_m)
+        in_goal = within_radius(dx_goal, dy_goal, sc.goal_radius_m)
         collision, reached = np.any(hit, axis=1), np.any(in_goal, axis=1)
         terminated = reached | collision
         # a terminated episode ends at its first event step; the rest of the period is discarded

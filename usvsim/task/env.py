@@ -11,7 +11,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from usvsim.task.batch import PoleAvoidanceBatch, observation_rows
+from usvsim.task.batch import ActionKind, PoleAvoidanceBatch, observation_rows
+from usvsim.task.observations import ObservationKind
 from usvsim.task.scenario import EpisodeSpec, draw_episode
 
 __all__ = ["PoleAvoidanceEnv"]
@@ -59,8 +60,8 @@ class PoleAvoidanceEnv(gym.Env):
 
     def __init__(
         self,
-        observation: str = "positional",
-        action: str = "gaussian",
+        observation: ObservationKind = "positional",
+        action: ActionKind = "gaussian",
         render_mode: str | None = None,
         **kwargs: Any,
     ) -> None:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import Literal, cast, get_args
 
 import numpy as np
 from gymnasium import spaces
@@ -44,6 +44,7 @@ __all__ = [
     "Standardisation",
     "build_observation",
     "observation_space",
+    "parse_observation_kind",
     "relative_polar",
 ]
 
@@ -93,14 +94,22 @@ def relative_polar(
     return np.hypot(d[..., 0], d[..., 1]), ssa(np.arctan2(d[..., 1], d[..., 0]) - psi_rad)
 
 
-def _check_kind(kind: str) -> None:
+def parse_observation_kind(kind: object) -> ObservationKind:
+    """``kind`` as an :data:`ObservationKind` (e.g. a string read from a file or a flag).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of :data:`OBSERVATION_KINDS`.
+    """
     if kind not in OBSERVATION_KINDS:
         raise ValueError(f"observation must be one of {OBSERVATION_KINDS}, got {kind!r}")
+    return cast(ObservationKind, kind)
 
 
-def observation_space(kind: str, radar: RadarConfig | None = None) -> spaces.Space:
+def observation_space(kind: ObservationKind, radar: RadarConfig | None = None) -> spaces.Space:
     """The single-boat observation space of ``kind`` (see the module table)."""
-    _check_kind(kind)
+    parse_observation_kind(kind)
     radar = radar or RadarConfig()
     image = spaces.Box(0, 255, radar.shape, dtype=np.uint8)
     if kind == "positional":
@@ -116,7 +125,7 @@ def observation_space(kind: str, radar: RadarConfig | None = None) -> spaces.Spa
 
 
 def build_observation(
-    kind: str,
+    kind: ObservationKind,
     pos_ne: FloatArray,
     psi_rad: FloatArray,
     pole_ne: FloatArray,
@@ -130,7 +139,7 @@ def build_observation(
     ``pos_ne`` (N, 2) m and ``psi_rad`` (N,) rad are the navigation estimate; ``pole_ne`` and
     ``goal_ne`` (N, 2) m. Returns an array or, for ``radar+goal``, a dict of arrays.
     """
-    _check_kind(kind)
+    parse_observation_kind(kind)
     if kind == "positional":
         # pole and goal in one pass: r, b (N, 2) → rows [r_pole, φ_pole, r_goal, φ_goal]
         r, b = relative_polar(pos_ne, psi_rad, np.stack([pole_ne, goal_ne], axis=1))

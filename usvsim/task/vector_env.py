@@ -20,11 +20,13 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from usvsim.task.batch import (
+    ActionKind,
     Observation,
     PoleAvoidanceBatch,
     observation_rows,
     write_observation_rows,
 )
+from usvsim.task.observations import ObservationKind
 from usvsim.task.scenario import draw_episode
 
 __all__ = ["PoleAvoidanceVectorEnv"]
@@ -47,8 +49,8 @@ class PoleAvoidanceVectorEnv(VectorEnv):
     def __init__(
         self,
         num_envs: int,
-        observation: str = "positional",
-        action: str = "gaussian",
+        observation: ObservationKind = "positional",
+        action: ActionKind = "gaussian",
         **kwargs: Any,
     ) -> None:
         self.metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
