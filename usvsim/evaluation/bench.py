@@ -217,10 +217,8 @@ def _expert_reference(args: BenchArgs, specs: Sequence[Any]) -> Any:
     """The expert model's paths on the validation starts, or None where it does not apply."""
     if args.no_likeness or args.scenario != "pole":
         return None
-    try:
-        from usvsim.evaluation.likeness import expert_reference
-    except ImportError:  # the learning package is optional for the bench
-        return None
+    from usvsim.evaluation.likeness import expert_reference
+
     return expert_reference(specs)
 
 
