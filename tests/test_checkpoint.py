@@ -34,7 +34,7 @@ from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 def _agent(setup_name: str, seed: int = 3) -> tuple[TRPOAgent, Checkpoint]:
     setup = get_setup(setup_name)
     agent = TRPOAgent(
-        observation_space(setup.observation), action_space(setup.action), setup.trpo_config(seed)
+        observation_space(setup.observation), action_space(setup.action), setup.run_config(seed)
     )
     env = PoleAvoidanceVectorEnv(8, observation=setup.observation, action=setup.action)
     obs, _ = env.reset(seed=0)
@@ -207,3 +207,55 @@ def test_shipped_model_reproduces_its_recorded_validation(path: Path) -> None:
     assert min(r.min_pole_distance_m for r in records) == pytest.approx(
         expected["min_pole_distance_m"], abs=0.01
     )
+
+
+def test_config_from_dict_rebuilds_nested_configs_and_refuses_unknown_keys() -> None:
+    import dataclasses
+
+    from learning.algorithms.base import config_from_dict
+    from learning.algorithms.trpo import TRPOConfig
+
+    config = get_setup("rl-gaussian-radar").run_config(seed=4)
+    again = config_from_dict(TRPOConfig, _plain_lists(dataclasses.asdict(config)))
+    assert again == config and again.network.hidden == (400, 300)
+    with pytest.raises(ValueError, match="unknown TRPOConfig keys \\['max_kll'\\]"):
+        config_from_dict(TRPOConfig, {"max_kll": 0.01})
+
+
+def _plain_lists(d: dict[str, Any]) -> dict[str, Any]:
+    """Tuples as lists, as a checkpoint stores them."""
+    return {
+        k: _plain_lists(v) if isinstance(v, dict) else list(v) if isinstance(v, tuple) else v
+        for k, v in d.items()
+    }
+
+
+@pytest.mark.parametrize("name", ["rl-gaussian-radar", "il-categorical-radar"])
+def test_shipped_flat_setup_params_read_as_the_composed_setup(name: str) -> None:
+    from learning.experiments.il_setups import IL_SETUPS
+    from learning.experiments.setups import SETUPS, setup_from_params, setup_params
+
+    ckpt = load_checkpoint(Path("usvsim/models") / f"{name}.pt")
+    assert "algorithm_config" not in ckpt.setup_params  # written before setups held configs
+    base = {**SETUPS, **IL_SETUPS}[name]
+    assert ckpt.algorithm == "trpo"
+    assert setup_from_params(base, ckpt.setup_params) == base
+    assert setup_from_params(base, setup_params(base)) == base
+    with pytest.raises(ValueError, match="unknown setup fields"):
+        setup_from_params(base, {**setup_params(base), "bogus": 1})
+
+
+def test_new_checkpoints_name_their_algorithm(tmp_path: Path) -> None:
+    from learning.algorithms.registry import ALGORITHMS, get_algorithm
+
+    _, ckpt = _agent("rl-gaussian-positional")
+    save_checkpoint(ckpt, tmp_path / "a.pt")
+    raw = torch.load(tmp_path / "a.pt", weights_only=True)
+    assert raw["algorithm"] == "trpo" and raw["setup_params"]["algorithm"] == "trpo"
+    assert list(ALGORITHMS) == ["trpo"]
+    with pytest.raises(ValueError, match="unknown algorithm 'sac'"):
+        get_algorithm("sac")
+    raw["algorithm"] = "sac"
+    torch.save(raw, tmp_path / "b.pt")
+    with pytest.raises(CheckpointError, match="unknown algorithm 'sac'"):
+        load_checkpoint(tmp_path / "b.pt")

@@ -12,10 +12,10 @@ from gymnasium import spaces
 from learning.algorithms.rollout import RolloutCollector
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig
 from learning.imitation.demonstrations import load_recordings, quality_check
+from learning.imitation.discriminator import cat_obs
 from learning.imitation.gail import (
     GAILConfig,
     GAILTrainer,
-    _cat,
     normalise_actions,
     reward_from_logits,
     train_gail,
@@ -120,19 +120,19 @@ def test_gradient_penalty_of_a_unit_gradient_discriminator_is_zero(expert: Exper
         w[0, 0] = 1.0
         gail.disc.head.weight.copy_(w)
     obs, az, _, _ = gail.policy_samples(batch, np.zeros((8, 4, 2), dtype=bool))
-    gp = gail._gradient_penalty(obs[:16], az[:16], _cat([obs[16:32]]), az[16:32])
+    gp = gail._gradient_penalty(obs[:16], az[:16], cat_obs([obs[16:32]]), az[16:32])
     assert float(gp.detach()) == pytest.approx(0.0, abs=1e-6)
 
 
 def _gail_run(expert: ExpertData, iterations: int, seed: int = 0):  # type: ignore[no-untyped-def]
     cfg = TRPOConfig(seed=seed, iterations=iterations, num_envs=16, steps_per_env=64, max_kl=0.02)
     log: list[float] = []
-    agent, _ = train_gail(
+    agent = train_gail(
         GAILConfig(),
         cfg,
         lambda n: PoleAvoidanceVectorEnv(n),
         expert,
-        callback=lambda s, a, g: log.append(s.mean_reward) and None,
+        callback=lambda s, a: log.append(s.update.mean_reward) and None,
     )
     return agent, log
 
@@ -183,7 +183,7 @@ def test_cloned_cnn_policy_keeps_its_batchnorm_statistics() -> None:
     agent = TRPOAgent(observation_space("radar+goal"), action_space("gaussian"), TRPOConfig())
     behavioural_cloning(agent, data, GAILConfig(bc_epochs=3))
     before = agent.act(data.obs)
-    refresh_batchnorm(agent.policy, agent._tensor(data.obs))
+    refresh_batchnorm(agent.policy, agent.policy_input(data.obs))
     np.testing.assert_allclose(agent.act(data.obs), before, atol=0.02)
 
 

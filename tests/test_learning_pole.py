@@ -6,9 +6,10 @@ import dataclasses
 
 import torch
 
-from learning.algorithms.trpo import IterationStats, TRPOAgent, train
-from learning.cli.train import validate
+from learning.algorithms.loop import IterationStats, train
+from learning.algorithms.trpo import TRPOAgent
 from learning.experiments.setups import get_setup
+from learning.experiments.validation import validate
 from usvsim.evaluation.episodes import evaluate, validation_episodes
 from usvsim.helm.protocol import RandomHelmsman
 
@@ -35,7 +36,7 @@ def _train(
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # 2 threads crawl on a shared, loaded 2-core CI machine
     try:
-        agent = train(setup.trpo_config(seed, iterations), setup.make_vector_env, callback=record)
+        agent = train(setup.run_config(seed, iterations), setup.make_vector_env, callback=record)
     finally:
         torch.set_num_threads(threads)
     return agent, stats

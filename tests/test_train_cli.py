@@ -107,10 +107,10 @@ def test_nan_in_the_loss_stops_with_an_error_and_keeps_the_checkpoint(
 def test_early_stop_after_consecutive_full_validations(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import learning.cli.train as cli
+    import learning.experiments.train_rl as train_rl
 
     full = {"successes": 15, "n_episodes": 15, "mean_return": -10.0, "min_pole_distance_m": 20.0}
-    monkeypatch.setattr(cli, "validate", lambda agent, setup: dict(full))
+    monkeypatch.setattr(train_rl, "validate", lambda agent, setup: dict(full))
     assert run(_args(tmp_path, iterations=10, stop_after=2)) == 0
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["iterations"] == 2
@@ -122,7 +122,7 @@ def test_fixed_horizon_return_adds_the_remaining_discounted_reward() -> None:
     setup = get_setup(SETUP)
     env = setup.make_vector_env(2)
     assert isinstance(env, FixedHorizonReturn)
-    gamma, K = setup.gamma, env.max_decisions
+    gamma, K = setup.algorithm_config.gamma, env.max_decisions
     env.reset(seed=0)
     straight = np.full(2, 20)  # 0°: straight at the pole → collision
     for _ in range(K):

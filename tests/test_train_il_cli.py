@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -10,10 +11,11 @@ from typing import Any
 
 import pytest
 
-import learning.experiments.il_setups as il_setups
+import learning.experiments.train_il as train_il
 from learning.cli.train import TrainArgs, run
 from learning.experiments.checkpoint import load_checkpoint
-from learning.experiments.il_setups import IL_CSV_FIELDS, IL_SETUPS
+from learning.experiments.il_setups import IL_SETUPS
+from learning.experiments.train_il import IL_CSV_FIELDS
 from usvsim.evaluation.episodes import validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference
 
@@ -33,10 +35,14 @@ def reference() -> ExpertReference:
 @pytest.fixture
 def tiny(monkeypatch: pytest.MonkeyPatch, reference: ExpertReference) -> None:
     """The setup with the small budget of tests/test_gail.py, validated on ``SPECS``."""
-    small = IL_SETUPS[SETUP].replace(bc_epochs=1, steps_per_env=16)
+    setup = IL_SETUPS[SETUP]
+    small = setup.replace(
+        gail=dataclasses.replace(setup.gail, bc_epochs=1),
+        algorithm_config=dataclasses.replace(setup.algorithm_config, steps_per_env=16),
+    )
     monkeypatch.setitem(IL_SETUPS, SETUP, small)
-    monkeypatch.setattr(il_setups, "validation_episodes", lambda: SPECS)
-    monkeypatch.setattr(il_setups, "expert_reference", lambda specs: reference)
+    monkeypatch.setattr(train_il, "validation_episodes", lambda: SPECS)
+    monkeypatch.setattr(train_il, "expert_reference", lambda specs: reference)
 
 
 def _args(out: Path, **kw: Any) -> TrainArgs:
@@ -112,7 +118,7 @@ def test_early_stop_after_consecutive_full_validations(
         "successes": 15, "n_episodes": 15, "mean_return": -10.0, "min_pole_distance_m": 20.0,
         "path_distance_m": 3.0,
     }  # fmt: skip
-    monkeypatch.setattr(il_setups, "validate_il", lambda *a: dict(full))
+    monkeypatch.setattr(train_il, "validate_il", lambda *a: dict(full))
     assert run(_args(tmp_path, iterations=10, validate_every=1, stop_after=2)) == 0
     summary = _summary(tmp_path)
     assert summary["iterations"] == 2

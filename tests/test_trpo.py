@@ -13,18 +13,15 @@ import torch
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 
+from learning.algorithms.loop import IterationStats, train
 from learning.algorithms.networks import NetworkConfig, make_policy
 from learning.algorithms.rollout import NonFiniteError, RolloutBatch, RolloutCollector, flatten_obs
-from learning.algorithms.trpo import (
-    IterationStats,
-    TRPOAgent,
-    TRPOConfig,
+from learning.algorithms.trpo import TRPOAgent, TRPOConfig, trpo_step
+from learning.algorithms.trust_region import (
     conjugate_gradient,
     fisher_vector_product,
     get_flat,
     line_search,
-    train,
-    trpo_step,
 )
 
 SMALL = NetworkConfig(hidden=(64, 64))
@@ -143,9 +140,9 @@ def test_mean_kl_after_update_within_trust_region(make_env) -> None:  # type: ig
     config = dataclasses.replace(CARTPOLE, max_kl=0.01, steps_per_env=128)
     agent, batch = _rollout(make_env, config)
     raw = flatten_obs(batch.obs, 2)[batch.valid.reshape(-1)]  # type: ignore[index]
-    obs = agent._tensor(raw)  # normalised as in the update (before the statistics refresh)
+    obs = agent.policy_input(raw)  # normalised as in the update (before the statistics refresh)
     old_policy = copy.deepcopy(agent.policy)
-    step, _ = agent.update(batch)
+    step = agent.update(batch).policy_step
     assert step.line_search.accepted
     with torch.no_grad():
         kl = float(old_policy(obs).kl(agent.policy(obs)).mean())

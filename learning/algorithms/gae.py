@@ -7,8 +7,8 @@ Arrays are (T, N): T steps of N environments. Step t of env n is the transition
 - the episode ends at t (``episode_end``): s'_t is its final observation, and s_{t+1} (if any)
   already belongs to the next episode.
 
-``next_values[t]`` = V(s'_t) is given by the caller (:func:`learning.algorithms.rollout.attach_values`),
-so the two ways an episode ends stay apart:
+``next_values[t]`` = V(s'_t) is given by the caller
+(:func:`learning.algorithms.rollout.attach_values`), so the two ways an episode ends stay apart:
 
     δ_t = r_t + γ (1 − terminated_t) V(s'_t) − V(s_t)          TD error
     A_t = δ_t + γ λ (1 − episode_end_t) A_{t+1}                 A_T = 0

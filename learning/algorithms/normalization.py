@@ -14,8 +14,8 @@ so that a batch of any size merges exactly with the statistics so far. Their sta
 dict of arrays (:meth:`ObservationNormalizer.state_dict`) saved with the model: a policy's inputs
 mean the same thing when it is loaded again.
 
-When the statistics change is the trainer's choice; :mod:`learning.algorithms.trpo` updates them between
-iterations, so that within one iteration the policy is one fixed function.
+When the statistics change is the trainer's choice; :mod:`learning.algorithms.trpo` updates them
+between iterations, so that within one iteration the policy is one fixed function.
 """
 
 from __future__ import annotations

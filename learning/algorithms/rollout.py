@@ -7,8 +7,8 @@ handled, so that every stored transition (s_t, a_t, r_t, s'_t) is a real one:
   observation as the next observation; the *following* step of that env ignores its action and
   only resets (reward 0, not done). That reset step is stored with ``valid = False`` and left
   out of the loss; its observation (the final one) still gives V(s'_t) for the step before it.
-- ``SAME_STEP`` (:class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`): the ending step returns the
-  new episode's first observation and puts the final one in ``info["final_obs"]`` (masked by
+- ``SAME_STEP`` (:class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`): the ending step returns
+  the new episode's first observation and puts the final one in ``info["final_obs"]`` (masked by
   ``info["_final_obs"]``); it is kept in :attr:`RolloutBatch.final_obs` for the bootstrap.
 
 Shapes (T steps, N envs, F episodes ended by a SAME_STEP autoreset):
@@ -28,6 +28,7 @@ final_obs           (F, ...)             final observations (SAME_STEP)
 final_index         (F, 2)               their (t, n)
 values              (T, N)               V(s_t), set by :func:`attach_values`
 next_values         (T, N)               V(s'_t), set by :func:`attach_values`
+info[key]           (T, N)               boolean ``info[key]`` per step (``info_keys``)
 ==================  ===================  ==========================================
 """
 
@@ -102,6 +103,7 @@ class RolloutBatch:
     episode_lengths: list[int] = field(default_factory=list)
     values: NDArray[np.float32] | None = None
     next_values: NDArray[np.float32] | None = None
+    info: dict[str, NDArray[np.bool_]] = field(default_factory=dict)  # (T, N) per info key
 
     @property
     def episode_end(self) -> NDArray[np.bool_]:
@@ -134,10 +136,14 @@ class RolloutCollector:
 
     ``act(obs)`` gets the raw observations of all N envs and returns the actions to store (Box:
     unclipped samples; they are clipped to the bounds only on the way to the env) and their
-    log-probabilities (N,). ``seed`` seeds the env's first reset.
+    log-probabilities (N,). ``seed`` seeds the env's first reset. ``info_keys`` name boolean
+    per-env ``info`` arrays to keep in :attr:`RolloutBatch.info` (False where absent).
     """
 
-    def __init__(self, env: VectorEnv, seed: int | None = None) -> None:
+    def __init__(
+        self, env: VectorEnv, seed: int | None = None, info_keys: tuple[str, ...] = ()
+    ) -> None:
+        self.info_keys = info_keys
         mode = env.metadata.get("autoreset_mode", AutoresetMode.NEXT_STEP)
         if mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
             raise ValueError(f"autoreset mode {mode} is not supported (NEXT_STEP or SAME_STEP)")
@@ -178,6 +184,7 @@ class RolloutCollector:
         final_index: list[tuple[int, int]] = []
         returns: list[float] = []
         lengths: list[int] = []
+        infos = {k: np.zeros((T, N), dtype=bool) for k in self.info_keys}
         for t in range(T):
             if isinstance(obs_buf, dict):
                 for k in obs_buf:
@@ -195,6 +202,9 @@ class RolloutCollector:
             if not np.isfinite(reward).all():
                 raise NonFiniteError(f"non-finite reward at step {t}")
             rewards[t], terminated[t], truncated[t] = reward, term, trunc
+            for k in self.info_keys:
+                if k in info:
+                    infos[k][t] = np.asarray(info[k], dtype=bool)
             done = np.asarray(term) | np.asarray(trunc)
             self._ep_return += np.where(valid[t], reward, 0.0)
             self._ep_length += valid[t]
@@ -223,4 +233,5 @@ class RolloutCollector:
             final_index=np.array(final_index, dtype=np.intp).reshape(-1, 2),
             episode_returns=returns,
             episode_lengths=lengths,
+            info=infos,
         )

@@ -1,19 +1,20 @@
 """Trust Region Policy Optimization (Schulman et al. 2015, "TRPO"), with GAE (Schulman et al. 2016).
 
-One iteration, top to bottom (:meth:`TRPOAgent.update`, :func:`train`):
+One iteration, top to bottom (:func:`learning.algorithms.loop.train`, :meth:`TRPOAgent.update`):
 
 1. Roll out π_θold on N envs for T steps (:mod:`learning.algorithms.rollout`).
-2. Advantages Â_t by GAE(γ, λ) with terminated/truncated kept apart (:mod:`learning.algorithms.gae`);
-   normalise them to zero mean, unit std over the batch.
+2. Advantages Â_t by GAE(γ, λ) with terminated/truncated kept apart
+   (:mod:`learning.algorithms.gae`); normalise them to zero mean, unit std over the batch.
 3. Policy step (:func:`trpo_step`), the paper's Sect. 6 / Appendix C:
 
        maximise  L(θ) = Ê[π_θ(a|s) / π_θold(a|s) · Â]
        subject to  D̄_KL(θ_old, θ) = Ê[KL(π_θold ‖ π_θ)] ≤ δ
 
    g = ∇_θ L; the Fisher matrix F = ∇²_θ D̄_KL at θ_old (plus damping·I) is never formed:
-   conjugate gradient solves F x = g from Fisher-vector products (:func:`fisher_vector_product`,
-   double backprop of the mean KL on a sub-sample of the batch). The full step is
-   β = sqrt(2δ / xᵀFx) · x; a backtracking line search (:func:`line_search`) shrinks it until
+   conjugate gradient solves F x = g from Fisher-vector products
+   (:func:`learning.algorithms.trust_region.fisher_vector_product`, double backprop of the
+   mean KL on a sub-sample of the batch). The full step is β = sqrt(2δ / xᵀFx) · x; a
+   backtracking line search (:func:`learning.algorithms.trust_region.line_search`) shrinks it until
    D̄_KL ≤ δ and L improves, and restores θ_old if no fraction does.
 4. Critic: regress V_φ on the λ-returns with Adam over minibatches (:func:`fit_critic`).
 5. Between iterations: observation statistics and the policy's BatchNorm statistics are
@@ -29,17 +30,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
 from gymnasium import spaces
-from gymnasium.vector import VectorEnv
-from torch import Tensor, nn
+from torch import Tensor
 
+from learning.algorithms.base import config_from_dict
 from learning.algorithms.gae import gae
 from learning.algorithms.networks import (
     Critic,
@@ -58,22 +57,29 @@ from learning.algorithms.rollout import (
     NonFiniteError,
     Obs,
     RolloutBatch,
-    RolloutCollector,
     attach_values,
     flatten_obs,
 )
+from learning.algorithms.trust_region import (
+    LineSearchResult,
+    conjugate_gradient,
+    fisher_vector_product,
+    flat_grad,
+    line_search,
+    rows,
+    trainable_params,
+)
 
 __all__ = [
-    "IterationStats",
     "LineSearchResult",
     "PolicyStepStats",
     "TRPOAgent",
     "TRPOConfig",
+    "TRPOUpdateStats",
     "conjugate_gradient",
     "fisher_vector_product",
     "fit_critic",
     "line_search",
-    "train",
     "trpo_step",
 ]
 
@@ -109,118 +115,6 @@ class TRPOConfig:
         return self.num_envs * self.steps_per_env
 
 
-# ---------------------------------------------------------------------------------------------
-# Building blocks of the policy step
-# ---------------------------------------------------------------------------------------------
-
-
-def _params(module: nn.Module) -> list[nn.Parameter]:
-    return [p for p in module.parameters() if p.requires_grad]
-
-
-def flat_grad(y: Tensor, params: Sequence[Tensor], **kwargs: Any) -> Tensor:
-    """∂y/∂θ as one flat vector."""
-    return torch.cat([g.reshape(-1) for g in torch.autograd.grad(y, params, **kwargs)])
-
-
-def get_flat(params: Sequence[Tensor]) -> Tensor:
-    return torch.cat([p.detach().reshape(-1) for p in params]).clone()
-
-
-@torch.no_grad()
-def set_flat(params: Sequence[Tensor], flat: Tensor) -> None:
-    """Copy ``flat`` into the parameters in place (bit-exact, storage kept)."""
-    i = 0
-    for p in params:
-        p.copy_(flat[i : i + p.numel()].view_as(p))
-        i += p.numel()
-
-
-def conjugate_gradient(
-    Avp: Callable[[Tensor], Tensor], b: Tensor, iters: int = 10, residual_tol: float = 1e-10
-) -> Tensor:
-    """Approximate solution of A x = b for symmetric positive-definite A given only x ↦ A x.
-
-    Hestenes and Stiefel (1952); TRPO, Appendix C. Starts from x = 0; stops after ``iters``
-    iterations or when the squared residual falls below ``residual_tol``.
-    """
-    x = torch.zeros_like(b)
-    r = b.clone()
-    p = b.clone()
-    rr = r @ r
-    for _ in range(iters):
-        if rr < residual_tol:
-            break
-        Ap = Avp(p)
-        alpha = rr / (p @ Ap)
-        x += alpha * p
-        r -= alpha * Ap
-        rr_new = r @ r
-        p = r + (rr_new / rr) * p
-        rr = rr_new
-    return x
-
-
-def _rows(obs: TensorObs, idx: Tensor) -> TensorObs:
-    return {k: v[idx] for k, v in obs.items()} if isinstance(obs, dict) else obs[idx]
-
-
-def fisher_vector_product(
-    policy: Policy, obs: TensorObs, damping: float
-) -> Callable[[Tensor], Tensor]:
-    """v ↦ (∇²_θ D̄_KL(θ_old, θ)|_θold + damping·I) v on ``obs`` (TRPO, Appendix C.1).
-
-    The mean KL and its gradient (with ``create_graph``) are built once at the current θ, which
-    is θ_old during the conjugate-gradient solve; every product is then one backward pass of
-    ∇D̄_KL · v through that graph. The policy must be in eval mode (one deterministic function).
-    """
-    params = _params(policy)
-    dist = policy(obs)
-    mean_kl = dist.detach().kl(dist).mean()
-    grad_kl = flat_grad(mean_kl, params, create_graph=True)
-
-    def fvp(v: Tensor) -> Tensor:
-        return flat_grad(grad_kl @ v, params, retain_graph=True) + damping * v
-
-    return fvp
-
-
-@dataclass(frozen=True)
-class LineSearchResult:
-    accepted: bool
-    step_fraction: float  # of the full natural-gradient step; 0 when rejected
-    trials: int  # evaluations made
-    kl: float  # mean KL at the accepted θ (0 when rejected)
-    improvement: float  # L(θ) − L(θ_old) at the accepted θ (0 when rejected)
-
-
-def line_search(
-    params: Sequence[Tensor],
-    full_step: Tensor,
-    evaluate: Callable[[], tuple[float, float]],
-    surrogate_old: float,
-    max_kl: float,
-    steps: int,
-    decay: float,
-) -> LineSearchResult:
-    """Backtracking line search along ``full_step`` from the current θ (= θ_old).
-
-    Tries θ_old + decayⁱ · full_step for i = 0 … steps − 1, accepting the first with
-    D̄_KL ≤ ``max_kl`` and L > ``surrogate_old`` (``evaluate`` returns (L, D̄_KL) at the current
-    parameters). If none is accepted, θ_old is restored bit for bit.
-    """
-    theta_old = get_flat(params)
-    for i in range(steps):
-        fraction = decay**i
-        set_flat(params, theta_old + fraction * full_step)
-        surrogate, kl = evaluate()
-        improvement = surrogate - surrogate_old
-        if math.isfinite(kl) and kl <= max_kl and improvement > 0:
-            return LineSearchResult(True, fraction, i + 1, kl, improvement)
-    set_flat(params, theta_old)
-    return LineSearchResult(False, 0.0, steps, 0.0, 0.0)
-
-
 @dataclass(frozen=True)
 class PolicyStepStats:
     entropy: float  # mean policy entropy at θ_old, nats
@@ -244,7 +138,7 @@ def trpo_step(
     finite.
     """
     policy.eval()
-    params = _params(policy)
+    params = trainable_params(policy)
     # L(θ) and g = ∇L at θ_old from one forward pass; π_θold is that pass, detached.
     dist = policy(obs)
     log_prob = dist.log_prob(actions)
@@ -259,7 +153,7 @@ def trpo_step(
     B = advantages.shape[0]
     n_sub = min(B, max(2, math.ceil(cfg.fvp_fraction * B)))
     sub = torch.randperm(B, generator=generator)[:n_sub] if n_sub < B else torch.arange(B)
-    Fvp = fisher_vector_product(policy, _rows(obs, sub), cfg.cg_damping)
+    Fvp = fisher_vector_product(policy, rows(obs, sub), cfg.cg_damping)
     x = conjugate_gradient(Fvp, g, cfg.cg_iters)
     xFx = float(x @ Fvp(x))
     if not math.isfinite(xFx):
@@ -309,7 +203,7 @@ def fit_critic(
             idx = perm[start : start + minibatch]
             if idx.numel() < 2:
                 continue
-            loss = (critic(_rows(obs, idx)) - returns[idx]).pow(2).mean()
+            loss = (critic(rows(obs, idx)) - returns[idx]).pow(2).mean()
             if not torch.isfinite(loss):
                 raise NonFiniteError("non-finite critic loss: optimizer step skipped")
             optimizer.zero_grad(set_to_none=True)
@@ -326,24 +220,46 @@ def fit_critic(
 
 
 @dataclass(frozen=True)
-class IterationStats:
-    """What one iteration did (handed to the :func:`train` callback)."""
+class TRPOUpdateStats:
+    """What one :meth:`TRPOAgent.update` did: the policy step and the critic's fit."""
 
-    iteration: int  # 1-based count of completed iterations
-    env_steps: int  # transitions collected so far (valid ones)
-    episodes: int  # episodes finished in this iteration's rollout
-    mean_return: float  # of those episodes (NaN if none finished)
-    mean_length: float
-    kl: float  # mean KL(π_old ‖ π_new) on the batch after the step
-    entropy: float  # mean entropy of π_old, nats
-    surrogate_improvement: float  # L(θ_new) − L(θ_old)
-    expected_improvement: float
-    line_search_accepted: bool
-    line_search_trials: int
-    value_loss: float
-    rollout_time_s: float
-    update_time_s: float
-    wall_time_s: float  # since train() started
+    LOG_FIELDS: ClassVar[tuple[str, ...]] = (
+        "kl",
+        "entropy",
+        "surrogate_improvement",
+        "line_search_accepted",
+        "value_loss",
+    )
+
+    policy_step: PolicyStepStats
+    value_loss: float  # mean squared error of the critic's last epoch
+
+    @property
+    def kl(self) -> float:
+        """Mean KL(π_old ‖ π_new) on the batch after the step, nats."""
+        return self.policy_step.line_search.kl
+
+    @property
+    def entropy(self) -> float:
+        """Mean entropy of π_old, nats."""
+        return self.policy_step.entropy
+
+    @property
+    def surrogate_improvement(self) -> float:
+        """L(θ_new) − L(θ_old)."""
+        return self.policy_step.line_search.improvement
+
+    @property
+    def expected_improvement(self) -> float:
+        return self.policy_step.expected_improvement
+
+    @property
+    def line_search_accepted(self) -> bool:
+        return self.policy_step.line_search.accepted
+
+    @property
+    def line_search_trials(self) -> int:
+        return self.policy_step.line_search.trials
 
 
 class TRPOAgent:
@@ -365,23 +281,25 @@ class TRPOAgent:
         self.generator = torch.Generator().manual_seed(config.seed + 1)
         self.iteration = 0
         self.env_steps = 0
+        self.info_keys: tuple[str, ...] = ()  # the update reads no env info
 
     # -- acting ----------------------------------------------------------------------------
 
-    def _tensor(self, obs: Obs) -> TensorObs:
+    def policy_input(self, obs: Obs) -> TensorObs:
+        """Raw observations → the normalised tensors the policy and critic take."""
         return obs_to_tensor(self.normalizer(obs))
 
     @torch.inference_mode()
     def sample(self, obs: Obs) -> tuple[np.ndarray, np.ndarray]:
         """Actions (unclipped) and their log-probabilities for a batch of raw observations."""
-        dist = self.policy(self._tensor(obs))
+        dist = self.policy(self.policy_input(obs))
         actions = dist.sample(self.generator)
         return actions.numpy(), dist.log_prob(actions).numpy()
 
     @torch.inference_mode()
     def act(self, obs: Obs, deterministic: bool = True) -> np.ndarray:
         """Environment-ready actions (Box: clipped to the bounds) for raw observations (N, ...)."""
-        dist = self.policy(self._tensor(obs))
+        dist = self.policy(self.policy_input(obs))
         actions = (dist.mode() if deterministic else dist.sample(self.generator)).numpy()
         if isinstance(self.action_space, spaces.Box):
             actions = np.clip(actions, self.action_space.low, self.action_space.high)
@@ -390,19 +308,17 @@ class TRPOAgent:
     @torch.inference_mode()
     def values(self, obs: Obs, chunk: int = 4096) -> np.ndarray:
         """V(s) (M,) for raw observations (M, ...)."""
-        t = self._tensor(obs)
+        t = self.policy_input(obs)
         M = next(iter(t.values())).shape[0] if isinstance(t, dict) else t.shape[0]
-        out = [
-            self.critic(_rows(t, torch.arange(i, min(M, i + chunk)))) for i in range(0, M, chunk)
-        ]
+        out = [self.critic(rows(t, torch.arange(i, min(M, i + chunk)))) for i in range(0, M, chunk)]
         return torch.cat(out).numpy()
 
     # -- learning --------------------------------------------------------------------------
 
-    def update(self, batch: RolloutBatch) -> tuple[PolicyStepStats, float]:
+    def update(self, batch: RolloutBatch) -> TRPOUpdateStats:
         """Steps 2-5 of the module docstring on one batch; returns the policy step's stats and
-        the critic's loss. Inputs are checked first: non-finite data raises
-        :class:`NonFiniteError` before any parameter changes."""
+        the critic's loss (:class:`TRPOUpdateStats`). Inputs are checked first: non-finite data
+        raises :class:`NonFiniteError` before any parameter changes."""
         cfg = self.config
         attach_values(batch, self.values)
         assert batch.values is not None and batch.next_values is not None
@@ -422,7 +338,7 @@ class TRPOAgent:
             if isinstance(raw_obs, dict)
             else raw_obs[valid]
         )
-        obs = self._tensor(raw_obs)
+        obs = self.policy_input(raw_obs)
         actions = torch.as_tensor(batch.actions.reshape(-1, *batch.actions.shape[2:])[valid])
         adv = torch.as_tensor(advantages.reshape(-1)[valid])
         ret = torch.as_tensor(returns.reshape(-1)[valid])
@@ -448,7 +364,7 @@ class TRPOAgent:
         refresh_batchnorm(self.policy, obs)
         self.iteration += 1
         self.env_steps += int(valid.sum())
-        return step, value_loss
+        return TRPOUpdateStats(step, value_loss)
 
     # -- checkpoints -----------------------------------------------------------------------
 
@@ -489,11 +405,7 @@ class TRPOAgent:
     def from_state_dict(cls, state: dict[str, Any], config: TRPOConfig | None = None) -> TRPOAgent:
         """An agent rebuilt from a :meth:`state_dict` (its own config unless one is given)."""
         if config is None:
-            saved = dict(state["config"])
-            net = dict(saved["network"])
-            net["hidden"] = tuple(net["hidden"])
-            saved["network"] = NetworkConfig(**net)
-            config = TRPOConfig(**saved)
+            config = config_from_dict(TRPOConfig, state["config"])
         agent = cls(
             space_from_spec(state["observation_space"]),
             space_from_spec(state["action_space"]),
@@ -501,57 +413,3 @@ class TRPOAgent:
         )
         agent.load_state_dict(state)
         return agent
-
-
-def train(
-    config: TRPOConfig,
-    make_vector_env: Callable[[int], VectorEnv],
-    *,
-    callback: Callable[[IterationStats, TRPOAgent], bool | None] | None = None,
-    state: dict[str, Any] | None = None,
-) -> TRPOAgent:
-    """Run TRPO until ``config.iterations`` iterations are done or ``callback`` returns True.
-
-    ``make_vector_env(num_envs)`` builds the (gymnasium 1.x) vector env; it is closed at the
-    end. ``state`` (a :meth:`TRPOAgent.state_dict`) resumes a run: networks, optimiser,
-    normaliser, random generator and counters continue; the environments restart with a reset
-    seeded ``config.seed + iteration`` (their state is not part of a checkpoint), so a resumed
-    run is reproducible, though not identical to an uninterrupted one. Same config and seed on
-    the same machine → identical iteration statistics.
-    """
-    env = make_vector_env(config.num_envs)
-    try:
-        agent = TRPOAgent(env.single_observation_space, env.single_action_space, config)
-        if state is not None:
-            agent.load_state_dict(state)
-        collector = RolloutCollector(env, seed=config.seed + agent.iteration)
-        start = time.perf_counter()
-        while agent.iteration < config.iterations:
-            t0 = time.perf_counter()
-            batch = collector.collect(agent.sample, config.steps_per_env)
-            t1 = time.perf_counter()
-            step, value_loss = agent.update(batch)
-            t2 = time.perf_counter()
-            ls, rets = step.line_search, batch.episode_returns
-            stats = IterationStats(
-                iteration=agent.iteration,
-                env_steps=agent.env_steps,
-                episodes=len(rets),
-                mean_return=float(np.mean(rets)) if rets else float("nan"),
-                mean_length=float(np.mean(batch.episode_lengths)) if rets else float("nan"),
-                kl=ls.kl,
-                entropy=step.entropy,
-                surrogate_improvement=ls.improvement,
-                expected_improvement=step.expected_improvement,
-                line_search_accepted=ls.accepted,
-                line_search_trials=ls.trials,
-                value_loss=value_loss,
-                rollout_time_s=t1 - t0,
-                update_time_s=t2 - t1,
-                wall_time_s=t2 - start,
-            )
-            if callback is not None and callback(stats, agent):
-                break
-        return agent
-    finally:
-        env.close()

@@ -1,7 +1,7 @@
 """``usvsim evaluate CHECKPOINT``: a trained policy on the validation and held-out episode sets.
 
-Loads the checkpoint (:func:`learning.experiments.checkpoint.load_checkpoint`, precise errors for a bad
-file), runs its deterministic policy on the study's 15 validation episodes and on the 200
+Loads the checkpoint (:func:`learning.experiments.checkpoint.load_checkpoint`, precise errors
+for a bad file), runs its deterministic policy on the study's 15 validation episodes and on the 200
 held-out episodes (:mod:`usvsim.evaluation.episodes`), and prints one table::
 
     set         episodes  success  collision  min d_pole m (min / median)  mean t_goal s
@@ -27,6 +27,7 @@ import torch
 from learning.experiments.checkpoint import (
     CheckpointError,
     PolicyHelmsman,
+    checkpoint_kinds,
     load_agent,
     load_checkpoint,
 )
@@ -100,14 +101,14 @@ def run(args: EvaluateArgs) -> int:
         agent = load_agent(ckpt, args.checkpoint)
     except CheckpointError as err:
         raise SystemExit(f"usvsim evaluate: {err}") from None
-    helmsman = PolicyHelmsman(agent, ckpt.observation, ckpt.action)
-    kinds = {"observation": ckpt.observation, "action": ckpt.action}
+    observation, action = checkpoint_kinds(ckpt)
+    helmsman = PolicyHelmsman(agent, observation, action)
     sets = [("validation", validation_episodes())]
     if args.heldout:
         sets.append(("held-out", heldout_episodes(n=args.heldout)))
     rows, per_episode = [], ""
     for name, episodes in sets:
-        records = evaluate(helmsman, episodes, **kinds)
+        records = evaluate(helmsman, episodes, observation=observation, action=action)
         rows.append(evaluation_row(name, records))
         if name == "validation" and args.episodes:
             per_episode = format_records(records)

@@ -1,22 +1,29 @@
-"""Checkpoints of trained policies: a documented, versioned file format, and loading as a helmsman.
+"""Checkpoints of trained policies: a documented, versioned file format, and loading as a
+helmsman.
 
-A checkpoint is one file written by ``torch.save`` (atomically, :mod:`usvsim.common.fileio`) holding a
-dict of plain data and tensors only, so that it loads with ``torch.load(weights_only=True)``
-(no pickled code runs when a file is opened):
+A checkpoint is one file written by ``torch.save`` (atomically, :mod:`usvsim.common.fileio`)
+holding a dict of plain data and tensors only, so that it loads with
+``torch.load(weights_only=True)`` (no pickled code runs when a file is opened):
 
 =====================  =========================================================================
 key                    value
 =====================  =========================================================================
 ``format``             ``"usvsim.checkpoint"`` (identifies the file)
 ``version``            :data:`VERSION` (an int; a reader refuses newer versions)
-``setup``              setup name, e.g. ``"rl-gaussian-positional"`` (:mod:`learning.experiments.setups`)
+``setup``              setup name, e.g. ``"rl-gaussian-positional"``
+                       (:mod:`learning.experiments.setups`)
 ``observation``        observation kind the policy needs: ``positional`` | ``radar+goal``
 ``action``             action kind it produces: ``gaussian`` | ``categorical``
-``setup_params``       every field of the :class:`learning.experiments.setups.RLSetup` used (dict)
-``agent``              :meth:`learning.algorithms.trpo.TRPOAgent.state_dict`: TRPO config, observation and
-                       action spaces, policy weights, observation-normaliser statistics (mean,
-                       var, count as lists), and — unless ``slim`` — critic, critic optimiser,
-                       random generator and counters needed to resume training
+``setup_params``       the setup used (:func:`learning.experiments.setups.setup_params`: its
+                       fields, the algorithm's config nested; older files: flat)
+``algorithm``          registered name of the algorithm whose agent ``agent`` holds
+                       (:mod:`learning.algorithms.registry`); ``"trpo"`` when absent (older
+                       files, and IL runs: GAIL trains a TRPO policy)
+``agent``              the agent's ``state_dict`` (e.g. :meth:`learning.algorithms.trpo.TRPOAgent.
+                       state_dict`): config, observation and action spaces, policy weights,
+                       observation-normaliser statistics (mean, var, count as lists), and —
+                       unless ``slim`` — critic, critic optimiser, random generator and
+                       counters needed to resume training
 ``slim``               True when only what acting needs is stored (policy + normaliser)
 ``weights_dtype``      ``"float32"``, or ``"float16"`` when the policy's floating-point
                        tensors were stored in half precision (converted back on load)
@@ -34,13 +41,13 @@ key                    value
 and what is wrong (unreadable or truncated file, not a checkpoint, newer version, missing keys,
 another setup or observation kind than expected, weights that do not fit the network).
 :func:`load_helmsman` wraps the policy's deterministic action as a
-:class:`usvsim.evaluation.episodes.Helmsman` that declares its ``observation`` and ``action`` kinds (read by
-:func:`usvsim.helm.registry.helmsman_kinds`).
+:class:`usvsim.helm.protocol.Helmsman` that declares its ``observation`` and ``action`` kinds
+(read by :func:`usvsim.helm.registry.helmsman_kinds`). Agents are built and restored through
+:mod:`learning.algorithms.registry`, whatever the algorithm.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import datetime as _dt
 import os
 import pickle
@@ -48,18 +55,19 @@ import subprocess
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
 from numpy.typing import NDArray
 
-from learning.algorithms.networks import NetworkConfig, space_to_spec
-from learning.algorithms.trpo import TRPOAgent, TRPOConfig
-from learning.experiments.setups import RLSetup, get_setup
+from learning.algorithms.base import Agent
+from learning.algorithms.networks import space_to_spec
+from learning.algorithms.registry import get_algorithm
+from learning.experiments.setups import RLSetup, get_setup, setup_params
 from usvsim.common.fileio import atomic_open
-from usvsim.task.batch import action_space
-from usvsim.task.observations import observation_space
+from usvsim.task.batch import ActionKind, action_space
+from usvsim.task.observations import ObservationKind, observation_space
 
 __all__ = [
     "FORMAT",
@@ -68,6 +76,7 @@ __all__ = [
     "CheckpointError",
     "NonFiniteWeightsError",
     "PolicyHelmsman",
+    "checkpoint_kinds",
     "git_revision",
     "load_agent",
     "load_checkpoint",
@@ -142,23 +151,26 @@ class Checkpoint:
     train_args: dict[str, Any] = field(default_factory=dict)
     validation: dict[str, Any] | None = None
     history: list[dict[str, Any]] = field(default_factory=list)
+    algorithm: str = "trpo"  # registered algorithm of ``agent`` (learning.algorithms.registry)
 
     @classmethod
     def from_agent(
         cls,
-        agent: TRPOAgent,
-        setup: RLSetup,
+        agent: Agent,
+        setup: Any,
         *,
         train_args: dict[str, Any] | None = None,
         validation: dict[str, Any] | None = None,
         history: list[dict[str, Any]] | None = None,
     ) -> Checkpoint:
-        """The full (resumable) checkpoint of ``agent`` trained on ``setup``."""
+        """The full (resumable) checkpoint of ``agent`` trained on ``setup`` (an RL or IL setup:
+        ``name``, ``observation``, ``action``, ``algorithm`` and its fields)."""
         return cls(
             setup=setup.name,
             observation=setup.observation,
             action=setup.action,
-            setup_params=_plain(dataclasses.asdict(setup)),
+            setup_params=_plain(setup_params(setup)),
+            algorithm=setup.algorithm,
             agent=_plain(agent.state_dict()),
             git_revision=git_revision(),
             train_args=_plain(dict(train_args or {})),
@@ -174,6 +186,7 @@ class Checkpoint:
             "observation": self.observation,
             "action": self.action,
             "setup_params": self.setup_params,
+            "algorithm": self.algorithm,
             "agent": self.agent,
             "slim": self.slim,
             "weights_dtype": self.weights_dtype,
@@ -185,29 +198,22 @@ class Checkpoint:
             "history": self.history,
         }
 
-    def make_agent(self) -> TRPOAgent:
+    def make_agent(self) -> Agent:
         """The agent: fully restored (resumable) unless slim, else policy and normaliser only."""
+        algorithm = get_algorithm(self.algorithm)
         if not self.slim:
-            return TRPOAgent.from_state_dict(self.agent)
+            return algorithm.from_state_dict(self.agent)
         state = self.agent
-        agent = TRPOAgent(
-            observation_space(self.observation),
-            action_space(self.action),
-            _config_from_state(state),
+        observation, action = checkpoint_kinds(self)
+        agent = algorithm.make_agent(
+            observation_space(observation),
+            action_space(action),
+            algorithm.config_from_dict(state["config"]),
         )
         agent.policy.load_state_dict(_cast_floats(state["policy"], torch.float32))
         agent.normalizer.load_state_dict(state["normalizer"])
         agent.iteration, agent.env_steps = int(state["iteration"]), int(state["env_steps"])
         return agent
-
-
-def _config_from_state(state: dict[str, Any]) -> TRPOConfig:
-    """The :class:`TRPOConfig` stored in an agent state (as ``TRPOAgent.from_state_dict``)."""
-    saved = dict(state["config"])
-    net = dict(saved["network"])
-    net["hidden"] = tuple(net["hidden"])
-    saved["network"] = NetworkConfig(**net)
-    return TRPOConfig(**saved)
 
 
 def save_checkpoint(checkpoint: Checkpoint, path: str | os.PathLike[str]) -> None:
@@ -252,6 +258,7 @@ def slim_copy(checkpoint: Checkpoint, half: bool = False) -> Checkpoint:
         train_args=checkpoint.train_args,
         validation=checkpoint.validation,
         history=checkpoint.history,
+        algorithm=checkpoint.algorithm,
     )
 
 
@@ -347,11 +354,16 @@ def load_checkpoint(
         train_args=dict(data.get("train_args") or {}),
         validation=data.get("validation"),
         history=list(data.get("history") or []),
+        algorithm=str(data.get("algorithm", "trpo")),
     )
+    try:
+        get_algorithm(ckpt.algorithm)
+    except ValueError as err:
+        raise CheckpointError(f"{p}: {err}") from None
     return ckpt
 
 
-def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>") -> TRPOAgent:
+def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>") -> Agent:
     """``checkpoint.make_agent()`` with weight errors reported as :class:`CheckpointError`."""
     try:
         return checkpoint.make_agent()
@@ -363,15 +375,16 @@ def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>"
 
 @dataclass
 class PolicyHelmsman:
-    """A trained policy as a :class:`usvsim.evaluation.episodes.Helmsman`: deterministic actions.
+    """A trained policy as a :class:`usvsim.helm.protocol.Helmsman`: deterministic actions.
 
-    ``observation`` and ``action`` name the kinds it needs (``usvsim.helm.registry.helmsman_kinds``);
-    Gaussian actions are the mean clipped to [-1, 1], categorical ones the most likely bin.
+    ``observation`` and ``action`` name the kinds it needs
+    (``usvsim.helm.registry.helmsman_kinds``); Gaussian actions are the mean clipped to [-1, 1],
+    categorical ones the most likely bin.
     """
 
-    agent: TRPOAgent
-    observation: str
-    action: str
+    agent: Agent
+    observation: ObservationKind
+    action: ActionKind
     name: str = "policy"
 
     def reset(self, n_boats: int) -> None:
@@ -385,4 +398,13 @@ def load_helmsman(path: str | os.PathLike[str]) -> PolicyHelmsman:
     """The policy of the checkpoint at ``path`` as a helmsman named after the file's stem."""
     ckpt = load_checkpoint(path)
     agent = load_agent(ckpt, path)
-    return PolicyHelmsman(agent, ckpt.observation, ckpt.action, name=Path(path).stem)
+    return PolicyHelmsman(agent, *checkpoint_kinds(ckpt), name=Path(path).stem)
+
+
+def checkpoint_kinds(checkpoint: Checkpoint) -> tuple[ObservationKind, ActionKind]:
+    """The observation and action kinds of a loaded checkpoint (checked by
+    :func:`load_checkpoint`)."""
+    return (
+        cast(ObservationKind, checkpoint.observation),
+        cast(ActionKind, checkpoint.action),
+    )

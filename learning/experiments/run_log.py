@@ -3,7 +3,8 @@
 ``log.csv`` and ``curve.png`` (:class:`RunLog`, :func:`plot_learning_curve`), the milestones of
 the validations (:class:`Milestones`), reading a log back for ``--resume``
 (:func:`read_log_rows`) and the tqdm bar (:func:`progress_bar`, :func:`advance`). The columns
-and the run itself are :mod:`learning.cli.train`'s (RL) and :mod:`learning.experiments.il_setups`'s (IL).
+and the run itself are :mod:`learning.experiments.train_rl`'s (RL) and
+:mod:`learning.experiments.train_il`'s (IL).
 """
 
 from __future__ import annotations

@@ -34,28 +34,47 @@ unchanged; evaluation uses the plain environment.
 
 What is tuned: the batch (``num_envs`` × ``steps_per_env``), γ, λ, δ, the Fisher sub-sample
 and the critic. The radar setups also scale the goal vector up to the image's share of the first
-fully connected layer's input (``balanced_fusion``, :mod:`learning.algorithms.networks`): with the study's
+fully connected layer's input (``balanced_fusion``, :mod:`learning.algorithms.networks`): with the
+study's
 plain concatenation rl-gaussian-radar needed 230 iterations to its first 15/15, with it 65.
-Each setup is a frozen dataclass whose :meth:`RLSetup.trpo_config` gives the
-:class:`learning.algorithms.trpo.TRPOConfig` of a run; the command line (``usvsim train``) overrides only
-the seed, the iteration budget and the number of boats, so a setup name plus a seed reproduces
-a run.
+Each setup is a frozen dataclass that holds its algorithm's config
+(:attr:`RLSetup.algorithm_config`, a :class:`learning.algorithms.trpo.TRPOConfig`);
+:meth:`RLSetup.run_config` gives the config of a run. The command line (``usvsim train``)
+overrides only the seed, the iteration budget and the number of boats, so a setup name plus a
+seed reproduces a run. :func:`setup_params` and :func:`setup_from_params` store a setup in a
+checkpoint and read it back (also the flat form of checkpoints written before the setups held
+their configs).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
 
 import numpy as np
 from gymnasium.vector import VectorEnv, VectorWrapper
 
+from learning.algorithms.base import config_from_dict
 from learning.algorithms.networks import NetworkConfig
+from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
+from usvsim.task.batch import ActionKind
+from usvsim.task.observations import ObservationKind
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
-__all__ = ["SETUPS", "FixedHorizonReturn", "RLSetup", "get_setup", "setup_names"]
+__all__ = [
+    "SETUPS",
+    "FixedHorizonReturn",
+    "RLSetup",
+    "get_setup",
+    "setup_from_params",
+    "setup_names",
+    "setup_params",
+]
+
+S = TypeVar("S")
 
 
 class FixedHorizonReturn(VectorWrapper):
@@ -89,99 +108,90 @@ class FixedHorizonReturn(VectorWrapper):
         return obs, reward, terminated, truncated, info
 
 
+# The TRPO hyperparameters shared by the RL setups (each setup changes a few).
+RL_TRPO = TRPOConfig(
+    iterations=300,  # budget of TRPO iterations (early stop usually comes first)
+    num_envs=32,  # N boats stepped together
+    steps_per_env=64,  # T decisions per boat per iteration; batch B = N·T
+    gamma=0.99,  # γ; an episode is ≤ 75 decisions, 1/(1-γ) = 100 covers it
+    gae_lambda=0.97,  # λ of GAE
+    max_kl=0.02,  # δ, nats
+    cg_iters=10,
+    cg_damping=0.1,
+    fvp_fraction=0.25,  # share of the batch in Fisher-vector products
+    critic_lr=1e-3,  # Adam
+    critic_epochs=5,
+    critic_minibatch=256,
+    network=NetworkConfig(init_std_fraction=0.5),  # Gaussian: initial σ / action half-width
+)
+
+# the CNN's 1.3 M weights fit noise in small batches: B = 4096; 410 rows suffice for the
+# Fisher-vector products; the critic's CNN dominates the update's cost; the goal's weight in
+# FC 1 (learning.algorithms.networks, balanced fusion)
+RADAR_TRPO = dataclasses.replace(
+    RL_TRPO,
+    num_envs=64,
+    fvp_fraction=0.1,
+    critic_epochs=2,
+    critic_minibatch=512,
+    network=NetworkConfig(init_std_fraction=0.5, balanced_fusion=True),
+)
+
+
 @dataclass(frozen=True)
 class RLSetup:
-    """One RL setup: the task's observation/action kinds and the TRPO hyperparameters."""
+    """One RL setup: the task's observation/action kinds and the algorithm's config."""
 
     name: str  # e.g. "rl-gaussian-positional"
-    observation: str  # usvsim.task.observations kind: "positional" | "radar+goal"
-    action: str  # usvsim.task.batch action kind: "gaussian" | "categorical"
-    iterations: int = 300  # budget of TRPO iterations (early stop usually comes first)
-    num_envs: int = 32  # N boats stepped together
-    steps_per_env: int = 64  # T decisions per boat per iteration; batch B = N·T
-    gamma: float = 0.99  # γ; an episode is ≤ 75 decisions, 1/(1-γ) = 100 covers it
-    gae_lambda: float = 0.97  # λ of GAE
-    max_kl: float = 0.02  # δ, nats
-    cg_iters: int = 10
-    cg_damping: float = 0.1
-    fvp_fraction: float = 0.25  # share of the batch in Fisher-vector products
-    critic_lr: float = 1e-3  # Adam
-    critic_epochs: int = 5
-    critic_minibatch: int = 256
-    init_std_fraction: float = 0.5  # Gaussian: initial σ / action half-width
-    balanced_fusion: bool = False  # learning.algorithms.networks.NetworkConfig.balanced_fusion
+    observation: ObservationKind  # usvsim.task.observations kind
+    action: ActionKind  # usvsim.task.batch action kind
+    algorithm_config: TRPOConfig = field(default=RL_TRPO)  # a registered algorithm's config
     validate_every: int = 5  # iterations between validations on the 15 episodes
     study_iterations: int = 0  # the study's iterations to its best validation (Table 4.1)
 
-    def trpo_config(self, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
-        """The :class:`TRPOConfig` of a run of this setup."""
-        return trpo_config_of(self, seed, iterations)
+    @property
+    def algorithm(self) -> str:
+        """The registered name of the algorithm (:mod:`learning.algorithms.registry`)."""
+        return algorithm_for(self.algorithm_config).name
+
+    def run_config(self, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
+        """The algorithm config of a run: the setup's, with ``seed`` and ``iterations`` (None:
+        the setup's budget)."""
+        budget = self.algorithm_config.iterations if iterations is None else iterations
+        return dataclasses.replace(self.algorithm_config, seed=seed, iterations=budget)
 
     def make_vector_env(self, num_envs: int, **env_kwargs: Any) -> VectorEnv:
         """The training environment: ``num_envs`` boats with :class:`FixedHorizonReturn`."""
         env = PoleAvoidanceVectorEnv(
             num_envs, observation=self.observation, action=self.action, **env_kwargs
         )
-        return FixedHorizonReturn(env, self.gamma)
+        return FixedHorizonReturn(env, self.algorithm_config.gamma)
+
+    def with_num_envs(self, num_envs: int) -> RLSetup:
+        """A copy whose runs step ``num_envs`` boats together."""
+        return self.replace(
+            algorithm_config=dataclasses.replace(self.algorithm_config, num_envs=num_envs)
+        )
 
     def replace(self, **changes: object) -> RLSetup:
         """A copy with some fields changed (unknown names raise ``TypeError``)."""
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 
-@dataclass(frozen=True)
-class GaussianPositional(RLSetup):
-    """MLP, Gaussian head, positional observation (study: ~2400 iterations to 15/15)."""
-
-    name: str = "rl-gaussian-positional"
-    observation: str = "positional"
-    action: str = "gaussian"
-    study_iterations: int = 2400
-
-
-@dataclass(frozen=True)
-class CategoricalPositional(RLSetup):
-    """MLP, 41 categories, positional observation (study: ~1000 iterations)."""
-
-    name: str = "rl-categorical-positional"
-    observation: str = "positional"
-    action: str = "categorical"
-    study_iterations: int = 1000
-
-
-@dataclass(frozen=True)
-class GaussianRadar(RLSetup):
-    """CNN with late goal fusion, Gaussian head, radar+goal (study: ~1300 iterations)."""
-
-    name: str = "rl-gaussian-radar"
-    observation: str = "radar+goal"
-    action: str = "gaussian"
-    num_envs: int = 64  # the CNN's 1.3 M weights fit noise in small batches: B = 4096
-    fvp_fraction: float = 0.1  # 410 rows suffice for the Fisher-vector products
-    critic_epochs: int = 2  # the critic's CNN dominates the update's cost
-    critic_minibatch: int = 512
-    balanced_fusion: bool = True  # the goal's weight in FC 1 (learning.algorithms.networks)
-    study_iterations: int = 1300
-
-
-@dataclass(frozen=True)
-class CategoricalRadar(RLSetup):
-    """CNN with late goal fusion, 41 categories, radar+goal (study: ~4300 iterations)."""
-
-    name: str = "rl-categorical-radar"
-    observation: str = "radar+goal"
-    action: str = "categorical"
-    num_envs: int = 64  # as GaussianRadar
-    fvp_fraction: float = 0.1
-    critic_epochs: int = 2
-    critic_minibatch: int = 512
-    balanced_fusion: bool = True  # the goal's weight in FC 1 (learning.algorithms.networks)
-    study_iterations: int = 4300
-
-
 SETUPS: dict[str, RLSetup] = {
     s.name: s
-    for s in (GaussianPositional(), CategoricalPositional(), GaussianRadar(), CategoricalRadar())
+    for s in (
+        # MLP, Gaussian head, positional observation (study: ~2400 iterations to 15/15)
+        RLSetup("rl-gaussian-positional", "positional", "gaussian", study_iterations=2400),
+        # MLP, 41 categories, positional observation (study: ~1000 iterations)
+        RLSetup("rl-categorical-positional", "positional", "categorical", study_iterations=1000),
+        # CNN with late goal fusion, Gaussian head, radar+goal (study: ~1300 iterations)
+        RLSetup("rl-gaussian-radar", "radar+goal", "gaussian", RADAR_TRPO, study_iterations=1300),
+        # CNN with late goal fusion, 41 categories, radar+goal (study: ~4300 iterations)
+        RLSetup(
+            "rl-categorical-radar", "radar+goal", "categorical", RADAR_TRPO, study_iterations=4300
+        ),
+    )
 }
 
 
@@ -197,24 +207,63 @@ def get_setup(name: str) -> RLSetup:
         raise ValueError(f"unknown setup {name!r}; known setups: {', '.join(SETUPS)}") from None
 
 
-def trpo_config_of(setup: Any, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
-    """The :class:`TRPOConfig` of a setup (RL or IL) that has the TRPO hyperparameter fields."""
-    return TRPOConfig(
-        seed=seed,
-        iterations=setup.iterations if iterations is None else iterations,
-        num_envs=setup.num_envs,
-        steps_per_env=setup.steps_per_env,
-        gamma=setup.gamma,
-        gae_lambda=setup.gae_lambda,
-        max_kl=setup.max_kl,
-        cg_iters=setup.cg_iters,
-        cg_damping=setup.cg_damping,
-        fvp_fraction=setup.fvp_fraction,
-        critic_lr=setup.critic_lr,
-        critic_epochs=setup.critic_epochs,
-        critic_minibatch=setup.critic_minibatch,
-        network=NetworkConfig(
-            init_std_fraction=setup.init_std_fraction,
-            balanced_fusion=setup.balanced_fusion,
-        ),
-    )
+def setup_params(setup: Any) -> dict[str, Any]:
+    """A setup (RL or IL) as plain data for a checkpoint: ``dataclasses.asdict`` plus the
+    ``"algorithm"`` of its ``algorithm_config``."""
+    return {**dataclasses.asdict(setup), "algorithm": setup.algorithm}
+
+
+def setup_from_params(base: S, params: Mapping[str, Any]) -> S:
+    """``base`` (an RL or IL setup) with the fields stored by :func:`setup_params`.
+
+    Reads the flat form of older checkpoints too (every hyperparameter a field of the setup,
+    no ``"algorithm"``: TRPO). Unknown names raise ``ValueError``.
+    """
+    params = dict(params)
+    algorithm = get_algorithm(str(params.pop("algorithm", "trpo")))
+    if "algorithm_config" not in params:
+        params = _nest_flat(base, params, algorithm.config_type)
+    changes: dict[str, Any] = {}
+    for f in dataclasses.fields(base):  # type: ignore[arg-type]
+        if f.name not in params:
+            continue
+        value = params.pop(f.name)
+        if f.name == "algorithm_config":
+            value = algorithm.config_from_dict(value)
+        elif isinstance(value, Mapping):
+            value = config_from_dict(type(getattr(base, f.name)), value)
+        changes[f.name] = value
+    if params:
+        raise ValueError(f"unknown setup fields {sorted(params)}")
+    return dataclasses.replace(base, **changes)  # type: ignore[type-var]
+
+
+def _nest_flat(base: Any, flat: dict[str, Any], config_type: type[Any]) -> dict[str, Any]:
+    """Old flat setup fields → the nested form: each hyperparameter into the config that holds
+    it (the algorithm's, its ``network``, and any other config field of ``base``, e.g. an IL
+    setup's ``gail``); a name several configs have (``balanced_fusion``) goes into each."""
+    top = {f.name for f in dataclasses.fields(base)}
+    groups: dict[str, tuple[Any, set[str]]] = {
+        "algorithm_config": (base.algorithm_config, _names(config_type)),
+    }
+    for name in top - {"algorithm_config"}:
+        value = getattr(base, name)
+        if dataclasses.is_dataclass(value):
+            groups[name] = (value, _names(type(value)))
+    nested: dict[str, Any] = {k: dataclasses.asdict(v) for k, (v, _) in groups.items()}
+    network = nested["algorithm_config"]["network"]
+    rest: dict[str, Any] = {}
+    for key, value in flat.items():
+        placed = False
+        for group, (_, names) in groups.items():
+            if key in names:
+                nested[group][key], placed = value, True
+        if key in _names(NetworkConfig):
+            network[key], placed = value, True
+        if not placed:
+            rest[key] = value
+    return {**rest, **nested}
+
+
+def _names(cls: type[Any]) -> set[str]:
+    return {f.name for f in dataclasses.fields(cls)}

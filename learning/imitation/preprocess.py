@@ -51,8 +51,8 @@ from usvsim.common.angles import ssa
 from usvsim.mavlink.link import read_tlog
 from usvsim.mavlink.messages import Attitude, GlobalPosition, VfrHud
 from usvsim.nav.geo import GeoOrigin
-from usvsim.task.batch import N_CATEGORIES
-from usvsim.task.observations import build_observation
+from usvsim.task.batch import N_CATEGORIES, ActionKind
+from usvsim.task.observations import ObservationKind, build_observation
 from usvsim.task.radar import RadarConfig
 
 __all__ = [
@@ -133,7 +133,7 @@ def decision_track(rec: Recording, period_s: float = 2.0) -> DecisionTrack:
     )
 
 
-def encode_actions(heading_change_rad: FloatArray, action: str) -> NDArray[Any]:
+def encode_actions(heading_change_rad: FloatArray, action: ActionKind) -> NDArray[Any]:
     """Δψ (M,) rad → env actions: gaussian (M, 1) float32 ``Δψ / 30°``; categorical (M,) int64
     ``round(Δψ / 1.5°) + 20`` clipped to 0..40 (step 6 of the module docstring)."""
     x = np.clip(np.asarray(heading_change_rad, dtype=float) / MAX_CHANGE_RAD, -1.0, 1.0)
@@ -162,8 +162,8 @@ class ExpertData:
 
 def expert_data(
     recordings: Sequence[Recording],
-    observation: str,
-    action: str,
+    observation: ObservationKind,
+    action: ActionKind,
     *,
     period_s: float = 2.0,
     radar: RadarConfig | None = None,

@@ -1,0 +1,138 @@
+"""Natural-gradient building blocks shared by trust-region policy steps (Schulman et al. 2015,
+"TRPO", Sect. 6 and Appendix C): flat parameter vectors, conjugate gradient, Fisher-vector
+products and the backtracking line search. :func:`learning.algorithms.trpo.trpo_step` composes
+them; each is tested on its own (``tests/test_trpo.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import torch
+from torch import Tensor, nn
+
+from learning.algorithms.networks import Policy, TensorObs
+
+__all__ = [
+    "LineSearchResult",
+    "conjugate_gradient",
+    "fisher_vector_product",
+    "flat_grad",
+    "get_flat",
+    "line_search",
+    "rows",
+    "set_flat",
+    "trainable_params",
+]
+
+
+def trainable_params(module: nn.Module) -> list[nn.Parameter]:
+    """The parameters of ``module`` that require gradients, in registration order."""
+    return [p for p in module.parameters() if p.requires_grad]
+
+
+def flat_grad(y: Tensor, params: Sequence[Tensor], **kwargs: Any) -> Tensor:
+    """∂y/∂θ as one flat vector."""
+    return torch.cat([g.reshape(-1) for g in torch.autograd.grad(y, params, **kwargs)])
+
+
+def get_flat(params: Sequence[Tensor]) -> Tensor:
+    return torch.cat([p.detach().reshape(-1) for p in params]).clone()
+
+
+@torch.no_grad()
+def set_flat(params: Sequence[Tensor], flat: Tensor) -> None:
+    """Copy ``flat`` into the parameters in place (bit-exact, storage kept)."""
+    i = 0
+    for p in params:
+        p.copy_(flat[i : i + p.numel()].view_as(p))
+        i += p.numel()
+
+
+def conjugate_gradient(
+    Avp: Callable[[Tensor], Tensor], b: Tensor, iters: int = 10, residual_tol: float = 1e-10
+) -> Tensor:
+    """Approximate solution of A x = b for symmetric positive-definite A given only x ↦ A x.
+
+    Hestenes and Stiefel (1952); TRPO, Appendix C. Starts from x = 0; stops after ``iters``
+    iterations or when the squared residual falls below ``residual_tol``.
+    """
+    x = torch.zeros_like(b)
+    r = b.clone()
+    p = b.clone()
+    rr = r @ r
+    for _ in range(iters):
+        if rr < residual_tol:
+            break
+        Ap = Avp(p)
+        alpha = rr / (p @ Ap)
+        x += alpha * p
+        r -= alpha * Ap
+        rr_new = r @ r
+        p = r + (rr_new / rr) * p
+        rr = rr_new
+    return x
+
+
+def rows(obs: TensorObs, idx: Tensor) -> TensorObs:
+    """The rows ``idx`` of a batch of tensor observations (a tensor or a dict of them)."""
+    return {k: v[idx] for k, v in obs.items()} if isinstance(obs, dict) else obs[idx]
+
+
+def fisher_vector_product(
+    policy: Policy, obs: TensorObs, damping: float
+) -> Callable[[Tensor], Tensor]:
+    """v ↦ (∇²_θ D̄_KL(θ_old, θ)|_θold + damping·I) v on ``obs`` (TRPO, Appendix C.1).
+
+    The mean KL and its gradient (with ``create_graph``) are built once at the current θ, which
+    is θ_old during the conjugate-gradient solve; every product is then one backward pass of
+    ∇D̄_KL · v through that graph. The policy must be in eval mode (one deterministic function).
+    """
+    params = trainable_params(policy)
+    dist = policy(obs)
+    mean_kl = dist.detach().kl(dist).mean()
+    grad_kl = flat_grad(mean_kl, params, create_graph=True)
+
+    def fvp(v: Tensor) -> Tensor:
+        return flat_grad(grad_kl @ v, params, retain_graph=True) + damping * v
+
+    return fvp
+
+
+@dataclass(frozen=True)
+class LineSearchResult:
+    accepted: bool
+    step_fraction: float  # of the full natural-gradient step; 0 when rejected
+    trials: int  # evaluations made
+    kl: float  # mean KL at the accepted θ (0 when rejected)
+    improvement: float  # L(θ) − L(θ_old) at the accepted θ (0 when rejected)
+
+
+def line_search(
+    params: Sequence[Tensor],
+    full_step: Tensor,
+    evaluate: Callable[[], tuple[float, float]],
+    surrogate_old: float,
+    max_kl: float,
+    steps: int,
+    decay: float,
+) -> LineSearchResult:
+    """Backtracking line search along ``full_step`` from the current θ (= θ_old).
+
+    Tries θ_old + decayⁱ · full_step for i = 0 … steps − 1, accepting the first with
+    D̄_KL ≤ ``max_kl`` and L > ``surrogate_old`` (``evaluate`` returns (L, D̄_KL) at the current
+    parameters). If none is accepted, θ_old is restored bit for bit.
+    """
+    theta_old = get_flat(params)
+    for i in range(steps):
+        fraction = decay**i
+        set_flat(params, theta_old + fraction * full_step)
+        surrogate, kl = evaluate()
+        improvement = surrogate - surrogate_old
+        if math.isfinite(kl) and kl <= max_kl and improvement > 0:
+            return LineSearchResult(True, fraction, i + 1, kl, improvement)
+    set_flat(params, theta_old)
+    return LineSearchResult(False, 0.0, steps, 0.0, 0.0)

@@ -1,0 +1,379 @@
+"""One IL training run (``usvsim train il-*``): GAIL (:mod:`learning.imitation.gail`) on one of
+the setups of :mod:`learning.experiments.il_setups`.
+
+:func:`train_il` is the run: load and filter the demonstrations
+(:mod:`learning.imitation.demonstrations`), preprocess them (:mod:`learning.imitation.preprocess`),
+GAIL (:func:`learning.imitation.gail.train_gail`), validate on the 15 episodes every
+``validate_every`` iterations, keep the best checkpoint (:mod:`learning.experiments.checkpoint`
+format, the policy agent; the discriminator in a ``latest.gail.pt`` sidecar for resuming), and
+write ``log.csv`` (:data:`IL_CSV_FIELDS`), ``curve.png`` and ``summary.json`` as an RL run does
+(:mod:`learning.experiments.train_rl`). ``usvsim train SETUP`` (:mod:`learning.cli.train`) runs
+it with the options of an RL run: ``--stop-after`` (default 3 consecutive 15/15 validations,
+as RL; 0 runs the whole budget), ``--time-budget-s``, ``--validate-every``, ``--n-envs``,
+``--resume``, ``--quiet``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from learning.algorithms.base import log_row
+from learning.algorithms.loop import IterationStats
+from learning.experiments.checkpoint import (
+    Checkpoint,
+    CheckpointError,
+    load_checkpoint,
+    save_checkpoint,
+)
+from learning.experiments.il_setups import ILSetup
+from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
+from learning.experiments.setups import setup_from_params
+from learning.experiments.validation import (
+    RunResult,
+    policy_records,
+    validation_record,
+    validation_summary,
+)
+from learning.imitation.demonstrations import DEMOS_DIR, load_recordings, quality_check
+from learning.imitation.gail import GAILAgent, GAILStats, train_gail
+from learning.imitation.preprocess import ExpertData, expert_data
+from usvsim.common.fileio import atomic_open, atomic_write_text
+from usvsim.evaluation.episodes import validation_episodes
+from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
+from usvsim.task.scenario import EpisodeSpec
+from usvsim.task.vector_env import PoleAvoidanceVectorEnv
+
+__all__ = ["IL_CSV_FIELDS", "ILRunResult", "train_il", "validate_il"]
+
+ILRunResult = RunResult  # the outcome of train_il (the same record as an RL run's)
+
+IL_CSV_FIELDS = (
+    "iteration",
+    "env_steps",
+    "wall_time_s",
+    "episodes",
+    "env_return",
+    "goal_rate",
+    "kl",
+    "entropy",
+    "line_search_accepted",
+    "mean_reward",
+    "disc_loss",
+    "expert_accuracy",
+    "policy_accuracy",
+    "mean_d_expert",
+    "mean_d_policy",
+    "val_successes",
+    "val_mean_return",
+    "val_min_pole_distance_m",
+    "val_path_distance_m",
+)
+"""Columns of an IL run's ``log.csv``: :class:`learning.imitation.gail.GAILStats` (``env_return``
+the handcrafted return of the finished training episodes, a diagnostic; ``mean_reward`` the mean
+imitation reward; ``disc_*``, ``*_accuracy``, ``mean_d_*`` the discriminator's last Adam step),
+then the validation's (filled on validation iterations): successes /15, mean handcrafted return,
+closest pole approach (m) and path distance to the expert's paths (m,
+:mod:`usvsim.evaluation.likeness`).
+``wall_time_s`` counts from the start of GAIL (behavioural cloning included) and continues
+across ``--resume``."""
+
+
+def _checkpoint(
+    agent: GAILAgent, setup: ILSetup, args: dict[str, Any], rec: Any, hist: Any
+) -> Checkpoint:
+    """The checkpoint of the policy agent (the discriminator goes to ``latest.gail.pt``)."""
+    return Checkpoint.from_agent(
+        agent.policy_agent,
+        setup,
+        train_args=args,
+        validation=rec,
+        history=hist,
+    )
+
+
+def validate_il(
+    agent: GAILAgent, setup: ILSetup, specs: Sequence[EpisodeSpec], reference: ExpertReference
+) -> dict[str, float]:
+    """The deterministic policy on ``specs`` (the 15 validation episodes):
+    :func:`learning.experiments.validation.validation_summary` and the path distance to the
+    expert (m)."""
+    recs = policy_records(agent, setup, specs)
+    return {
+        **validation_summary(recs),
+        "path_distance_m": likeness(recs, reference).path_distance_m,
+    }
+
+
+class _ILRun:
+    """One GAIL run's bookkeeping: log rows, validations, checkpoints, milestones, stopping."""
+
+    def __init__(
+        self,
+        setup: ILSetup,
+        out: Path,
+        *,
+        train_args: dict[str, Any],
+        last_iteration: int,
+        validate_every: int,
+        stop_after: int,
+        time_budget_s: float,
+        rows: list[dict[str, Any]],
+        history: list[dict[str, Any]],
+        say: Callable[[str], None],
+    ) -> None:
+        """``train_args`` go into the checkpoints and ``summary.json``; the rest: train_il's."""
+        self.setup, self.out, self.train_args, self.say = setup, out, train_args, say
+        self.validate_every = validate_every or setup.validate_every
+        self.last_iteration, self.stop_after = last_iteration, stop_after
+        self.time_budget_s = time_budget_s
+        self.log = RunLog(
+            out,
+            IL_CSV_FIELDS,
+            setup.name,
+            rows,
+            "env_return",
+            "env return (handcrafted,\nfinished episodes)",
+        )
+        self.history = list(history)
+        self.milestones = Milestones()
+        for h in history:
+            self.milestones.add(h)
+        self.best = max(history, key=_rank) if history else None
+        self.wall_offset_s = float(history[-1]["wall_time_s"]) if history else 0.0
+        self.start = time.perf_counter()
+        self.stop_reason = "iterations"
+        self.specs = validation_episodes()
+        self.reference = expert_reference(self.specs)
+
+    def session_s(self) -> float:
+        return time.perf_counter() - self.start
+
+    def on_iteration(self, s: IterationStats, agent: GAILAgent) -> bool:
+        wall = self.wall_offset_s + self.session_s()
+        row: dict[str, Any] = {
+            "iteration": s.iteration,
+            "env_steps": s.env_steps,
+            "wall_time_s": round(wall, 3),
+            "episodes": s.episodes,
+            "env_return": s.mean_return,
+            **log_row(s.update),
+        }
+        self.log.rows.append(row)
+        stop = False
+        if s.iteration % self.validate_every == 0 or s.iteration == self.last_iteration:
+            stop = self._validate(s, agent, row, wall)
+        if not stop and 0 < self.time_budget_s <= self.session_s():
+            self.stop_reason, stop = "time budget", True
+        return stop
+
+    def _validate(
+        self, s: IterationStats, agent: GAILAgent, row: dict[str, Any], wall: float
+    ) -> bool:
+        val = validate_il(agent, self.setup, self.specs, self.reference)
+        u = s.update
+        assert isinstance(u, GAILStats)
+        rec = validation_record(
+            row,
+            wall,
+            val,
+            env_return=s.mean_return,
+            kl=s.kl,
+            entropy=s.entropy,
+            expert_accuracy=u.expert_accuracy,
+            policy_accuracy=u.policy_accuracy,
+            goal_rate=u.goal_rate,
+        )
+        self.history.append(rec)
+        self.milestones.add(rec)
+        self.say(
+            f"it {s.iteration:4d} {rec['wall_time_s']:6.0f}s val {rec['successes']:2d}/15 "
+            f"min d_pole {rec['min_pole_distance_m']:5.1f} m  D acc E/π "
+            f"{u.expert_accuracy:.2f}/{u.policy_accuracy:.2f}  goal {u.goal_rate:.2f}  "
+            f"path-to-expert {rec['path_distance_m']:4.1f} m"
+        )
+        ck = _checkpoint(agent, self.setup, self.train_args, rec, self.history)
+        if self.best is None or _rank(rec) > _rank(self.best):
+            self.best = rec
+            save_checkpoint(ck, self.out / "best.pt")
+        save_checkpoint(ck, self.out / "latest.pt")
+        with atomic_open(self.out / "latest.gail.pt", "wb") as handle:
+            torch.save(agent.trainer.state_dict(), handle)
+        self.log.write(plot=self.log.plot_due())
+        reason = self.milestones.stop_reason(self.stop_after)
+        self.stop_reason = reason or self.stop_reason
+        return bool(reason)
+
+    def result(self, agent: GAILAgent, wall_s: float) -> RunResult:
+        """Write ``summary.json``; the run's :class:`ILRunResult`."""
+        summary = {
+            "setup": self.setup.name,
+            "seed": self.train_args["seed"],
+            "command": self.train_args["command"],
+            "iterations": agent.iteration,
+            "env_steps": agent.env_steps,
+            "wall_time_s": wall_s,
+            "stop_reason": self.stop_reason,
+            "first_14_of_15": self.milestones.first_14_of_15,
+            "first_15_of_15": self.milestones.first_full,
+            "best": self.best,
+            "study_success": self.setup.study_success,
+            "study_iterations": self.setup.study_iterations,
+            "threads": torch.get_num_threads(),
+            "demonstrations": self.train_args["demos"],
+        }
+        atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        return RunResult(
+            self.best,
+            self.history,
+            self.out / "best.pt",
+            self.out / "latest.pt",
+            agent.iteration,
+            agent.env_steps,
+            wall_s,
+            self.stop_reason,
+            self.milestones.first_full,
+        )
+
+
+def train_il(
+    setup: ILSetup,
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    iterations: int | None = None,
+    resume: bool = False,
+    threads: int = 1,
+    validate_every: int = 0,
+    stop_after: int = 0,
+    time_budget_s: float = 0.0,
+    quiet: bool = True,
+    command: str = "",
+    demos_dir: str | Path = DEMOS_DIR,
+    log: Callable[[str], None] = print,
+) -> ILRunResult:
+    """Train ``setup`` by GAIL, writing into ``out_dir`` the files of ``usvsim train``
+    (:mod:`learning.cli.train`; ``log.csv`` columns :data:`IL_CSV_FIELDS`).
+
+    ``best.pt`` is the best validation checkpoint (most successes, then the smallest path
+    distance to the expert, :mod:`usvsim.evaluation.likeness`), ``latest.pt`` the last one and
+    ``latest.gail.pt`` its discriminator state; ``resume`` continues from those two with the
+    setup, hyperparameters and seed stored there, and keeps ``log.csv`` up to their iteration.
+    Validation every ``validate_every`` iterations (0: the setup's) and at the last one; the
+    run stops after ``stop_after`` consecutive 15/15 validations (0: never) or once this
+    session has run ``time_budget_s`` (0: no limit). ``quiet``: no progress bar; ``log``
+    prints one line per validation. ``threads``: torch CPU threads (on 2 shared cores, 2
+    threads made an iteration 20× slower than 1 when measured).
+
+    Raises ``CheckpointError`` when ``resume`` finds no usable checkpoint of ``setup``, and
+    ``NonFiniteError`` / ``NonFiniteWeightsError`` (after writing ``log.csv``) when an update
+    goes non-finite; nothing is saved after such a failure.
+    """
+    torch.set_num_threads(max(1, threads))
+    out = Path(out_dir)
+    state: dict[str, Any] | None = None
+    history: list[dict[str, Any]] = []
+    rows: list[dict[str, Any]] = []
+    if resume:
+        setup, state, history = _resume_state(setup, out / "latest.pt")
+        seed = int(state["agent"]["config"]["seed"])
+        rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
+    out.mkdir(parents=True, exist_ok=True)
+    data, n_demos = _expert_pairs(setup, demos_dir, log)
+    cfg = setup.run_config(seed, iterations)
+    train_args = {
+        "seed": seed,
+        "iterations": iterations,
+        "demos": n_demos,
+        "validate_every": validate_every,
+        "stop_after": stop_after,
+        "time_budget_s": time_budget_s,
+        "command": command
+        or f"learning.experiments.train_il.train_il({setup.name!r}, seed={seed})",
+    }
+    start_iteration = int(state["agent"]["iteration"]) if state is not None else 0
+    bar = progress_bar(cfg.iterations, start_iteration, setup.name, quiet)
+
+    def say(message: str) -> None:
+        with bar.external_write_mode():
+            log(message)
+
+    run = _ILRun(
+        setup,
+        out,
+        train_args=train_args,
+        last_iteration=cfg.iterations,
+        validate_every=validate_every,
+        stop_after=stop_after,
+        time_budget_s=time_budget_s,
+        rows=rows,
+        history=history,
+        say=say,
+    )
+
+    def callback(s: IterationStats, agent: GAILAgent) -> bool:
+        stop = run.on_iteration(s, agent)
+        advance(bar, s.mean_return, s.kl, run.history[-1] if run.history else None)
+        return stop
+
+    def make_env(n: int) -> PoleAvoidanceVectorEnv:
+        return PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
+
+    run.start = time.perf_counter()  # the clock counts GAIL, warm start included
+    try:
+        agent = train_gail(
+            setup.gail,
+            cfg,
+            make_env,
+            data,
+            callback=callback,
+            state=state,
+        )
+    finally:
+        bar.close()
+        run.log.write()
+    return run.result(agent, run.wall_offset_s + run.session_s())
+
+
+def _expert_pairs(
+    setup: ILSetup, demos_dir: str | Path, log: Callable[[str], None]
+) -> tuple[ExpertData, int]:
+    """The (s, a) pairs of the demonstrations in ``demos_dir`` that pass the quality check, in
+    ``setup``'s observation and action kinds; and how many demonstrations that is."""
+    report = load_recordings(demos_dir)
+    for path, why in report.errors.items():
+        log(f"skipping {path}: {why}")
+    kept = [r for r in report.recordings if not quality_check(r)]
+    data = expert_data(kept, setup.observation, setup.action)
+    log(f"{setup.name}: {len(kept)}/{len(report.recordings)} demonstrations, {len(data)} pairs")
+    return data, len(kept)
+
+
+def _resume_state(
+    setup: ILSetup, path: Path
+) -> tuple[ILSetup, dict[str, Any], list[dict[str, Any]]]:
+    """The setup stored in ``path`` (a ``latest.pt`` of ``setup``), the agent and
+    discriminator state to resume, and the validation history."""
+    ck = load_checkpoint(path)
+    if ck.setup != setup.name:
+        raise CheckpointError(
+            f"{path}: checkpoint is for setup {ck.setup!r}, expected {setup.name!r}"
+        )
+    gail_path = path.with_suffix(".gail.pt")
+    if not gail_path.is_file():
+        raise CheckpointError(f"{gail_path} is missing (the discriminator of {path.name})")
+    stored = setup_from_params(setup, ck.setup_params)
+    gail_state = torch.load(gail_path, weights_only=True)
+    return stored, {"agent": ck.agent, "gail": gail_state}, ck.history
+
+
+def _rank(rec: dict[str, Any]) -> tuple[int, float]:
+    """Most validation successes first, then the most expert-like path (the point of IL)."""
+    d = rec.get("path_distance_m", math.inf)
+    return int(rec["successes"]), -d if math.isfinite(d) else -math.inf

@@ -1,0 +1,229 @@
+"""One RL training run (``usvsim train rl-*``): the setup's algorithm (TRPO) through the generic
+loop (:func:`learning.algorithms.loop.train`), validation every ``validate_every`` iterations,
+checkpoints, early stop, and the run's files (``log.csv``, ``curve.png``, ``latest.pt``,
+``best.pt``, ``summary.json``; table in :mod:`learning.cli.train`).
+
+``log.csv`` columns (:func:`csv_fields`): :data:`COMMON_FIELDS`, then the algorithm's
+``UpdateStats.LOG_FIELDS`` (TRPO: kl, entropy, surrogate_improvement, line_search_accepted,
+value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from learning.algorithms.base import Agent, log_row
+from learning.algorithms.loop import IterationStats, train
+from learning.algorithms.registry import get_algorithm
+from learning.algorithms.rollout import NonFiniteError
+from learning.experiments.checkpoint import (
+    Checkpoint,
+    CheckpointError,
+    NonFiniteWeightsError,
+    load_checkpoint,
+    save_checkpoint,
+)
+from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
+from learning.experiments.setups import RLSetup, setup_from_params
+from learning.experiments.validation import RunResult, validate, validation_record
+from usvsim.common.fileio import atomic_write_text
+
+__all__ = ["COMMON_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
+
+COMMON_FIELDS = ("iteration", "env_steps", "wall_time_s", "episodes", "mean_return", "mean_length")
+VALIDATION_FIELDS = ("val_successes", "val_mean_return", "val_min_pole_distance_m")
+
+
+def csv_fields(setup: RLSetup) -> tuple[str, ...]:
+    """The ``log.csv`` columns of a run of ``setup`` (module docstring)."""
+    stats = get_algorithm(setup.algorithm).stats_type
+    return COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS
+
+
+class _Run:
+    """State of one training run: files, log rows, validation history, the stopping rule."""
+
+    def __init__(
+        self,
+        setup: RLSetup,
+        out: Path,
+        rows: list[dict[str, Any]],
+        *,
+        train_args: dict[str, Any],
+        validate_every: int,
+        stop_after: int,
+        time_budget_s: float,
+    ) -> None:
+        self.setup, self.out, self.train_args = setup, out, train_args
+        self.log = RunLog(out, csv_fields(setup), setup.name, rows)
+        self.rows = self.log.rows
+        self.history: list[dict[str, Any]] = []
+        self.best: tuple[int, float] | None = None
+        self.milestones = Milestones()
+        self.stop_reason = "iterations"
+        self.wall_offset_s = 0.0  # wall-clock of the run before a resume
+        self.validate_every = validate_every or setup.validate_every
+        self.stop_after, self.time_budget_s = stop_after, time_budget_s
+
+    def restore(self, history: list[dict[str, Any]]) -> None:
+        """Continue the validation bookkeeping of a resumed run from its stored history."""
+        self.history = list(history)
+        self.wall_offset_s = float(history[-1]["wall_time_s"]) if history else 0.0
+        for h in history:
+            self.milestones.add(h)
+            key = (int(h["successes"]), float(h["mean_return"]))
+            self.best = key if self.best is None or key > self.best else self.best
+
+    def on_iteration(self, stats: IterationStats, agent: Agent) -> bool:
+        wall = self.wall_offset_s + stats.wall_time_s
+        row: dict[str, Any] = {
+            "iteration": stats.iteration,
+            "env_steps": stats.env_steps,
+            "wall_time_s": round(wall, 3),
+            "episodes": stats.episodes,
+            "mean_return": stats.mean_return,
+            "mean_length": stats.mean_length,
+            **log_row(stats.update),
+        }
+        self.rows.append(row)
+        stop = False
+        if stats.iteration % self.validate_every == 0:
+            stop = self._validate(stats, agent, row, wall)
+        if not stop and self.time_budget_s > 0 and stats.wall_time_s >= self.time_budget_s:
+            self.stop_reason, stop = "time budget", True
+        return stop
+
+    def _validate(
+        self, stats: IterationStats, agent: Agent, row: dict[str, Any], wall: float
+    ) -> bool:
+        val = validate(agent, self.setup)
+        record = validation_record(row, wall, val, kl=stats.kl, entropy=stats.entropy)
+        self.history.append(record)
+        self.milestones.add(record)
+        ckpt = Checkpoint.from_agent(
+            agent,
+            self.setup,
+            train_args=self.train_args,
+            validation=record,
+            history=self.history,
+        )
+        save_checkpoint(ckpt, self.out / "latest.pt")
+        key = (int(val["successes"]), float(val["mean_return"]))
+        if self.best is None or key > self.best:
+            self.best = key
+            save_checkpoint(ckpt, self.out / "best.pt")
+        self.log.write(plot=self.log.plot_due())
+        reason = self.milestones.stop_reason(self.stop_after)
+        if reason:
+            self.stop_reason = reason
+            return True
+        return False
+
+    def result(self, agent: Agent, wall_s: float, seed: int, command: str) -> RunResult:
+        """Write ``summary.json``; the run's :class:`RunResult`."""
+        best = None
+        if self.best is not None:
+            best = {"successes": self.best[0], "mean_return": self.best[1]}
+        summary = {
+            "setup": self.setup.name,
+            "seed": seed,
+            "command": command,
+            "iterations": agent.iteration,
+            "env_steps": agent.env_steps,
+            "wall_time_s": wall_s,
+            "stop_reason": self.stop_reason,
+            "first_15_of_15": self.milestones.first_full,
+            "best": best,
+            "study_iterations": self.setup.study_iterations,
+            "threads": torch.get_num_threads(),
+        }
+        atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        return RunResult(
+            best,
+            self.history,
+            self.out / "best.pt",
+            self.out / "latest.pt",
+            agent.iteration,
+            agent.env_steps,
+            wall_s,
+            self.stop_reason,
+            self.milestones.first_full,
+        )
+
+
+def train_rl(
+    setup: RLSetup,
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    iterations: int | None = None,
+    resume: bool = False,
+    validate_every: int = 0,
+    stop_after: int = 3,
+    time_budget_s: float = 0.0,
+    quiet: bool = True,
+    train_args: dict[str, Any] | None = None,
+    command: str = "",
+) -> RunResult:
+    """Train ``setup`` into ``out_dir`` (module docstring).
+
+    Validation every ``validate_every`` iterations (0: the setup's); the run stops after
+    ``stop_after`` consecutive 15/15 validations (0: never) or once it has run
+    ``time_budget_s`` (0: no limit). ``resume`` continues from ``out_dir/latest.pt`` with the
+    setup, hyperparameters and seed stored there and keeps ``log.csv`` up to its iteration.
+    ``train_args`` go into the checkpoints, ``command`` into ``summary.json``.
+
+    Raises ``CheckpointError`` when ``resume`` finds no usable full checkpoint of ``setup``, and
+    ``NonFiniteError`` / ``NonFiniteWeightsError`` (after writing ``log.csv``, naming the
+    iteration) when an update goes non-finite; nothing is saved after such a failure.
+    """
+    out = Path(out_dir)
+    state: dict[str, Any] | None = None
+    rows: list[dict[str, Any]] = []
+    history: list[dict[str, Any]] = []
+    if resume:
+        ckpt = load_checkpoint(out / "latest.pt", expected_setup=setup)
+        if ckpt.slim:
+            raise CheckpointError(f"{out / 'latest.pt'}: slim checkpoint (no critic)")
+        setup = setup_from_params(setup, ckpt.setup_params)
+        state, history = ckpt.agent, ckpt.history
+        rows = read_log_rows(out / "log.csv", int(state["iteration"]))
+    config = setup.run_config(seed, iterations)
+    if state is not None:
+        config = dataclasses.replace(config, seed=int(state["config"]["seed"]))
+    out.mkdir(parents=True, exist_ok=True)
+    r = _Run(
+        setup,
+        out,
+        rows,
+        train_args=dict(train_args or {}),
+        validate_every=validate_every,
+        stop_after=stop_after,
+        time_budget_s=time_budget_s,
+    )
+    r.restore(history)
+    start_iteration = int(state["iteration"]) if state is not None else 0
+    bar = progress_bar(config.iterations, start_iteration, setup.name, quiet)
+
+    def callback(stats: IterationStats, agent: Agent) -> bool:
+        stop = r.on_iteration(stats, agent)
+        advance(bar, stats.mean_return, stats.kl, r.history[-1] if r.history else None)
+        return stop
+
+    t0 = time.perf_counter()
+    try:
+        agent = train(config, setup.make_vector_env, callback=callback, state=state)
+    except (NonFiniteError, NonFiniteWeightsError) as err:
+        r.log.write()
+        raise type(err)(f"{err}; stopped at iteration {len(r.rows) + 1}") from err
+    finally:
+        bar.close()
+    wall = r.wall_offset_s + time.perf_counter() - t0
+    r.log.write()
+    return r.result(agent, wall, seed, command)
