@@ -22,7 +22,7 @@ from learning.algorithms.networks import NetworkConfig, make_trunk
 from learning.algorithms.rollout import Obs, RolloutBatch, flatten_obs
 from learning.imitation.preprocess import ExpertData
 from usvsim.task.batch import N_CATEGORIES
-from usvsim.task.observations import POSITIONAL_STANDARDISATION
+from usvsim.task.observations import POSITIONAL_STANDARDIZATION
 
 __all__ = [
     "N_ABSORBING",
@@ -172,7 +172,7 @@ class GAILTrainer:
             }
         if obs.dtype == np.uint8:
             return {"image": torch.as_tensor(obs, dtype=torch.float32) / 255.0}
-        return torch.as_tensor(POSITIONAL_STANDARDISATION.apply(obs))
+        return torch.as_tensor(POSITIONAL_STANDARDIZATION.apply(obs))
 
     @staticmethod
     def _az(a: NDArray[np.float32], z: NDArray[Any]) -> Tensor:
