@@ -13,7 +13,7 @@ from usvsim.evaluation.episodes import (
     evaluate,
     format_records,
     heldout_episodes,
-    summarise,
+    summarize,
     validation_episodes,
 )
 from usvsim.helm.protocol import RandomHelmsman, StraightAheadHelmsman
@@ -71,7 +71,7 @@ def test_heldout_set_is_fixed_and_separate():
 def test_straight_ahead_hits_the_pole_in_all_15_validation_episodes(straight_records):
     hits = [r.collision or r.min_pole_distance_m < 10.0 for r in straight_records]
     assert sum(hits) == 15
-    assert summarise(straight_records).success_rate == 0.0
+    assert summarize(straight_records).success_rate == 0.0
 
 
 def test_records_are_consistent(straight_records):
@@ -99,7 +99,7 @@ def test_records_do_not_depend_on_the_batch(plant):
 
 def test_a_simple_avoider_succeeds_where_straight_ahead_fails(plant):
     records = evaluate(BearingKeeper(), validation_episodes(), plant=plant)
-    s = summarise(records)
+    s = summarize(records)
     assert s.success_rate > 0.5
     ok = [r for r in records if r.success]
     assert all(r.reached_goal and r.min_pole_distance_m >= 10.0 for r in ok)

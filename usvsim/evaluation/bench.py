@@ -52,7 +52,7 @@ __all__ = [
     "plot_pole_paths",
     "plot_waypoint_paths",
     "run_bench",
-    "summarise_set",
+    "summarize_set",
     "to_csv",
     "to_json",
     "to_markdown",
@@ -129,7 +129,7 @@ class BenchRow:
         }
 
 
-def summarise_set(
+def summarize_set(
     helmsman: str, episode_set: str, records: Sequence[_Record], wall_s: float
 ) -> BenchRow:
     """The table row of ``records`` (see the module docstring for the columns)."""
@@ -205,7 +205,7 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
         t0 = time.perf_counter()
         evaluator = evaluate if args.scenario == "pole" else evaluate_waypoints
         recs = evaluator(helmsman, sets[set_name], observation=obs_kind, action=act_kind)
-        row = summarise_set(name, set_name, recs, time.perf_counter() - t0)
+        row = summarize_set(name, set_name, recs, time.perf_counter() - t0)
         if reference is not None and set_name == "validation":
             row = _with_likeness(row, recs, reference)
         rows.append(row)

@@ -43,7 +43,7 @@ __all__ = [
     "evaluate",
     "format_records",
     "heldout_episodes",
-    "summarise",
+    "summarize",
     "validation_episodes",
 ]
 
@@ -239,7 +239,7 @@ class EvaluationSummary:
     mean_time_to_goal_s: float  # over episodes that reached the goal; NaN if none
 
 
-def summarise(
+def summarize(
     records: Sequence[EpisodeRecord], safety_distance_m: float = 10.0
 ) -> EvaluationSummary:
     """Success, collision and hit rates and pole distances of ``records``."""

@@ -13,7 +13,7 @@ name            single-boat value                            space
 
 Ranges in m; bearings in rad relative to the estimated heading, clockwise positive, in [-π, π)
 (:func:`usvsim.common.angles.ssa`). The positional observation is left raw (the study's definition);
-networks standardise it with :data:`POSITIONAL_STANDARDISATION`. The goal vector of ``radar+goal``
+networks standardise it with :data:`POSITIONAL_STANDARDIZATION`. The goal vector of ``radar+goal``
 is standardised inside the observation because it joins the CNN late (study, Sect. "Networks").
 
 Standardisation constants: the mean and standard deviation of a uniform distribution over each
@@ -37,11 +37,11 @@ from usvsim.common.angles import ssa
 from usvsim.task.radar import RadarConfig, UniformSource, render_radar
 
 __all__ = [
-    "GOAL_STANDARDISATION",
+    "GOAL_STANDARDIZATION",
     "OBSERVATION_KINDS",
-    "POSITIONAL_STANDARDISATION",
+    "POSITIONAL_STANDARDIZATION",
     "ObservationKind",
-    "Standardisation",
+    "Standardization",
     "build_observation",
     "observation_space",
     "parse_observation_kind",
@@ -54,7 +54,7 @@ FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class Standardisation:
+class Standardization:
     """``(x - mean) / std`` element-wise over the last axis."""
 
     mean: tuple[float, ...]
@@ -67,10 +67,10 @@ class Standardisation:
 
 MAX_RANGE_M = 10_000.0  # m, Box bound on ranges: far beyond any area (an episode ends first)
 _BEARING_STD = math.pi / math.sqrt(3.0)  # std of U[-π, π)
-GOAL_STANDARDISATION = Standardisation(
+GOAL_STANDARDIZATION = Standardization(
     mean=(110.0, 0.0), std=(220.0 / math.sqrt(12.0), _BEARING_STD)
 )
-POSITIONAL_STANDARDISATION = Standardisation(
+POSITIONAL_STANDARDIZATION = Standardization(
     mean=(50.0, 0.0, 110.0, 0.0),
     std=(100.0 / math.sqrt(12.0), _BEARING_STD, 220.0 / math.sqrt(12.0), _BEARING_STD),
 )
@@ -118,8 +118,8 @@ def observation_space(kind: ObservationKind, radar: RadarConfig | None = None) -
         return spaces.Box(low, high, dtype=np.float32)
     if kind == "radar":
         return image
-    goal_high = GOAL_STANDARDISATION.apply(np.array([MAX_RANGE_M, np.pi]))
-    goal_low = GOAL_STANDARDISATION.apply(np.array([0.0, -np.pi]))
+    goal_high = GOAL_STANDARDIZATION.apply(np.array([MAX_RANGE_M, np.pi]))
+    goal_low = GOAL_STANDARDIZATION.apply(np.array([0.0, -np.pi]))
     goal = spaces.Box(goal_low, goal_high, dtype=np.float32)
     return spaces.Dict({"radar": image, "goal": goal})
 
@@ -151,5 +151,5 @@ def build_observation(
     if kind == "radar":
         return image
     r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
-    goal = GOAL_STANDARDISATION.apply(np.stack([r_g, b_g], axis=-1))
+    goal = GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], axis=-1))
     return {"radar": image, "goal": goal}
