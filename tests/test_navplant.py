@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usvsim.nav.compiled import build_nav_step
-from usvsim.nav.filter import Navigator, export_nav_state
+from usvsim.nav.compiled import build_nav_step, export_nav_state
+from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import NavigatedPlant
 from usvsim.vessel.plant import Plant

@@ -17,13 +17,57 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa_casadi
-from usvsim.nav.filter import NAV_NS
-from usvsim.nav.models import NavConfig, heading_filter_model, position_filter_model
+from usvsim.nav.filter import Navigator
+from usvsim.nav.kalman import FilterNoise, HeadingState, PositionState
+from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import period_steps
 
-__all__ = ["NAV_NOISE", "build_nav_step", "nav_draws_per_step", "nav_noise_block"]
+__all__ = [
+    "NAV_NOISE",
+    "NAV_NS",
+    "NAV_STATE_FIELDS",
+    "build_nav_step",
+    "export_nav_state",
+    "import_nav_state",
+    "nav_draws_per_step",
+    "nav_noise_block",
+]
 
 FloatArray = NDArray[np.float64]
+
+#: Layout of the filter state of one boat (15 entries): :class:`PositionState` (complex numbers
+#: as real, imaginary pairs), :class:`HeadingState`, the true gyro bias and the yaw-rate estimate.
+NAV_STATE_FIELDS = (
+    "p_n", "p_e", "w_n", "w_e", "L_pp", "L_pw_re", "L_pw_im", "L_ww",
+    "psi", "b", "P_psi", "P_pb", "P_b", "gyro_bias", "yaw_rate",
+)  # fmt: skip
+NAV_NS = len(NAV_STATE_FIELDS)
+
+
+def export_nav_state(nav: Navigator) -> FloatArray:
+    """The navigator's filter states as an (N, 15) array (layout :data:`NAV_STATE_FIELDS`)."""
+    x, h = nav.filter_state
+    return np.column_stack([
+        x.p.real, x.p.imag, x.w.real, x.w.imag, x.L_pp, x.L_pw.real, x.L_pw.imag, x.L_ww,
+        h.psi, h.b, h.P_psi, h.P_pb, h.P_b, nav.true_gyro_bias, nav.estimate.yaw_rate,
+    ])  # fmt: skip
+
+
+def import_nav_state(nav: Navigator, state: FloatArray) -> None:
+    """Load (N, 15) filter states (from the compiled path) back into ``nav``."""
+    s = np.asarray(state, dtype=np.float64)
+    if s.shape != (nav.n_boats, NAV_NS):
+        raise ValueError(f"nav state must have shape ({nav.n_boats}, {NAV_NS}), got {s.shape}")
+    pos = PositionState(
+        p=s[:, 0] + 1j * s[:, 1],
+        w=s[:, 2] + 1j * s[:, 3],
+        L_pp=s[:, 4].copy(),
+        L_pw=s[:, 5] + 1j * s[:, 6],
+        L_ww=s[:, 7].copy(),
+    )
+    head = HeadingState(*(s[:, j].copy() for j in range(8, 13)))
+    nav.load_state(pos, head, yaw_rate=s[:, 14].copy(), true_gyro_bias=s[:, 13].copy())
+
 
 #: Standard normals one plant step consumes, in :meth:`Navigator.step`'s draw order.
 NAV_NOISE = ("gyro", "gps_n", "gps_e", "vel_n", "vel_e", "compass")
@@ -78,10 +122,9 @@ def build_nav_step(cfg: NavConfig) -> Any:
     circular position filter are carried as (real, imaginary) pairs.
     """
     s, dt = cfg.sensors, cfg.dt_s
-    pm, hm = position_filter_model(cfg), heading_filter_model(cfg)
-    q_pp, q_pw, q_ww = pm.Q[0, 0], pm.Q[0, 2], pm.Q[2, 2]
-    q_psi, q_bias, r_gps, r_c = hm.Q[0, 0], hm.Q[1, 1], pm.R[0, 0], hm.R[0, 0]
-    r_v = s.gps_velocity_sigma_mps**2
+    q = FilterNoise.from_config(cfg)  # the Navigator's numbers
+    q_pp, q_pw, q_ww, q_psi, q_bias = q.q_pp, q.q_pw, q.q_ww, q.q_psi, q.q_bias
+    r_gps, r_c, r_v = q.r_gps, q.r_compass, q.r_gps_vel
     n, x, e = ca.SX.sym("n", NAV_NS), ca.SX.sym("x", 8), ca.SX.sym("e", 8)
 
     def mul(a: tuple[Any, Any], b: tuple[Any, Any]) -> tuple[Any, Any]:

@@ -3,31 +3,12 @@
 Everything downstream (guidance, observations, the MAVLink bridge) reads the vessel's state from
 here, never from the plant's true state.
 
-The filter models and their configuration are in :mod:`usvsim.nav.models`; the compiled
-CasADi twin of :meth:`Navigator.step` in :mod:`usvsim.nav.compiled`.
-
-Batching (exact, no loop over boats)
-------------------------------------
-F differs per boat (it depends on ω) and a vector environment resets boats one at a time, so
-every boat has its own covariance (a single shared P, exact for the plain CV filter without
-resets, is not an option). Stored as ``(N, 4, 4)`` and updated with batched ``matmul``, a step
-cost ~270 µs at N = 256 on the 2-vCPU development VM, so we use an exact reduction instead
-(~100 µs there, most of it the ~70 NumPy calls' fixed overhead and the random draws). With
-isotropic ``Q`` and ``R`` and an isotropic start, the position covariance stays *circularly
-symmetric*: write the position and velocity as complex numbers ``p = x_N + i y_E``,
-``w = v_N + i v_E``; the rotation ``[[c, −s], [s, c]]`` is multiplication by ``e^{iθ}`` and the
-filter is a 2-state complex Kalman filter (Picinbono 1996, *IEEE TSP* 44(10), second-order
-circularity) whose Hermitian covariance ``Λ`` holds 4 real numbers per boat. The real
-covariance is recovered exactly as (see :meth:`Navigator.position_covariance`)::
-
-    P = [[Λ_pp, 0,     Re Λ_pw, −Im Λ_pw],
-         [0,    Λ_pp,  Im Λ_pw,  Re Λ_pw],
-         [Re,   Im,    Λ_ww,     0      ],
-         [−Im,  Re,    0,        Λ_ww   ]]
-
-The 2×2 heading covariance is kept as its three entries per boat. All updates are then
-element-wise on ``(N,)`` arrays; the tests check both filters against filterpy's ``KalmanFilter``
-run per boat on the full 4×4 / 2×2 model, to 1e-9.
+The filter models and their configuration are in :mod:`usvsim.nav.models`, their update
+equations (exact, element-wise over the boats) in :mod:`usvsim.nav.kalman`, the compiled CasADi
+twin of :meth:`Navigator.step` in :mod:`usvsim.nav.compiled`. :meth:`Navigator.reset` and
+:meth:`Navigator.step` simulate the sensors from the true state, then run the measurement-driven
+:meth:`Navigator.start` and :meth:`Navigator.fuse`, which also serve real readings (the MAVLink
+bridge's :class:`usvsim.nav.telemetry.TelemetryEstimator`).
 
 Timing convention
 -----------------
@@ -52,13 +33,24 @@ name              shape           meaning
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
-from usvsim.nav.models import NavConfig, heading_filter_model, position_filter_model, turn_factors
+from usvsim.nav.kalman import (
+    FilterNoise,
+    HeadingState,
+    PositionState,
+    predict_heading,
+    predict_position,
+    update_heading,
+    update_position,
+    update_velocity,
+)
+from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import (
     _as_checked,
     _check_step_index,
@@ -70,14 +62,7 @@ from usvsim.nav.sensors import (
     sample_gyro_bias,
 )
 
-__all__ = [
-    "NAV_NS",
-    "NAV_STATE_FIELDS",
-    "NavEstimate",
-    "Navigator",
-    "export_nav_state",
-    "import_nav_state",
-]
+__all__ = ["NavEstimate", "Navigator"]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -151,24 +136,17 @@ class Navigator:
             raise ValueError(f"n_boats must be a positive integer, got {n_boats!r}")
         self.cfg = cfg
         self.n_boats = int(n_boats)
-        pm, hm = position_filter_model(cfg), heading_filter_model(cfg)
-        # Per-axis entries of the (isotropic) position Q and R; see the module docstring.
-        self._q_pp, self._q_pw, self._q_ww = pm.Q[0, 0], pm.Q[0, 2], pm.Q[2, 2]
-        self._r_gps = pm.R[0, 0]
-        self._r_gps_vel = cfg.sensors.gps_velocity_sigma_mps**2
-        self._q_psi, self._q_bias = hm.Q[0, 0], hm.Q[1, 1]
-        self._r_compass = hm.R[0, 0]
+        self._noise = FilterNoise.from_config(cfg)
         self._gps_period = period_steps(cfg.sensors.gps_rate_hz, cfg.dt_s)
         self._compass_period = period_steps(cfg.sensors.compass_rate_hz, cfg.dt_s)
 
         n = self.n_boats
         nan, cnan = np.full(n, np.nan), np.full(n, np.nan + 0j)
-        # Position filter: complex means p = x_N + i y_E, w = v_N + i v_E; covariance Λ.
-        self._p, self._w, self._L_pw = cnan, cnan.copy(), cnan.copy()
-        self._L_pp, self._L_ww = nan, nan.copy()
-        # Heading filter: means ψ, b̂; covariance [[P_psi, P_pb], [P_pb, P_b]].
-        self._psi, self._b, self._yaw_rate = nan.copy(), nan.copy(), nan.copy()
-        self._P_psi, self._P_pb, self._P_b = nan.copy(), nan.copy(), nan.copy()
+        self._pos = PositionState(
+            p=cnan, w=cnan.copy(), L_pp=nan, L_pw=cnan.copy(), L_ww=nan.copy()
+        )
+        self._head = HeadingState(*(nan.copy() for _ in range(5)))
+        self._yaw_rate = nan.copy()  # bias-corrected gyro rate g − b̂, rad/s
         self._gyro_bias = nan.copy()  # true bias of each boat's gyro, rad/s
         self._ready = np.zeros(n, dtype=bool)
         self._all_ready = False
@@ -206,16 +184,7 @@ class Navigator:
             The estimate of all N boats after the reset.
         """
         eta, nu = self._check_states(eta, nu)
-        if mask is None:
-            idx = np.arange(self.n_boats)
-        else:
-            m = np.asarray(mask)
-            if m.dtype != np.bool_ or m.shape != (self.n_boats,):
-                raise ValueError(
-                    f"mask must be a bool array of shape ({self.n_boats},), "
-                    f"got dtype {m.dtype} and shape {m.shape}"
-                )
-            idx = np.flatnonzero(m)
+        idx = self._boats(mask)
         s, k = self.cfg.sensors, idx.size
         psi_true = eta[idx, 2]
         gps = _draw_gps(eta[idx, :2], rng, s)
@@ -225,25 +194,82 @@ class Navigator:
         w = w + _as_complex(rng.normal(0.0, self.cfg.init_vel_sigma_mps, size=(k, 2)))
         bias = sample_gyro_bias(k, rng, s)
         gyro = _draw_gyro(nu[idx, 2], bias, rng, s)
+        self._gyro_bias = self._gyro_bias.copy()  # copy: earlier estimates may view it
+        self._gyro_bias[idx] = bias
+        return self._start(idx, _as_complex(gps), w, compass, gyro)
 
-        new = {
-            "_p": _as_complex(gps),
-            "_w": w,
-            "_L_pp": s.gps_sigma_m**2,
-            "_L_pw": 0.0,
-            "_L_ww": self.cfg.init_vel_sigma_mps**2,
-            "_psi": compass,
-            "_b": 0.0,
-            "_P_psi": s.compass_sigma_rad**2,
-            "_P_pb": 0.0,
-            "_P_b": s.gyro_bias_sigma_radps**2,
-            "_gyro_bias": bias,
-            "_yaw_rate": gyro,
-        }
-        for name, value in new.items():
-            array = getattr(self, name).copy()  # copy: earlier NavEstimates view the old one
-            array[idx] = value
-            setattr(self, name, array)
+    def start(
+        self,
+        pos_ne: FloatArray,
+        vel_ne: FloatArray,
+        heading_rad: FloatArray,
+        gyro_radps: FloatArray,
+        mask: NDArray[np.bool_] | None = None,
+    ) -> NavEstimate:
+        """Start the filters of (some) boats at a given first fix (real sensors, telemetry).
+
+        The measurement-driven half of :meth:`reset`, which draws these readings from the true
+        state and then calls it; same means and covariances. Rows outside ``mask`` are not used.
+
+        Parameters
+        ----------
+        pos_ne : ndarray, shape (N, 2)
+            GNSS position [x_N, y_E] (m).
+        vel_ne : ndarray, shape (N, 2)
+            GNSS velocity over ground [v_N, v_E] (m/s).
+        heading_rad : ndarray, shape (N,)
+            Compass heading (rad).
+        gyro_radps : ndarray, shape (N,)
+            Gyro yaw rate (rad/s); the first yaw-rate estimate (the bias estimate starts at 0).
+        mask : ndarray of bool, shape (N,), optional
+            Boats to start; default all.
+
+        Returns
+        -------
+        NavEstimate
+            The estimate of all N boats.
+        """
+        idx = self._boats(mask)
+        pos, vel = (
+            self._checked_rows("pos_ne", pos_ne, (2,)),
+            self._checked_rows("vel_ne", vel_ne, (2,)),
+        )
+        psi = self._checked_rows("heading_rad", heading_rad, ())
+        gyro = self._checked_rows("gyro_radps", gyro_radps, ())
+        return self._start(idx, _as_complex(pos[idx]), _as_complex(vel[idx]), psi[idx], gyro[idx])
+
+    def _start(
+        self,
+        idx: NDArray[np.intp],
+        p: ComplexArray,
+        w: ComplexArray,
+        psi: FloatArray,
+        gyro: FloatArray,
+    ) -> NavEstimate:
+        """Set boats ``idx`` to the first fix ``p``, ``w`` (complex NE), ``psi`` and ``gyro``."""
+        s = self.cfg.sensors
+
+        def rows(old: NDArray[Any], value: object) -> NDArray[Any]:
+            new = old.copy()  # copy: earlier NavEstimates view the old array
+            new[idx] = value
+            return new
+
+        x, h = self._pos, self._head
+        self._pos = PositionState(
+            p=rows(x.p, p),
+            w=rows(x.w, w),
+            L_pp=rows(x.L_pp, s.gps_sigma_m**2),
+            L_pw=rows(x.L_pw, 0.0),
+            L_ww=rows(x.L_ww, self.cfg.init_vel_sigma_mps**2),
+        )
+        self._head = HeadingState(
+            psi=rows(h.psi, psi),
+            b=rows(h.b, 0.0),
+            P_psi=rows(h.P_psi, s.compass_sigma_rad**2),
+            P_pb=rows(h.P_pb, 0.0),
+            P_b=rows(h.P_b, s.gyro_bias_sigma_radps**2),
+        )
+        self._yaw_rate = rows(self._yaw_rate, gyro)
         self._ready[idx] = True
         self._all_ready = bool(self._ready.all())
         return self.estimate
@@ -252,13 +278,16 @@ class Navigator:
     def estimate(self) -> NavEstimate:
         """Current estimate of all N boats (arrays of shape (N, ...), read them, don't write)."""
         return NavEstimate(
-            pos_ne=_as_ne(self._p), vel_ne=_as_ne(self._w), psi=self._psi, yaw_rate=self._yaw_rate
+            pos_ne=_as_ne(self._pos.p),
+            vel_ne=_as_ne(self._pos.w),
+            psi=self._head.psi,
+            yaw_rate=self._yaw_rate,
         )
 
     @property
     def gyro_bias_estimate(self) -> FloatArray:
         """Estimated gyro bias b̂ of each boat (rad/s), shape (N,)."""
-        return self._b
+        return self._head.b
 
     @property
     def true_gyro_bias(self) -> FloatArray:
@@ -268,16 +297,28 @@ class Navigator:
     @property
     def position_covariance(self) -> FloatArray:
         """Covariance of ``[x_N, y_E, v_N, v_E]``, shape (N, 4, 4) (m², m²/s, m²/s²)."""
-        pp, ww, re, im = self._L_pp, self._L_ww, self._L_pw.real, self._L_pw.imag
-        zero = np.zeros_like(pp)
-        rows = [[pp, zero, re, -im], [zero, pp, im, re], [re, im, ww, zero], [-im, re, zero, ww]]
-        return np.stack([np.stack(row, -1) for row in rows], -2)
+        return self._pos.covariance
 
     @property
     def heading_covariance(self) -> FloatArray:
         """Covariance of ``[ψ, b]``, shape (N, 2, 2) (rad², rad²/s, rad²/s²)."""
-        rows = [[self._P_psi, self._P_pb], [self._P_pb, self._P_b]]
-        return np.stack([np.stack(row, -1) for row in rows], -2)
+        return self._head.covariance
+
+    @property
+    def filter_state(self) -> tuple[PositionState, HeadingState]:
+        """Means and covariances of both filters of all N boats (read them, don't write)."""
+        return self._pos, self._head
+
+    def load_state(
+        self,
+        pos: PositionState,
+        head: HeadingState,
+        yaw_rate: FloatArray,
+        true_gyro_bias: FloatArray,
+    ) -> None:
+        """Replace the filter states of all N boats (e.g. stepped in compiled code), shapes (N,)."""
+        self._pos, self._head = pos, head
+        self._yaw_rate, self._gyro_bias = yaw_rate, true_gyro_bias
 
     def step(
         self,
@@ -318,85 +359,88 @@ class Navigator:
         eta, nu = self._check_states(eta_true, nu_true)
         s = self.cfg.sensors
         gyro = _draw_gyro(nu[:, 2], self._gyro_bias, rng, s)
-        self._predict(gyro)
+        gps = vel = compass = None
         if k % self._gps_period == 0:
-            self._update_position(_as_complex(_draw_gps(eta[:, :2], rng, s)))
+            gps = _draw_gps(eta[:, :2], rng, s)
             if self.cfg.gnss_velocity:
                 # true velocity over ground R(ψ)[u, v] = (u + i v) e^{iψ}
-                vel = (nu[:, 0] + 1j * nu[:, 1]) * np.exp(1j * eta[:, 2])
-                self._update_velocity(_as_complex(_draw_gps_velocity(_as_ne(vel), rng, s)))
+                vel_true = (nu[:, 0] + 1j * nu[:, 1]) * np.exp(1j * eta[:, 2])
+                vel = _draw_gps_velocity(_as_ne(vel_true), rng, s)
         if k % self._compass_period == 0:
             # Unwrapped reading: the innovation is wrapped, so ssa here would be redundant.
-            self._update_heading(_draw_compass(eta[:, 2], rng, s, wrap=False))
-        self._psi = ssa(self._psi)
-        self._yaw_rate = gyro - self._b
+            compass = _draw_compass(eta[:, 2], rng, s, wrap=False)
+        return self._fuse(gyro, gps, vel, compass, 1)
+
+    def fuse(
+        self,
+        gyro_radps: FloatArray,
+        pos_ne: FloatArray | None = None,
+        vel_ne: FloatArray | None = None,
+        heading_rad: FloatArray | None = None,
+        n_predict: int = 1,
+    ) -> NavEstimate:
+        """Advance the filters with given sensor readings (real sensors, telemetry).
+
+        The measurement-driven half of :meth:`step`, which draws these readings from the true
+        state and then calls it: ``n_predict`` time updates of ``dt_s`` each with the gyro
+        reading, then the GNSS position, GNSS velocity and compass updates of the readings
+        given (``None``: that sensor did not fire), ψ wrapped to [-π, π) at the end.
+
+        Parameters
+        ----------
+        gyro_radps : ndarray, shape (N,)
+            Gyro yaw rate (rad/s), held over the ``n_predict`` steps.
+        pos_ne : ndarray, shape (N, 2), optional
+            GNSS position [x_N, y_E] (m).
+        vel_ne : ndarray, shape (N, 2), optional
+            GNSS velocity over ground [v_N, v_E] (m/s), fused whatever ``cfg.gnss_velocity``
+            says (that flag only switches the simulated receiver of :meth:`step`).
+        heading_rad : ndarray, shape (N,), optional
+            Compass heading (rad), any range: the innovation is wrapped.
+        n_predict : int
+            Plant steps since the last call (>= 0), e.g. more than 1 after lost telemetry.
+
+        Returns
+        -------
+        NavEstimate
+            The estimate after the readings, arrays of shape (N, ...).
+        """
+        if not self._all_ready:
+            raise RuntimeError("Navigator.start() or reset() must initialise every boat first")
+        gyro = self._checked_rows("gyro_radps", gyro_radps, ())
+        pos = None if pos_ne is None else self._checked_rows("pos_ne", pos_ne, (2,))
+        vel = None if vel_ne is None else self._checked_rows("vel_ne", vel_ne, (2,))
+        psi = None if heading_rad is None else self._checked_rows("heading_rad", heading_rad, ())
+        if (
+            isinstance(n_predict, bool)
+            or not isinstance(n_predict, (int, np.integer))
+            or n_predict < 0
+        ):
+            raise ValueError(f"n_predict must be a non-negative integer, got {n_predict!r}")
+        return self._fuse(gyro, pos, vel, psi, int(n_predict))
+
+    def _fuse(
+        self,
+        gyro: FloatArray,
+        pos_ne: FloatArray | None,
+        vel_ne: FloatArray | None,
+        heading: FloatArray | None,
+        n_predict: int,
+    ) -> NavEstimate:
+        """:meth:`fuse` without input checks (for :meth:`step`)."""
+        x, h, q = self._pos, self._head, self._noise
+        for _ in range(n_predict):
+            omega = gyro - h.b  # bias-corrected rate with the prior bias, rad/s
+            h, x = predict_heading(h, omega, q), predict_position(x, omega, q)
+        if pos_ne is not None:
+            x = update_position(x, _as_complex(pos_ne), q)
+        if vel_ne is not None:
+            x = update_velocity(x, _as_complex(vel_ne), q)
+        if heading is not None:
+            h = update_heading(h, heading, q)
+        self._pos, self._head = x, replace(h, psi=ssa(h.psi))
+        self._yaw_rate = gyro - h.b
         return self.estimate
-
-    def _predict(self, gyro: FloatArray) -> None:
-        """Time update of both filters over ``dt_s`` with the gyro reading ``gyro`` (N,).
-
-        Heading: ``x⁻ = F x + B g``, ``P⁻ = F P Fᵀ + Q`` with ``F = [[1, −dt], [0, 1]]``; ψ is
-        left unwrapped until the end of :meth:`step`. Position, in complex form:
-        ``p⁻ = p + G w``, ``w⁻ = E w``, ``Λ⁻ = F Λ Fᴴ + Q`` with ``F = [[1, G], [0, E]]``.
-        """
-        dt = self.cfg.dt_s
-        omega = gyro - self._b  # bias-corrected rate with the prior bias, rad/s
-        self._psi = self._psi + dt * omega
-        P_pb = self._P_pb - dt * self._P_b
-        self._P_psi = self._P_psi - dt * (self._P_pb + P_pb) + self._q_psi
-        self._P_pb, self._P_b = P_pb, self._P_b + self._q_bias
-
-        # CV: G = dt, E = 1 (Python scalars, cheaper than arrays); aided: per-boat turn factors.
-        G: ComplexArray | float = dt
-        E: ComplexArray | float = 1.0
-        if self.cfg.turn_rate_aided:
-            G, E = turn_factors(omega, dt)
-        L_pw_G = self._L_pw + G * self._L_ww  # Λ_pw + G Λ_ww
-        # Λ_pp + 2 Re(Ḡ Λ_pw) + |G|² Λ_ww = Λ_pp + Re(Ḡ (Λ_pw + Λ_pw + G Λ_ww))
-        self._L_pp = self._L_pp + (np.conjugate(G) * (self._L_pw + L_pw_G)).real + self._q_pp
-        self._L_pw = L_pw_G * np.conjugate(E) + self._q_pw
-        self._L_ww = self._L_ww + self._q_ww
-        self._p = self._p + G * self._w
-        self._w = E * self._w
-
-    def _update_position(self, z: ComplexArray) -> None:
-        """GNSS update with ``z = x_N + i y_E`` (N,): ``K = [Λ_pp, conj Λ_pw] / S``.
-
-        ``Λ⁺ = Λ − K S Kᴴ`` (Simon 2006, *Optimal State Estimation*, Ch. 5), element-wise.
-        """
-        S = self._L_pp + self._r_gps
-        y = z - self._p
-        k_p, k_w = self._L_pp / S, self._L_pw.conjugate() / S
-        self._p = self._p + k_p * y
-        self._w = self._w + k_w * y
-        self._L_ww = self._L_ww - (k_w * self._L_pw).real  # Λ_ww − |Λ_pw|² / S
-        self._L_pw = self._L_pw * (1.0 - k_p)
-        self._L_pp = self._r_gps * k_p  # Λ_pp (1 − Λ_pp / S) = R Λ_pp / S
-
-    def _update_velocity(self, z: ComplexArray) -> None:
-        """GNSS velocity update, ``z = v_N + i v_E`` (N,): ``H = [0, 1]``, ``K = [Λ_pw, Λ_ww]/S``.
-
-        ``Λ⁺ = Λ − K S Kᴴ``: Λ_pp −= |Λ_pw|²/S, Λ_pw −= Λ_pw Λ_ww/S, Λ_ww −= Λ_ww²/S.
-        """
-        S = self._L_ww + self._r_gps_vel
-        y = z - self._w
-        k_p, k_w = self._L_pw / S, self._L_ww / S
-        self._p = self._p + k_p * y
-        self._w = self._w + k_w * y
-        self._L_pp = self._L_pp - (k_p * self._L_pw.conjugate()).real
-        self._L_pw = self._L_pw * (1.0 - k_w)
-        self._L_ww = self._r_gps_vel * k_w
-
-    def _update_heading(self, z: FloatArray) -> None:
-        """Compass update with ``z`` (N,) rad: innovation ``ssa(z − ψ⁻)``, ``K = P Hᵀ / S``."""
-        S = self._P_psi + self._r_compass
-        y = ssa(z - self._psi)
-        k_psi, k_b = self._P_psi / S, self._P_pb / S
-        self._psi = self._psi + k_psi * y
-        self._b = self._b + k_b * y
-        self._P_b = self._P_b - k_b * self._P_pb
-        self._P_pb = self._P_pb * (1.0 - k_psi)
-        self._P_psi = self._r_compass * k_psi  # P_ψψ (1 − P_ψψ / S) = R P_ψψ / S
 
     def run(
         self,
@@ -446,6 +490,25 @@ class Navigator:
             )
         return NavEstimate(pos_ne=pos, vel_ne=vel, psi=psi, yaw_rate=rate)
 
+    def _boats(self, mask: NDArray[np.bool_] | None) -> NDArray[np.intp]:
+        """Indices of the boats in ``mask`` (all when ``None``), after checking it."""
+        if mask is None:
+            return np.arange(self.n_boats)
+        m = np.asarray(mask)
+        if m.dtype != np.bool_ or m.shape != (self.n_boats,):
+            raise ValueError(
+                f"mask must be a bool array of shape ({self.n_boats},), "
+                f"got dtype {m.dtype} and shape {m.shape}"
+            )
+        return np.flatnonzero(m)
+
+    def _checked_rows(self, name: str, array: object, tail: tuple[int, ...]) -> FloatArray:
+        """``array`` as float64 of shape (N, *tail), finite; raise ``ValueError`` otherwise."""
+        a = _as_checked(name, array, tail)
+        if a.shape[0] != self.n_boats:
+            raise ValueError(f"{name} must have {self.n_boats} rows (n_boats), got {a.shape[0]}")
+        return a
+
     def _check_states(self, eta: FloatArray, nu: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Validate shape (N, 3) and finiteness of ``eta`` and ``nu``; return float64 arrays."""
         eta = _as_checked("eta", eta, (3,))
@@ -456,36 +519,3 @@ class Navigator:
                 f"got {eta.shape[0]} and {nu.shape[0]}"
             )
         return eta, nu
-
-
-# --- the filter state as a flat array (the compiled twin's layout, usvsim.nav.compiled) -------
-
-#: Layout of the filter state of one boat (15 entries), as exported by :func:`export_nav_state`
-#: and stepped by :func:`usvsim.nav.compiled.build_nav_step`.
-NAV_STATE_FIELDS = (
-    "p_n", "p_e", "w_n", "w_e", "L_pp", "L_pw_re", "L_pw_im", "L_ww",
-    "psi", "b", "P_psi", "P_pb", "P_b", "gyro_bias", "yaw_rate",
-)  # fmt: skip
-NAV_NS = len(NAV_STATE_FIELDS)
-
-
-def export_nav_state(nav: Navigator) -> FloatArray:
-    """The navigator's filter states as an (N, 15) array (layout :data:`NAV_STATE_FIELDS`)."""
-    return np.column_stack([
-        nav._p.real, nav._p.imag, nav._w.real, nav._w.imag, nav._L_pp, nav._L_pw.real,
-        nav._L_pw.imag, nav._L_ww, nav._psi, nav._b, nav._P_psi, nav._P_pb, nav._P_b,
-        nav._gyro_bias, nav._yaw_rate,
-    ])  # fmt: skip
-
-
-def import_nav_state(nav: Navigator, state: FloatArray) -> None:
-    """Load (N, 15) filter states (from the compiled path) back into ``nav``."""
-    s = np.asarray(state, dtype=np.float64)
-    if s.shape != (nav.n_boats, NAV_NS):
-        raise ValueError(f"nav state must have shape ({nav.n_boats}, {NAV_NS}), got {s.shape}")
-    nav._p = s[:, 0] + 1j * s[:, 1]
-    nav._w = s[:, 2] + 1j * s[:, 3]
-    nav._L_pp, nav._L_pw, nav._L_ww = s[:, 4].copy(), s[:, 5] + 1j * s[:, 6], s[:, 7].copy()
-    nav._psi, nav._b = s[:, 8].copy(), s[:, 9].copy()
-    nav._P_psi, nav._P_pb, nav._P_b = s[:, 10].copy(), s[:, 11].copy(), s[:, 12].copy()
-    nav._gyro_bias, nav._yaw_rate = s[:, 13].copy(), s[:, 14].copy()

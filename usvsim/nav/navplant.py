@@ -8,7 +8,7 @@ order, so the fused path reproduces ``Plant.step`` followed by ``Navigator.run``
 (tested to 1e-9), at a fraction of the cost: no Python work per plant step.
 
 State per boat (28): plant ``x`` (8), autopilot ``c`` (5), filter ``n`` (15,
-:data:`usvsim.nav.filter.NAV_STATE_FIELDS`). :meth:`NavigatedPlant.run` steps this packed state
+:data:`usvsim.nav.compiled.NAV_STATE_FIELDS`). :meth:`NavigatedPlant.run` steps this packed state
 directly (what the batch keeps between decisions); :meth:`NavigatedPlant.step` takes and updates a
 :class:`usvsim.vessel.plant.PlantState` and a :class:`usvsim.nav.filter.Navigator` instead.
 """
@@ -21,8 +21,15 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-from usvsim.nav.compiled import build_nav_step, nav_draws_per_step, nav_noise_block
-from usvsim.nav.filter import NAV_NS, Navigator, export_nav_state, import_nav_state
+from usvsim.nav.compiled import (
+    NAV_NS,
+    build_nav_step,
+    export_nav_state,
+    import_nav_state,
+    nav_draws_per_step,
+    nav_noise_block,
+)
+from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import period_steps
 from usvsim.vessel.codegen import BatchStepper, GatheredSteps

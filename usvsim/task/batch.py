@@ -43,7 +43,8 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
-from usvsim.nav.filter import Navigator, export_nav_state
+from usvsim.nav.compiled import export_nav_state
+from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import NavigatedPlant
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
