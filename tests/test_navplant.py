@@ -8,7 +8,7 @@ import pytest
 from usvsim.nav.compiled import build_nav_step, export_nav_state
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
-from usvsim.nav.navplant import NavigatedPlant
+from usvsim.nav.navplant import PACKED, NavigatedPlant
 from usvsim.vessel.plant import Plant
 
 
@@ -102,6 +102,19 @@ def test_packed_run_equals_the_navigator_step(plant):
     normals = rng.standard_normal((n, fused.draws_needed(21, T)))
     traj = fused.run(packed, psi_ref, 3.0, T, 21, normals)
     _, plant_traj, nav_traj = fused.step(state, nav, psi_ref, 3.0, T, 21, normals)
-    np.testing.assert_array_equal(traj[:, :, :13], plant_traj)
-    np.testing.assert_array_equal(traj[:, :, 13:], nav_traj)
-    np.testing.assert_array_equal(traj[:, -1, 13:], export_nav_state(nav))
+    np.testing.assert_array_equal(traj[:, :, PACKED.closed_loop], plant_traj)
+    np.testing.assert_array_equal(traj[:, :, PACKED.nav], nav_traj)
+    np.testing.assert_array_equal(traj[:, -1, PACKED.nav], export_nav_state(nav))
+    # the named slices read the navigator's estimate
+    est = nav.estimate
+    np.testing.assert_array_equal(traj[:, -1, PACKED.nav_pos], est.pos_ne)
+    np.testing.assert_array_equal(traj[:, -1, PACKED.nav_vel], est.vel_ne)
+    np.testing.assert_array_equal(traj[:, -1, PACKED.nav_psi], est.psi)
+
+
+def test_packed_layout_tiles_the_state():
+    # x (8) | c (5) | n (15): the parts follow each other without gaps and fill the vector
+    parts = [PACKED.plant, PACKED.controller, PACKED.nav]
+    assert [(p.start, p.stop) for p in parts] == [(0, 8), (8, 13), (13, 28)]
+    assert PACKED.closed_loop == slice(0, 13) and PACKED.size == 28
+    assert (PACKED.nav_pos, PACKED.nav_vel, PACKED.nav_psi) == (slice(13, 15), slice(15, 17), 21)

@@ -8,13 +8,15 @@ order, so the fused path reproduces ``Plant.step`` followed by ``Navigator.run``
 (tested to 1e-9), at a fraction of the cost: no Python work per plant step.
 
 State per boat (28): plant ``x`` (8), autopilot ``c`` (5), filter ``n`` (15,
-:data:`usvsim.nav.compiled.NAV_STATE_FIELDS`). :meth:`NavigatedPlant.run` steps this packed state
-directly (what the batch keeps between decisions); :meth:`NavigatedPlant.step` takes and updates a
+:data:`usvsim.nav.compiled.NAV_STATE_FIELDS`), read by name through :data:`PACKED`.
+:meth:`NavigatedPlant.run` steps this packed state directly (what the batch keeps between
+decisions); :meth:`NavigatedPlant.step` takes and updates a
 :class:`usvsim.vessel.plant.PlantState` and a :class:`usvsim.nav.filter.Navigator` instead.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -23,6 +25,7 @@ from numpy.typing import NDArray
 
 from usvsim.nav.compiled import (
     NAV_NS,
+    NAV_STATE_FIELDS,
     build_nav_step,
     export_nav_state,
     import_nav_state,
@@ -36,9 +39,66 @@ from usvsim.vessel.codegen import BatchStepper, GatheredSteps
 from usvsim.vessel.model import NX
 from usvsim.vessel.plant import NS, Plant, PlantState
 
-__all__ = ["NavigatedPlant"]
+__all__ = ["PACKED", "NavigatedPlant", "PackedLayout"]
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PackedLayout:
+    """Named column slices of the packed per-boat state ``[x, c, n]`` (N, ``size``).
+
+    Attributes
+    ----------
+    plant : slice
+        ``x``, the vessel's state (:data:`usvsim.vessel.model.NX` entries).
+    controller : slice
+        ``c``, the autopilot's state.
+    closed_loop : slice
+        ``[x, c]``, one :class:`usvsim.vessel.plant.PlantState` row
+        (:data:`usvsim.vessel.plant.NS` entries).
+    nav : slice
+        ``n``, the filter state (:data:`usvsim.nav.compiled.NAV_STATE_FIELDS`).
+    nav_pos : slice
+        Estimated position ``[x_N, y_E]`` (m).
+    nav_vel : slice
+        Estimated velocity over ground ``[v_N, v_E]`` (m/s).
+    nav_psi : int
+        Estimated heading ψ (rad).
+    size : int
+        Entries per boat.
+    """
+
+    plant: slice
+    controller: slice
+    closed_loop: slice
+    nav: slice
+    nav_pos: slice
+    nav_vel: slice
+    nav_psi: int
+    size: int
+
+    @classmethod
+    def build(cls) -> PackedLayout:
+        """The layout of :class:`NavigatedPlant`: ``x`` (NX), ``c`` (NS − NX), ``n`` (NAV_NS)."""
+
+        def nav(name: str) -> int:
+            return NS + NAV_STATE_FIELDS.index(name)
+
+        return cls(
+            plant=slice(0, NX),
+            controller=slice(NX, NS),
+            closed_loop=slice(0, NS),
+            nav=slice(NS, NS + NAV_NS),
+            nav_pos=slice(nav("p_n"), nav("p_e") + 1),
+            nav_vel=slice(nav("w_n"), nav("w_e") + 1),
+            nav_psi=nav("psi"),
+            size=NS + NAV_NS,
+        )
+
+
+#: The packed state's layout, computed once.
+PACKED = PackedLayout.build()
 
 
 class NavigatedPlant:
@@ -58,12 +118,12 @@ class NavigatedPlant:
         self.plant = plant
         self.nav_config = nav_config
         nav_fn = build_nav_step(nav_config)
-        s = ca.SX.sym("s", NS + NAV_NS)
+        s = ca.SX.sym("s", PACKED.size)
         w = ca.SX.sym("w", 4)
         g = ca.SX.sym("g", plant.gains.size)
         e = ca.SX.sym("e", 8)
-        s_plant = plant.step_function(s[:NS], w, g)
-        n_next = nav_fn(s[NS:], s_plant[:NX], e)
+        s_plant = plant.step_function(s[PACKED.closed_loop], w, g)
+        n_next = nav_fn(s[PACKED.nav], s_plant[PACKED.plant], e)
         # noise layouts repeat with the sensor schedule: cache them per phase of the cycle
         self._cycle = int(
             np.lcm(
@@ -175,6 +235,6 @@ class NavigatedPlant:
         noise = self.noise_steps(first_step_index, n_steps, normals)
         traj = self._stepper.run(s0, w, self.plant.gains, n_steps, noise)
         last = traj[:, -1]
-        import_nav_state(navigator, last[:, NS:])
-        new_state = PlantState(x=last[:, :NX].copy(), c=last[:, NX:NS].copy())
-        return new_state, traj[:, :, :NS], traj[:, :, NS:]
+        import_nav_state(navigator, last[:, PACKED.nav])
+        new_state = PlantState(x=last[:, PACKED.plant].copy(), c=last[:, PACKED.controller].copy())
+        return new_state, traj[:, :, PACKED.closed_loop], traj[:, :, PACKED.nav]

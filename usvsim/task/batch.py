@@ -46,14 +46,13 @@ from usvsim.common.angles import ssa
 from usvsim.nav.compiled import export_nav_state
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
-from usvsim.nav.navplant import NavigatedPlant
+from usvsim.nav.navplant import PACKED, NavigatedPlant
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction, RewardTerms
 from usvsim.task.scenario import BoatNoise, EpisodeSpec, Scenario, episode_geometry
 from usvsim.vessel.autopilot import AutopilotConfig
-from usvsim.vessel.model import NX
-from usvsim.vessel.plant import NS, Plant, PlantState
+from usvsim.vessel.plant import Plant, PlantState
 from usvsim.vessel.vessels import VesselParams
 
 __all__ = [
@@ -264,7 +263,8 @@ class PoleAvoidanceBatch:
         self._navplant = NavigatedPlant(self.plant, nav)  # plant + filter, compiled together
         self._noise = BoatNoise(n)
         self._collision_m = self.scenario.pole_radius_m + self.plant.vessel.half_beam_m
-        # packed per-boat state [x (8), c (5), filter n (15)], the fused step's layout (N, 28);
+        # packed per-boat state [x (8), c (5), filter n (15)], the fused step's layout (N, 28)
+        # (named slices: usvsim.nav.navplant.PACKED);
         # the filter part is meaningful once a boat is reset
         start = self.plant.initial_state(np.zeros((n, 3)))
         self._s = np.concatenate([start.x, start.c, export_nav_state(self._nav)], axis=1)
@@ -281,7 +281,7 @@ class PoleAvoidanceBatch:
     @property
     def state(self) -> PlantState:
         """True plant state of all boats (for evaluation and plots, never for observations)."""
-        return PlantState(x=self._s[:, :NX].copy(), c=self._s[:, NX:NS].copy())
+        return PlantState(x=self._s[:, PACKED.plant].copy(), c=self._s[:, PACKED.controller].copy())
 
     @property
     def estimate(self) -> tuple[FloatArray, FloatArray]:
@@ -298,15 +298,15 @@ class PoleAvoidanceBatch:
             raise ValueError(f"need one EpisodeSpec per reset boat ({idx.size}), got {len(specs)}")
         geo = episode_geometry(self.scenario, specs)
         rows = self.plant.initial_state(geo.start_eta, self.scenario.speed_mps)
-        self._s[idx, :NX], self._s[idx, NX:NS] = rows.x, rows.c
+        self._s[idx, PACKED.plant], self._s[idx, PACKED.controller] = rows.x, rows.c
         self.pole_ne[idx], self.goal_ne[idx] = geo.pole_ne, geo.goal_ne
         self._noise.seed(idx, [s.noise_seed for s in specs])
         mask = np.zeros(self.n_boats, dtype=bool)
         mask[idx] = True
-        x = self._s[:, :NX]
+        x = self._s[:, PACKED.plant]
         est = self._nav.reset(x[:, 0:3], x[:, 3:6], self._rng_view(idx), mask=mask)
         self._noise.for_boats(None)
-        self._s[idx, NS:] = export_nav_state(self._nav)[idx]  # the freshly started filters
+        self._s[idx, PACKED.nav] = export_nav_state(self._nav)[idx]  # the freshly started filters
         self._est_pos[idx], self._est_psi[idx] = est.pos_ne[idx], est.psi[idx]
         self._n_decisions[idx] = 0
         self._min_pole[idx] = [s.start_distance_m for s in specs]
@@ -356,10 +356,10 @@ class PoleAvoidanceBatch:
         packed = self._navplant.run(self._s, psi_ref, sc.speed_mps, T, first, normals)  # (N, T, 28)
         self._s = packed[:, -1].copy()
         self._plant_step += T
-        self._est_pos = self._s[:, NS : NS + 2].copy()
-        self._est_psi = self._s[:, NS + 8].copy()
+        self._est_pos = self._s[:, PACKED.nav_pos].copy()
+        self._est_psi = self._s[:, PACKED.nav_psi].copy()
 
-        traj = packed[:, :, :NS]
+        traj = packed[:, :, PACKED.closed_loop]
         x_n, y_e = traj[:, :, 0], traj[:, :, 1]  # true position at every plant step (N, T)
         d_pole = np.hypot(x_n - self.pole_ne[:, 0:1], y_e - self.pole_ne[:, 1:2])
         hit = d_pole < self._collision_m
