@@ -44,6 +44,8 @@ from usvsim.nav.kalman import (
     FilterNoise,
     HeadingState,
     PositionState,
+    as_complex,
+    as_ne,
     predict_heading,
     predict_position,
     update_heading,
@@ -52,12 +54,12 @@ from usvsim.nav.kalman import (
 )
 from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import (
-    _as_checked,
-    _check_step_index,
-    _draw_compass,
-    _draw_gps,
-    _draw_gps_velocity,
-    _draw_gyro,
+    as_checked,
+    check_step_index,
+    draw_compass,
+    draw_gps,
+    draw_gps_velocity,
+    draw_gyro,
     period_steps,
     sample_gyro_bias,
 )
@@ -98,16 +100,6 @@ class NavEstimate:
     def cog_rad(self) -> FloatArray:
         """Course over ground ``atan2(v_E, v_N)`` (rad, clockwise from north), shape (...)."""
         return np.arctan2(self.vel_ne[..., 1], self.vel_ne[..., 0])
-
-
-def _as_ne(z: ComplexArray) -> FloatArray:
-    """View complex ``x_N + i y_E`` of shape (N,) as real ``[x_N, y_E]`` of shape (N, 2)."""
-    return z[:, None].view(np.float64)
-
-
-def _as_complex(ne: FloatArray) -> ComplexArray:
-    """Complex ``x_N + i y_E`` (N,) from real ``[x_N, y_E]`` (N, 2) (a view when contiguous)."""
-    return np.ascontiguousarray(ne, dtype=np.float64).view(np.complex128)[:, 0]
 
 
 class Navigator:
@@ -187,16 +179,16 @@ class Navigator:
         idx = self._boats(mask)
         s, k = self.cfg.sensors, idx.size
         psi_true = eta[idx, 2]
-        gps = _draw_gps(eta[idx, :2], rng, s)
-        compass = _draw_compass(psi_true, rng, s)
+        gps = draw_gps(eta[idx, :2], rng, s)
+        compass = draw_compass(psi_true, rng, s)
         # Body velocity to NED: w = (u + i v) e^{iψ}, i.e. R(ψ) [u, v].
         w = (nu[idx, 0] + 1j * nu[idx, 1]) * np.exp(1j * psi_true)
-        w = w + _as_complex(rng.normal(0.0, self.cfg.init_vel_sigma_mps, size=(k, 2)))
+        w = w + as_complex(rng.normal(0.0, self.cfg.init_vel_sigma_mps, size=(k, 2)))
         bias = sample_gyro_bias(k, rng, s)
-        gyro = _draw_gyro(nu[idx, 2], bias, rng, s)
+        gyro = draw_gyro(nu[idx, 2], bias, rng, s)
         self._gyro_bias = self._gyro_bias.copy()  # copy: earlier estimates may view it
         self._gyro_bias[idx] = bias
-        return self._start(idx, _as_complex(gps), w, compass, gyro)
+        return self._start(idx, as_complex(gps), w, compass, gyro)
 
     def start(
         self,
@@ -204,12 +196,11 @@ class Navigator:
         vel_ne: FloatArray,
         heading_rad: FloatArray,
         gyro_radps: FloatArray,
-        mask: NDArray[np.bool_] | None = None,
     ) -> NavEstimate:
-        """Start the filters of (some) boats at a given first fix (real sensors, telemetry).
+        """Start the filters of all boats at a given first fix (real sensors, telemetry).
 
         The measurement-driven half of :meth:`reset`, which draws these readings from the true
-        state and then calls it; same means and covariances. Rows outside ``mask`` are not used.
+        state and then calls it: the same means and covariances.
 
         Parameters
         ----------
@@ -221,22 +212,17 @@ class Navigator:
             Compass heading (rad).
         gyro_radps : ndarray, shape (N,)
             Gyro yaw rate (rad/s); the first yaw-rate estimate (the bias estimate starts at 0).
-        mask : ndarray of bool, shape (N,), optional
-            Boats to start; default all.
 
         Returns
         -------
         NavEstimate
             The estimate of all N boats.
         """
-        idx = self._boats(mask)
-        pos, vel = (
-            self._checked_rows("pos_ne", pos_ne, (2,)),
-            self._checked_rows("vel_ne", vel_ne, (2,)),
-        )
+        p = as_complex(self._checked_rows("pos_ne", pos_ne, (2,)))
+        w = as_complex(self._checked_rows("vel_ne", vel_ne, (2,)))
         psi = self._checked_rows("heading_rad", heading_rad, ())
         gyro = self._checked_rows("gyro_radps", gyro_radps, ())
-        return self._start(idx, _as_complex(pos[idx]), _as_complex(vel[idx]), psi[idx], gyro[idx])
+        return self._start(np.arange(self.n_boats), p, w, psi, gyro)
 
     def _start(
         self,
@@ -278,8 +264,8 @@ class Navigator:
     def estimate(self) -> NavEstimate:
         """Current estimate of all N boats (arrays of shape (N, ...), read them, don't write)."""
         return NavEstimate(
-            pos_ne=_as_ne(self._pos.p),
-            vel_ne=_as_ne(self._pos.w),
+            pos_ne=as_ne(self._pos.p),
+            vel_ne=as_ne(self._pos.w),
             psi=self._head.psi,
             yaw_rate=self._yaw_rate,
         )
@@ -353,22 +339,22 @@ class Navigator:
         RuntimeError
             If some boat has never been reset.
         """
-        k = _check_step_index(step_index)
+        k = check_step_index(step_index)
         if not self._all_ready:
             raise RuntimeError("Navigator.reset() must initialise every boat before step()")
         eta, nu = self._check_states(eta_true, nu_true)
         s = self.cfg.sensors
-        gyro = _draw_gyro(nu[:, 2], self._gyro_bias, rng, s)
+        gyro = draw_gyro(nu[:, 2], self._gyro_bias, rng, s)
         gps = vel = compass = None
         if k % self._gps_period == 0:
-            gps = _draw_gps(eta[:, :2], rng, s)
+            gps = draw_gps(eta[:, :2], rng, s)
             if self.cfg.gnss_velocity:
                 # true velocity over ground R(ψ)[u, v] = (u + i v) e^{iψ}
                 vel_true = (nu[:, 0] + 1j * nu[:, 1]) * np.exp(1j * eta[:, 2])
-                vel = _draw_gps_velocity(_as_ne(vel_true), rng, s)
+                vel = draw_gps_velocity(as_ne(vel_true), rng, s)
         if k % self._compass_period == 0:
             # Unwrapped reading: the innovation is wrapped, so ssa here would be redundant.
-            compass = _draw_compass(eta[:, 2], rng, s, wrap=False)
+            compass = draw_compass(eta[:, 2], rng, s, wrap=False)
         return self._fuse(gyro, gps, vel, compass, 1)
 
     def fuse(
@@ -433,9 +419,9 @@ class Navigator:
             omega = gyro - h.b  # bias-corrected rate with the prior bias, rad/s
             h, x = predict_heading(h, omega, q), predict_position(x, omega, q)
         if pos_ne is not None:
-            x = update_position(x, _as_complex(pos_ne), q)
+            x = update_position(x, as_complex(pos_ne), q)
         if vel_ne is not None:
-            x = update_velocity(x, _as_complex(vel_ne), q)
+            x = update_velocity(x, as_complex(vel_ne), q)
         if heading is not None:
             h = update_heading(h, heading, q)
         self._pos, self._head = x, replace(h, psi=ssa(h.psi))
@@ -469,7 +455,7 @@ class Navigator:
         NavEstimate
             Arrays of shape (N, T, ...): the estimate after each step.
         """
-        k0 = _check_step_index(first_step_index)
+        k0 = check_step_index(first_step_index)
         eta = np.asarray(eta_traj, dtype=np.float64)
         nu = np.asarray(nu_traj, dtype=np.float64)
         for name, a in (("eta_traj", eta), ("nu_traj", nu)):
@@ -482,12 +468,8 @@ class Navigator:
         psi, rate = np.empty((n, T)), np.empty((n, T))
         for j in range(T):
             est = self.step(k0 + j, eta[:, j], nu[:, j], rng)
-            pos[:, j], vel[:, j], psi[:, j], rate[:, j] = (
-                est.pos_ne,
-                est.vel_ne,
-                est.psi,
-                est.yaw_rate,
-            )
+            pos[:, j], vel[:, j] = est.pos_ne, est.vel_ne
+            psi[:, j], rate[:, j] = est.psi, est.yaw_rate
         return NavEstimate(pos_ne=pos, vel_ne=vel, psi=psi, yaw_rate=rate)
 
     def _boats(self, mask: NDArray[np.bool_] | None) -> NDArray[np.intp]:
@@ -504,18 +486,11 @@ class Navigator:
 
     def _checked_rows(self, name: str, array: object, tail: tuple[int, ...]) -> FloatArray:
         """``array`` as float64 of shape (N, *tail), finite; raise ``ValueError`` otherwise."""
-        a = _as_checked(name, array, tail)
+        a = as_checked(name, array, tail)
         if a.shape[0] != self.n_boats:
             raise ValueError(f"{name} must have {self.n_boats} rows (n_boats), got {a.shape[0]}")
         return a
 
     def _check_states(self, eta: FloatArray, nu: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Validate shape (N, 3) and finiteness of ``eta`` and ``nu``; return float64 arrays."""
-        eta = _as_checked("eta", eta, (3,))
-        nu = _as_checked("nu", nu, (3,))
-        if eta.shape[0] != self.n_boats or nu.shape[0] != self.n_boats:
-            raise ValueError(
-                f"eta and nu must have {self.n_boats} rows (n_boats), "
-                f"got {eta.shape[0]} and {nu.shape[0]}"
-            )
-        return eta, nu
+        return self._checked_rows("eta", eta, (3,)), self._checked_rows("nu", nu, (3,))

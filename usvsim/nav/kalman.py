@@ -42,6 +42,8 @@ __all__ = [
     "FilterNoise",
     "HeadingState",
     "PositionState",
+    "as_complex",
+    "as_ne",
     "predict_heading",
     "predict_position",
     "update_heading",
@@ -51,6 +53,16 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
+
+
+def as_ne(z: ComplexArray) -> FloatArray:
+    """View complex ``x_N + i y_E`` of shape (N,) as real ``[x_N, y_E]`` of shape (N, 2)."""
+    return z[:, None].view(np.float64)
+
+
+def as_complex(ne: FloatArray) -> ComplexArray:
+    """Complex ``x_N + i y_E`` (N,) from real ``[x_N, y_E]`` (N, 2) (a view when contiguous)."""
+    return np.ascontiguousarray(ne, dtype=np.float64).view(np.complex128)[:, 0]
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,7 @@ import numpy as np
 from filterpy.common import Q_discrete_white_noise
 from numpy.typing import NDArray
 
-from usvsim.nav.sensors import SensorConfig, _check_positive, period_steps
+from usvsim.nav.sensors import SensorConfig, check_positive, period_steps
 
 __all__ = [
     "LinearModel",
@@ -103,7 +103,7 @@ class NavConfig:
             )
         for f in fields(self):
             if f.name not in ("sensors", "turn_rate_aided", "gnss_velocity"):
-                _check_positive(f"NavConfig.{f.name}", getattr(self, f.name))
+                check_positive(f"NavConfig.{f.name}", getattr(self, f.name))
         # Both raise ValueError with the offending numbers if the rate does not fit dt_s.
         period_steps(self.sensors.gps_rate_hz, self.dt_s)
         period_steps(self.sensors.compass_rate_hz, self.dt_s)

@@ -34,9 +34,17 @@ from usvsim.common.angles import ssa
 
 __all__ = [
     "SensorConfig",
+    "as_checked",
+    "check_positive",
+    "check_step_index",
+    "draw_compass",
+    "draw_gps",
+    "draw_gps_velocity",
+    "draw_gyro",
     "period_steps",
     "sample_compass",
     "sample_gps",
+    "sample_gps_velocity",
     "sample_gyro",
     "sample_gyro_bias",
     "sensor_fires",
@@ -78,10 +86,10 @@ class SensorConfig:
     def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
-            _check_positive(f"SensorConfig.{f.name}", value)
+            check_positive(f"SensorConfig.{f.name}", value)
 
 
-def _check_positive(name: str, value: object) -> None:
+def check_positive(name: str, value: object) -> None:
     """Raise ``ValueError`` unless ``value`` is a finite real number > 0."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a real number, got {value!r}")
@@ -89,7 +97,7 @@ def _check_positive(name: str, value: object) -> None:
         raise ValueError(f"{name} must be finite and > 0, got {value!r}")
 
 
-def _as_checked(name: str, array: object, shape_tail: tuple[int, ...]) -> FloatArray:
+def as_checked(name: str, array: object, shape_tail: tuple[int, ...]) -> FloatArray:
     """Return ``array`` as float64 after checking shape ``(N, *shape_tail)`` and finiteness."""
     a = np.asarray(array, dtype=np.float64)
     if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
@@ -126,8 +134,8 @@ def period_steps(rate_hz: float, dt_s: float) -> int:
     >>> period_steps(5.0, 0.1), period_steps(10.0, 0.1)
     (2, 1)
     """
-    _check_positive("rate_hz", rate_hz)
-    _check_positive("dt_s", dt_s)
+    check_positive("rate_hz", rate_hz)
+    check_positive("dt_s", dt_s)
     exact = 1.0 / (float(rate_hz) * float(dt_s))
     period = round(exact)
     if period < 1:
@@ -164,11 +172,11 @@ def sensor_fires(step_index: int, rate_hz: float, dt_s: float) -> bool:
     >>> [sensor_fires(k, 5.0, 0.1) for k in range(4)]
     [True, False, True, False]
     """
-    k = _check_step_index(step_index)
+    k = check_step_index(step_index)
     return k % period_steps(rate_hz, dt_s) == 0
 
 
-def _check_step_index(step_index: object) -> int:
+def check_step_index(step_index: object) -> int:
     """Return ``step_index`` as ``int`` after checking it is a non-negative integer."""
     if isinstance(step_index, bool) or not isinstance(step_index, (int, np.integer)):
         raise ValueError(f"step_index must be an integer, got {step_index!r}")
@@ -193,10 +201,10 @@ def sample_gps(pos_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig) 
     ndarray, shape (N, 2)
         Measured position (m).
     """
-    return _draw_gps(_as_checked("pos_ne", pos_ne, (2,)), rng, cfg)
+    return draw_gps(as_checked("pos_ne", pos_ne, (2,)), rng, cfg)
 
 
-def _draw_gps(pos_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig) -> FloatArray:
+def draw_gps(pos_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig) -> FloatArray:
     """:func:`sample_gps` without input checks (for callers that validated already)."""
     return pos_ne + rng.normal(0.0, cfg.gps_sigma_m, size=pos_ne.shape)
 
@@ -205,12 +213,13 @@ def sample_gps_velocity(
     vel_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig
 ) -> FloatArray:
     """GNSS Doppler velocity: true velocity over ground (N, 2) m/s plus white noise per axis."""
-    return _draw_gps_velocity(_as_checked("vel_ne", vel_ne, (2,)), rng, cfg)
+    return draw_gps_velocity(as_checked("vel_ne", vel_ne, (2,)), rng, cfg)
 
 
-def _draw_gps_velocity(
+def draw_gps_velocity(
     vel_ne: FloatArray, rng: np.random.Generator, cfg: SensorConfig
 ) -> FloatArray:
+    """:func:`sample_gps_velocity` without input checks (for callers that validated already)."""
     return vel_ne + rng.normal(0.0, cfg.gps_velocity_sigma_mps, size=vel_ne.shape)
 
 
@@ -230,10 +239,10 @@ def sample_compass(psi: FloatArray, rng: np.random.Generator, cfg: SensorConfig)
     ndarray, shape (N,)
         Measured heading (rad) in [-π, π).
     """
-    return _draw_compass(_as_checked("psi", psi, ()), rng, cfg)
+    return draw_compass(as_checked("psi", psi, ()), rng, cfg)
 
 
-def _draw_compass(
+def draw_compass(
     psi: FloatArray, rng: np.random.Generator, cfg: SensorConfig, wrap: bool = True
 ) -> FloatArray:
     """:func:`sample_compass` without input checks (for callers that validated already).
@@ -264,14 +273,14 @@ def sample_gyro(
     ndarray, shape (N,)
         Measured yaw rate (rad/s).
     """
-    rate = _as_checked("r", r, ())
-    b = _as_checked("bias", bias, ())
+    rate = as_checked("r", r, ())
+    b = as_checked("bias", bias, ())
     if b.shape != rate.shape:
         raise ValueError(f"bias must have the shape of r {rate.shape}, got {b.shape}")
-    return _draw_gyro(rate, b, rng, cfg)
+    return draw_gyro(rate, b, rng, cfg)
 
 
-def _draw_gyro(
+def draw_gyro(
     r: FloatArray, bias: FloatArray, rng: np.random.Generator, cfg: SensorConfig
 ) -> FloatArray:
     """:func:`sample_gyro` without input checks (for callers that validated already)."""
