@@ -18,7 +18,7 @@ __all__ = ["ssa", "ssa_casadi"]
 def ssa(angle_rad: ArrayLike) -> NDArray[np.float64]:
     """Smallest signed angle: map any angle (rad) to [-π, π).
 
-    Fossen (2021), *Handbook of Marine Craft Hydrodynamics and Motion Control*, (MSS ``ssa``).
+    Fossen (2021), *Handbook of Marine Craft Hydrodynamics and Motion Control*; MSS ``ssa``.
     Works element-wise on arrays of any shape.
 
     >>> float(ssa(3 * np.pi / 2))

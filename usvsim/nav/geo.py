@@ -1,8 +1,8 @@
 """Latitude/longitude <-> local NED (north, east) around an origin: flat-earth, WGS-84 radii.
 
 The flat-earth approximation linearises the geodetic-to-NED transformation at the origin
-(Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd ed., §2.3.1,
-eqs. 2.107-2.108; Farrell 2008, *Aided Navigation*, §2.3.3)::
+(Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd ed., §2.4,
+eqs. 2.112, 2.118-2.119; Farrell 2008, *Aided Navigation*, §2.3.3)::
 
     x_N = (μ − μ0) (R_M + h0)               R_M = a (1 − e²) / (1 − e² sin² μ0)^{3/2}
     y_E = ssa(l − l0) (R_N + h0) cos μ0     R_N = a / (1 − e² sin² μ0)^{1/2}

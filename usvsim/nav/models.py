@@ -29,7 +29,7 @@ sensors measure position and heading directly and the gyro measures the heading 
 2. **Heading** — state ``x = [ψ, b]`` (rad, rad/s), the gyro ``g = r + b + n_g`` as process input
    and the compass as measurement: the classic compass / rate-gyro filter with a bias state (Farrell
    2008, *Aided Navigation: GPS with High Rate Sensors*; Fossen 2021, *Handbook of Marine Craft
-   Hydrodynamics and Motion Control*, 2nd ed.)::
+   Hydrodynamics and Motion Control*, 2nd ed., ch. 13)::
 
        ψ_k = ψ_{k-1} + dt (g_k − b_{k-1}),  b_k = b_{k-1} + n_b
        F = [[1, −dt], [0, 1]],  B = [dt, 0]ᵀ,  Q = diag((dt σ_g)², σ_bw² dt)
