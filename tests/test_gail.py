@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -190,10 +191,14 @@ def test_cloned_cnn_policy_keeps_its_batchnorm_statistics() -> None:
 @pytest.mark.slow
 def test_il_run_validates_checkpoints_and_resumes(tmp_path) -> None:  # type: ignore[no-untyped-def]
     from learning.experiments.checkpoint import load_checkpoint, load_helmsman
-    from learning.experiments.il_setups import get_il_setup, train_il
+    from learning.experiments.il_setups import get_il_setup
+    from learning.experiments.train_il import train_il
 
-    setup = get_il_setup("il-gaussian-positional").replace(
-        validate_every=1, bc_epochs=1, num_envs=4, steps_per_env=16
+    base = get_il_setup("il-gaussian-positional")
+    setup = base.replace(
+        validate_every=1,
+        gail=dataclasses.replace(base.gail, bc_epochs=1),
+        algorithm_config=dataclasses.replace(base.algorithm_config, num_envs=4, steps_per_env=16),
     )
     first = train_il(setup, tmp_path, iterations=2, log=lambda _: None)
     assert [h["iteration"] for h in first.history] == [1, 2]
