@@ -1,4 +1,5 @@
-"""The MAVLink bridge (usvsim.mavlink.bridge) against ``usvsim sitl`` on loopback, faster than real time.
+"""The MAVLink bridge (usvsim.mavlink.bridge) against ``usvsim sitl`` on loopback, faster than
+real time.
 
 End to end: a helmsman drives the endpoint past the pole to the goal and the true path matches
 the in-process simulation of the same episode (same EpisodeSpec, same sensor-noise stream in

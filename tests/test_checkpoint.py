@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from learning.algorithms.trpo import TRPOAgent
+from learning.algorithms.registry import get_algorithm
 from learning.experiments.checkpoint import (
     FORMAT,
     VERSION,
@@ -31,9 +31,9 @@ from usvsim.task.observations import observation_space
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 
-def _agent(setup_name: str, seed: int = 3) -> tuple[TRPOAgent, Checkpoint]:
+def _agent(setup_name: str, seed: int = 3) -> tuple[Any, Checkpoint]:
     setup = get_setup(setup_name)
-    agent = TRPOAgent(
+    agent = get_algorithm(setup.algorithm).make_agent(
         observation_space(setup.observation), action_space(setup.action), setup.run_config(seed)
     )
     env = PoleAvoidanceVectorEnv(8, observation=setup.observation, action=setup.action)
@@ -252,10 +252,20 @@ def test_new_checkpoints_name_their_algorithm(tmp_path: Path) -> None:
     save_checkpoint(ckpt, tmp_path / "a.pt")
     raw = torch.load(tmp_path / "a.pt", weights_only=True)
     assert raw["algorithm"] == "trpo" and raw["setup_params"]["algorithm"] == "trpo"
-    assert list(ALGORITHMS) == ["trpo"]
+    assert list(ALGORITHMS) == ["trpo", "ppo"]
     with pytest.raises(ValueError, match="unknown algorithm 'sac'"):
         get_algorithm("sac")
     raw["algorithm"] = "sac"
     torch.save(raw, tmp_path / "b.pt")
     with pytest.raises(CheckpointError, match="unknown algorithm 'sac'"):
         load_checkpoint(tmp_path / "b.pt")
+
+
+def test_a_ppo_checkpoint_round_trips_through_the_registry(tmp_path: Path) -> None:
+    agent, ckpt = _agent("rl-gaussian-positional-ppo")
+    assert ckpt.algorithm == "ppo" and type(agent).__name__ == "PPOAgent"
+    save_checkpoint(ckpt, tmp_path / "p.pt")
+    loaded = load_agent(load_checkpoint(tmp_path / "p.pt"))
+    obs = np.random.default_rng(0).normal(size=(5, *agent.observation_space.shape))
+    assert type(loaded).__name__ == "PPOAgent"
+    np.testing.assert_array_equal(loaded.act(obs), agent.act(obs))

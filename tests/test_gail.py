@@ -17,7 +17,7 @@ from learning.imitation.discriminator import cat_obs
 from learning.imitation.gail import (
     GAILConfig,
     GAILTrainer,
-    normalise_actions,
+    normalize_actions,
     reward_from_logits,
     train_gail,
 )
@@ -47,9 +47,9 @@ def test_reward_forms_match_their_definitions() -> None:
 
 
 def test_actions_are_normalised_to_the_heading_change_fraction() -> None:
-    cat = normalise_actions(np.array([0, 10, 20, 40]), action_space("categorical"))
+    cat = normalize_actions(np.array([0, 10, 20, 40]), action_space("categorical"))
     np.testing.assert_allclose(cat[:, 0], [-1.0, -0.5, 0.0, 1.0])
-    gauss = normalise_actions(np.array([[-1.7], [0.25], [3.0]]), action_space("gaussian"))
+    gauss = normalize_actions(np.array([[-1.7], [0.25], [3.0]]), action_space("gaussian"))
     np.testing.assert_allclose(gauss[:, 0], [-1.0, 0.25, 1.0])
 
 
@@ -176,13 +176,13 @@ def test_cloned_cnn_policy_keeps_its_batchnorm_statistics() -> None:
     """After cloning, a trainer's refresh of the BatchNorm statistics on the same states
     leaves the policy's actions as they were (the statistics were settled)."""
     from learning.algorithms.networks import refresh_batchnorm
-    from learning.imitation.gail import behavioural_cloning
+    from learning.imitation.gail import behavioral_cloning
     from usvsim.task.observations import observation_space
 
     kept = [r for r in load_recordings().recordings if not quality_check(r)][:3]
     data = expert_data(kept, "radar+goal", "gaussian")
     agent = TRPOAgent(observation_space("radar+goal"), action_space("gaussian"), TRPOConfig())
-    behavioural_cloning(agent, data, GAILConfig(bc_epochs=3))
+    behavioral_cloning(agent, data, GAILConfig(bc_epochs=3))
     before = agent.act(data.obs)
     refresh_batchnorm(agent.policy, agent.policy_input(data.obs))
     np.testing.assert_allclose(agent.act(data.obs), before, atol=0.02)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import torch
 
+import learning.algorithms.actor_critic
 import learning.algorithms.trpo
 from learning.cli.evaluate import EvaluateArgs
 from learning.cli.evaluate import run as run_evaluate
@@ -90,13 +91,13 @@ def test_nan_in_the_loss_stops_with_an_error_and_keeps_the_checkpoint(
 ) -> None:
     assert run(_args(tmp_path)) == 0
     before = {name: (tmp_path / name).read_bytes() for name in ("latest.pt", "best.pt")}
-    real_gae = learning.algorithms.trpo.gae
+    real_gae = learning.algorithms.actor_critic.gae
 
     def nan_gae(*a: object, **kw: object) -> tuple[np.ndarray, np.ndarray]:
         adv, ret = real_gae(*a, **kw)  # type: ignore[arg-type]
         return adv * np.nan, ret
 
-    monkeypatch.setattr(learning.algorithms.trpo, "gae", nan_gae)
+    monkeypatch.setattr(learning.algorithms.actor_critic, "gae", nan_gae)
     assert run(_args(tmp_path, iterations=4, resume=True)) == 1
     assert "non-finite" in capsys.readouterr().err
     for name, data in before.items():

@@ -79,6 +79,7 @@ __all__ = [
     "make_trunk",
     "obs_to_tensor",
     "refresh_batchnorm",
+    "rows",
     "space_from_spec",
     "space_to_spec",
 ]
@@ -255,6 +256,11 @@ def make_critic(observation_space: spaces.Space, cfg: NetworkConfig | None = Non
     """The value network for a single-env observation space."""
     cfg = cfg or NetworkConfig()
     return Critic(make_trunk(observation_space, cfg))
+
+
+def rows(obs: TensorObs, idx: Tensor) -> TensorObs:
+    """The rows ``idx`` of a batch of tensor observations (a tensor or a dict of them)."""
+    return {k: v[idx] for k, v in obs.items()} if isinstance(obs, dict) else obs[idx]
 
 
 def obs_to_tensor(obs: np.ndarray | dict[str, np.ndarray]) -> TensorObs:

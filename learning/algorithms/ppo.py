@@ -16,7 +16,7 @@ in the order of CleanRL's ``ppo_continuous_action.py`` (Huang et al. 2022):
    is measured (exactly, from the distributions' parameters); above ``target_kl`` the remaining
    epochs are skipped (the early stop of OpenAI Spinning Up and Stable-Baselines3).
 4. Critic: regress V_φ on the λ-returns with Adam over minibatches, the squared-error value
-   loss L^VF of Eq. 9 (:func:`learning.algorithms.trpo.fit_critic`). Policy and critic have
+   loss L^VF of Eq. 9 (:func:`learning.algorithms.actor_critic.fit_critic`). Policy and critic have
    separate weights here, so Eq. 9's sum L^CLIP − c₁ L^VF + c₂ S splits into two independent
    problems: the critic gets its own epochs, minibatch and learning rate (c₁ drops out under
    Adam).
@@ -32,7 +32,6 @@ is exactly 1, bit for bit, whatever the floating-point blocking of the matrix pr
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -42,29 +41,18 @@ import torch
 from gymnasium import spaces
 from torch import Tensor, nn
 
-from learning.algorithms.base import config_from_dict
-from learning.algorithms.gae import gae
+from learning.algorithms.actor_critic import ActorCritic, fit_critic
 from learning.algorithms.networks import (
     NetworkConfig,
     Policy,
     TensorObs,
-    make_critic,
-    make_policy,
-    obs_to_tensor,
-    refresh_batchnorm,
-    space_from_spec,
-    space_to_spec,
+    rows,
 )
-from learning.algorithms.normalization import ObservationNormalizer
 from learning.algorithms.rollout import (
     NonFiniteError,
-    Obs,
     RolloutBatch,
-    attach_values,
-    flatten_obs,
 )
-from learning.algorithms.trpo import fit_critic
-from learning.algorithms.trust_region import rows, trainable_params
+from learning.algorithms.trust_region import trainable_params
 
 __all__ = [
     "PPOAgent",
@@ -264,164 +252,57 @@ class PPOUpdateStats:
         return self.policy_step.early_stopped
 
 
-class PPOAgent:
+class PPOAgent(ActorCritic):
     """Policy, critic, their optimisers, observation normaliser and random state of one run.
 
     The same public interface as :class:`learning.algorithms.trpo.TRPOAgent`.
     """
 
+    STATE_FORMAT: ClassVar[str] = STATE_FORMAT
+    NAME: ClassVar[str] = "PPO"
+    config_type: ClassVar[type[Any]] = PPOConfig
+    config: PPOConfig
+
     def __init__(
         self, observation_space: spaces.Space, action_space: spaces.Space, config: PPOConfig
     ) -> None:
-        self.config = config
-        self.observation_space, self.action_space = observation_space, action_space
-        with torch.random.fork_rng():  # initialise from the seed without touching global state
-            torch.manual_seed(config.seed)
-            self.policy = make_policy(observation_space, action_space, config.network)
-            self.critic = make_critic(observation_space, config.network).eval()
+        super().__init__(observation_space, action_space, config)
         self.policy_optimizer = torch.optim.Adam(
             self.policy.parameters(), lr=config.policy_lr, eps=config.adam_eps
         )
         self.critic_optimizer = torch.optim.Adam(
             self.critic.parameters(), lr=config.critic_lr, eps=config.adam_eps
         )
-        self.normalizer = ObservationNormalizer(
-            observation_space, clip=config.obs_clip, enabled=config.normalize_observations
-        )
-        self.generator = torch.Generator().manual_seed(config.seed + 1)
-        self.iteration = 0
-        self.env_steps = 0
-        self.info_keys: tuple[str, ...] = ()  # the update reads no env info
 
-    # -- acting ----------------------------------------------------------------------------
-
-    def policy_input(self, obs: Obs) -> TensorObs:
-        """Raw observations → the normalised tensors the policy and critic take."""
-        return obs_to_tensor(self.normalizer(obs))
-
-    @torch.inference_mode()
-    def sample(self, obs: Obs) -> tuple[np.ndarray, np.ndarray]:
-        """Actions (unclipped) and their log-probabilities for a batch of raw observations."""
-        dist = self.policy(self.policy_input(obs))
-        actions = dist.sample(self.generator)
-        return actions.numpy(), dist.log_prob(actions).numpy()
-
-    @torch.inference_mode()
-    def act(self, obs: Obs, deterministic: bool = True) -> np.ndarray:
-        """Environment-ready actions (Box: clipped to the bounds) for raw observations (N, ...)."""
-        dist = self.policy(self.policy_input(obs))
-        actions = (dist.mode() if deterministic else dist.sample(self.generator)).numpy()
-        if isinstance(self.action_space, spaces.Box):
-            actions = np.clip(actions, self.action_space.low, self.action_space.high)
-        return actions
-
-    @torch.inference_mode()
-    def values(self, obs: Obs, chunk: int = 4096) -> np.ndarray:
-        """V(s) (M,) for raw observations (M, ...)."""
-        t = self.policy_input(obs)
-        M = next(iter(t.values())).shape[0] if isinstance(t, dict) else t.shape[0]
-        out = [self.critic(rows(t, torch.arange(i, min(M, i + chunk)))) for i in range(0, M, chunk)]
-        return torch.cat(out).numpy()
-
-    # -- learning --------------------------------------------------------------------------
+    def optimizers(self) -> dict[str, torch.optim.Optimizer]:
+        return {
+            "policy_optimizer": self.policy_optimizer,
+            "critic_optimizer": self.critic_optimizer,
+        }
 
     def update(self, batch: RolloutBatch) -> PPOUpdateStats:
-        """Steps 2-5 of the module docstring on one batch; returns the policy epochs' stats and
-        the critic's loss (:class:`PPOUpdateStats`). Inputs are checked first: non-finite data
-        raises :class:`NonFiniteError` before any parameter changes."""
+        """Steps 2-5 of the module docstring on one batch (:class:`PPOUpdateStats`). Inputs are
+        checked first: non-finite data raises :class:`NonFiniteError` before any parameter
+        changes."""
         cfg = self.config
-        attach_values(batch, self.values)
-        assert batch.values is not None and batch.next_values is not None
-        advantages, returns = gae(
-            batch.rewards,
-            batch.values,
-            batch.next_values,
-            batch.terminated,
-            batch.episode_end,
-            cfg.gamma,
-            cfg.gae_lambda,
+        tb = self.training_batch(batch)
+        step = ppo_step(
+            self.policy,
+            self.policy_optimizer,
+            tb.obs,
+            tb.actions,
+            tb.advantages,
+            cfg,
+            self.generator,
         )
-        valid = batch.valid.reshape(-1)
-        raw_obs = flatten_obs(batch.obs, 2)
-        raw_obs = (
-            {k: v[valid] for k, v in raw_obs.items()}
-            if isinstance(raw_obs, dict)
-            else raw_obs[valid]
-        )
-        obs = self.policy_input(raw_obs)
-        actions = torch.as_tensor(batch.actions.reshape(-1, *batch.actions.shape[2:])[valid])
-        adv = torch.as_tensor(advantages.reshape(-1)[valid])
-        ret = torch.as_tensor(returns.reshape(-1)[valid])
-        parts = obs.values() if isinstance(obs, dict) else [obs]
-        if not all(bool(torch.isfinite(p).all()) for p in parts):
-            raise NonFiniteError("non-finite observation in the batch: no update made")
-        if not (torch.isfinite(adv).all() and torch.isfinite(ret).all()):
-            raise NonFiniteError("non-finite advantages or returns: no update made")
-        if cfg.normalize_advantages and adv.numel() > 1:
-            adv = (adv - adv.mean()) / (adv.std() + 1e-8)
-        step = ppo_step(self.policy, self.policy_optimizer, obs, actions, adv, cfg, self.generator)
         value_loss = fit_critic(
             self.critic,
             self.critic_optimizer,
-            obs,
-            ret,
+            tb.obs,
+            tb.returns,
             cfg.critic_epochs,
             cfg.critic_minibatch,
             self.generator,
         )
-        # Between iterations: refresh the statistics the next rollout's policy will use.
-        self.normalizer.update(raw_obs)
-        refresh_batchnorm(self.policy, obs)
-        self.iteration += 1
-        self.env_steps += int(valid.sum())
+        self.finish_update(tb)
         return PPOUpdateStats(step, value_loss)
-
-    # -- checkpoints -----------------------------------------------------------------------
-
-    def state_dict(self) -> dict[str, Any]:
-        """Everything needed to resume or to act: plain types, tensors and numpy arrays."""
-        return {
-            "format": STATE_FORMAT,
-            "config": dataclasses.asdict(self.config),
-            "observation_space": space_to_spec(self.observation_space),
-            "action_space": space_to_spec(self.action_space),
-            "policy": self.policy.state_dict(),
-            "critic": self.critic.state_dict(),
-            "policy_optimizer": self.policy_optimizer.state_dict(),
-            "critic_optimizer": self.critic_optimizer.state_dict(),
-            "normalizer": self.normalizer.state_dict(),
-            "generator": self.generator.get_state(),
-            "iteration": self.iteration,
-            "env_steps": self.env_steps,
-        }
-
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore a :meth:`state_dict`; raises ``ValueError`` if its spaces differ from ours."""
-        if state.get("format") != STATE_FORMAT:
-            raise ValueError(f"not a PPO state (format {state.get('format')!r})")
-        for key, space in (
-            ("observation_space", self.observation_space),
-            ("action_space", self.action_space),
-        ):
-            if state[key] != space_to_spec(space):
-                raise ValueError(f"checkpoint {key} {state[key]} does not match {space}")
-        self.policy.load_state_dict(state["policy"])
-        self.critic.load_state_dict(state["critic"])
-        self.policy_optimizer.load_state_dict(state["policy_optimizer"])
-        self.critic_optimizer.load_state_dict(state["critic_optimizer"])
-        self.normalizer.load_state_dict(state["normalizer"])
-        self.generator.set_state(state["generator"])
-        self.iteration, self.env_steps = int(state["iteration"]), int(state["env_steps"])
-
-    @classmethod
-    def from_state_dict(cls, state: dict[str, Any], config: PPOConfig | None = None) -> PPOAgent:
-        """An agent rebuilt from a :meth:`state_dict` (its own config unless one is given)."""
-        if config is None:
-            config = config_from_dict(PPOConfig, state["config"])
-        agent = cls(
-            space_from_spec(state["observation_space"]),
-            space_from_spec(state["action_space"]),
-            config,
-        )
-        agent.load_state_dict(state)
-        return agent

@@ -19,6 +19,7 @@ from typing import Any
 from gymnasium import spaces
 
 from learning.algorithms.base import Agent, UpdateStats, config_from_dict
+from learning.algorithms.ppo import PPOAgent, PPOConfig, PPOUpdateStats
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats
 
 __all__ = ["ALGORITHMS", "Algorithm", "algorithm_for", "get_algorithm"]
@@ -41,7 +42,10 @@ class Algorithm:
 
 ALGORITHMS: dict[str, Algorithm] = {
     a.name: a
-    for a in (Algorithm("trpo", TRPOConfig, TRPOAgent, TRPOAgent.from_state_dict, TRPOUpdateStats),)
+    for a in (
+        Algorithm("trpo", TRPOConfig, TRPOAgent, TRPOAgent.from_state_dict, TRPOUpdateStats),
+        Algorithm("ppo", PPOConfig, PPOAgent, PPOAgent.from_state_dict, PPOUpdateStats),
+    )
 }
 
 

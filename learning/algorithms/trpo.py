@@ -28,45 +28,23 @@ then one backward through that graph); one no-grad forward on B per line-search 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-import numpy as np
 import torch
 from gymnasium import spaces
 from torch import Tensor
 
-from learning.algorithms.base import config_from_dict
-from learning.algorithms.gae import gae
-from learning.algorithms.networks import (
-    Critic,
-    NetworkConfig,
-    Policy,
-    TensorObs,
-    make_critic,
-    make_policy,
-    obs_to_tensor,
-    refresh_batchnorm,
-    space_from_spec,
-    space_to_spec,
-)
-from learning.algorithms.normalization import ObservationNormalizer
-from learning.algorithms.rollout import (
-    NonFiniteError,
-    Obs,
-    RolloutBatch,
-    attach_values,
-    flatten_obs,
-)
+from learning.algorithms.actor_critic import ActorCritic, fit_critic
+from learning.algorithms.networks import NetworkConfig, Policy, TensorObs, rows
+from learning.algorithms.rollout import NonFiniteError, RolloutBatch
 from learning.algorithms.trust_region import (
     LineSearchResult,
     conjugate_gradient,
     fisher_vector_product,
     flat_grad,
     line_search,
-    rows,
     trainable_params,
 )
 
@@ -78,7 +56,6 @@ __all__ = [
     "TRPOUpdateStats",
     "conjugate_gradient",
     "fisher_vector_product",
-    "fit_critic",
     "line_search",
     "trpo_step",
 ]
@@ -182,38 +159,6 @@ def trpo_step(
     return PolicyStepStats(entropy, float(surrogate.detach()), float(g @ full_step), result)
 
 
-def fit_critic(
-    critic: Critic,
-    optimizer: torch.optim.Optimizer,
-    obs: TensorObs,
-    returns: Tensor,
-    epochs: int,
-    minibatch: int,
-    generator: torch.Generator,
-) -> float:
-    """Regress V_φ(s) on ``returns`` (B,) by Adam on shuffled minibatches; mean loss of the last
-    epoch (mean squared error). Minibatches of one row are skipped (BatchNorm needs two)."""
-    critic.train()
-    B = returns.shape[0]
-    losses: list[float] = []
-    for _ in range(epochs):
-        losses = []
-        perm = torch.randperm(B, generator=generator)
-        for start in range(0, B, minibatch):
-            idx = perm[start : start + minibatch]
-            if idx.numel() < 2:
-                continue
-            loss = (critic(rows(obs, idx)) - returns[idx]).pow(2).mean()
-            if not torch.isfinite(loss):
-                raise NonFiniteError("non-finite critic loss: optimizer step skipped")
-            optimizer.zero_grad(set_to_none=True)
-            loss.backward()
-            optimizer.step()
-            losses.append(float(loss.detach()))
-    critic.eval()
-    return float(np.mean(losses)) if losses else float("nan")
-
-
 # ---------------------------------------------------------------------------------------------
 # The agent: networks, normaliser, random state; one update per iteration
 # ---------------------------------------------------------------------------------------------
@@ -262,154 +207,38 @@ class TRPOUpdateStats:
         return self.policy_step.line_search.trials
 
 
-class TRPOAgent:
+class TRPOAgent(ActorCritic):
     """Policy, critic, critic optimiser, observation normaliser and random state of one run."""
+
+    STATE_FORMAT: ClassVar[str] = STATE_FORMAT
+    NAME: ClassVar[str] = "TRPO"
+    config_type: ClassVar[type[Any]] = TRPOConfig
+    config: TRPOConfig
 
     def __init__(
         self, observation_space: spaces.Space, action_space: spaces.Space, config: TRPOConfig
     ) -> None:
-        self.config = config
-        self.observation_space, self.action_space = observation_space, action_space
-        with torch.random.fork_rng():  # initialise from the seed without touching global state
-            torch.manual_seed(config.seed)
-            self.policy = make_policy(observation_space, action_space, config.network)
-            self.critic = make_critic(observation_space, config.network).eval()
+        super().__init__(observation_space, action_space, config)
         self.critic_optimizer = torch.optim.Adam(self.critic.parameters(), lr=config.critic_lr)
-        self.normalizer = ObservationNormalizer(
-            observation_space, clip=config.obs_clip, enabled=config.normalize_observations
-        )
-        self.generator = torch.Generator().manual_seed(config.seed + 1)
-        self.iteration = 0
-        self.env_steps = 0
-        self.info_keys: tuple[str, ...] = ()  # the update reads no env info
 
-    # -- acting ----------------------------------------------------------------------------
-
-    def policy_input(self, obs: Obs) -> TensorObs:
-        """Raw observations → the normalised tensors the policy and critic take."""
-        return obs_to_tensor(self.normalizer(obs))
-
-    @torch.inference_mode()
-    def sample(self, obs: Obs) -> tuple[np.ndarray, np.ndarray]:
-        """Actions (unclipped) and their log-probabilities for a batch of raw observations."""
-        dist = self.policy(self.policy_input(obs))
-        actions = dist.sample(self.generator)
-        return actions.numpy(), dist.log_prob(actions).numpy()
-
-    @torch.inference_mode()
-    def act(self, obs: Obs, deterministic: bool = True) -> np.ndarray:
-        """Environment-ready actions (Box: clipped to the bounds) for raw observations (N, ...)."""
-        dist = self.policy(self.policy_input(obs))
-        actions = (dist.mode() if deterministic else dist.sample(self.generator)).numpy()
-        if isinstance(self.action_space, spaces.Box):
-            actions = np.clip(actions, self.action_space.low, self.action_space.high)
-        return actions
-
-    @torch.inference_mode()
-    def values(self, obs: Obs, chunk: int = 4096) -> np.ndarray:
-        """V(s) (M,) for raw observations (M, ...)."""
-        t = self.policy_input(obs)
-        M = next(iter(t.values())).shape[0] if isinstance(t, dict) else t.shape[0]
-        out = [self.critic(rows(t, torch.arange(i, min(M, i + chunk)))) for i in range(0, M, chunk)]
-        return torch.cat(out).numpy()
-
-    # -- learning --------------------------------------------------------------------------
+    def optimizers(self) -> dict[str, torch.optim.Optimizer]:
+        return {"critic_optimizer": self.critic_optimizer}
 
     def update(self, batch: RolloutBatch) -> TRPOUpdateStats:
-        """Steps 2-5 of the module docstring on one batch; returns the policy step's stats and
-        the critic's loss (:class:`TRPOUpdateStats`). Inputs are checked first: non-finite data
-        raises :class:`NonFiniteError` before any parameter changes."""
+        """Steps 2-5 of the module docstring on one batch (:class:`TRPOUpdateStats`). Inputs are
+        checked first: non-finite data raises :class:`NonFiniteError` before any parameter
+        changes."""
         cfg = self.config
-        attach_values(batch, self.values)
-        assert batch.values is not None and batch.next_values is not None
-        advantages, returns = gae(
-            batch.rewards,
-            batch.values,
-            batch.next_values,
-            batch.terminated,
-            batch.episode_end,
-            cfg.gamma,
-            cfg.gae_lambda,
-        )
-        valid = batch.valid.reshape(-1)
-        raw_obs = flatten_obs(batch.obs, 2)
-        raw_obs = (
-            {k: v[valid] for k, v in raw_obs.items()}
-            if isinstance(raw_obs, dict)
-            else raw_obs[valid]
-        )
-        obs = self.policy_input(raw_obs)
-        actions = torch.as_tensor(batch.actions.reshape(-1, *batch.actions.shape[2:])[valid])
-        adv = torch.as_tensor(advantages.reshape(-1)[valid])
-        ret = torch.as_tensor(returns.reshape(-1)[valid])
-        parts = obs.values() if isinstance(obs, dict) else [obs]
-        if not all(bool(torch.isfinite(p).all()) for p in parts):
-            raise NonFiniteError("non-finite observation in the batch: no update made")
-        if not (torch.isfinite(adv).all() and torch.isfinite(ret).all()):
-            raise NonFiniteError("non-finite advantages or returns: no update made")
-        if cfg.normalize_advantages and adv.numel() > 1:
-            adv = (adv - adv.mean()) / (adv.std() + 1e-8)
-        step = trpo_step(self.policy, obs, actions, adv, cfg, self.generator)
+        tb = self.training_batch(batch)
+        step = trpo_step(self.policy, tb.obs, tb.actions, tb.advantages, cfg, self.generator)
         value_loss = fit_critic(
             self.critic,
             self.critic_optimizer,
-            obs,
-            ret,
+            tb.obs,
+            tb.returns,
             cfg.critic_epochs,
             cfg.critic_minibatch,
             self.generator,
         )
-        # Between iterations: refresh the statistics the next rollout's policy will use.
-        self.normalizer.update(raw_obs)
-        refresh_batchnorm(self.policy, obs)
-        self.iteration += 1
-        self.env_steps += int(valid.sum())
+        self.finish_update(tb)
         return TRPOUpdateStats(step, value_loss)
-
-    # -- checkpoints -----------------------------------------------------------------------
-
-    def state_dict(self) -> dict[str, Any]:
-        """Everything needed to resume or to act: plain types, tensors and numpy arrays."""
-        return {
-            "format": STATE_FORMAT,
-            "config": dataclasses.asdict(self.config),
-            "observation_space": space_to_spec(self.observation_space),
-            "action_space": space_to_spec(self.action_space),
-            "policy": self.policy.state_dict(),
-            "critic": self.critic.state_dict(),
-            "critic_optimizer": self.critic_optimizer.state_dict(),
-            "normalizer": self.normalizer.state_dict(),
-            "generator": self.generator.get_state(),
-            "iteration": self.iteration,
-            "env_steps": self.env_steps,
-        }
-
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore a :meth:`state_dict`; raises ``ValueError`` if its spaces differ from ours."""
-        if state.get("format") != STATE_FORMAT:
-            raise ValueError(f"not a TRPO state (format {state.get('format')!r})")
-        for key, space in (
-            ("observation_space", self.observation_space),
-            ("action_space", self.action_space),
-        ):
-            if state[key] != space_to_spec(space):
-                raise ValueError(f"checkpoint {key} {state[key]} does not match {space}")
-        self.policy.load_state_dict(state["policy"])
-        self.critic.load_state_dict(state["critic"])
-        self.critic_optimizer.load_state_dict(state["critic_optimizer"])
-        self.normalizer.load_state_dict(state["normalizer"])
-        self.generator.set_state(state["generator"])
-        self.iteration, self.env_steps = int(state["iteration"]), int(state["env_steps"])
-
-    @classmethod
-    def from_state_dict(cls, state: dict[str, Any], config: TRPOConfig | None = None) -> TRPOAgent:
-        """An agent rebuilt from a :meth:`state_dict` (its own config unless one is given)."""
-        if config is None:
-            config = config_from_dict(TRPOConfig, state["config"])
-        agent = cls(
-            space_from_spec(state["observation_space"]),
-            space_from_spec(state["action_space"]),
-            config,
-        )
-        agent.load_state_dict(state)
-        return agent

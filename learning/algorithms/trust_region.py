@@ -23,7 +23,6 @@ __all__ = [
     "flat_grad",
     "get_flat",
     "line_search",
-    "rows",
     "set_flat",
     "trainable_params",
 ]
@@ -75,11 +74,6 @@ def conjugate_gradient(
         p = r + (rr_new / rr) * p
         rr = rr_new
     return x
-
-
-def rows(obs: TensorObs, idx: Tensor) -> TensorObs:
-    """The rows ``idx`` of a batch of tensor observations (a tensor or a dict of them)."""
-    return {k: v[idx] for k, v in obs.items()} if isinstance(obs, dict) else obs[idx]
 
 
 def fisher_vector_product(

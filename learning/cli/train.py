@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,17 +48,18 @@ from learning.experiments.il_setups import get_il_setup
 from learning.experiments.setups import get_setup
 from learning.experiments.train_il import train_il
 from learning.experiments.train_rl import train_rl
+from learning.experiments.validation import RunResult
 
 __all__ = ["TrainArgs", "command_of", "outcome", "run"]
 
 
 @dataclass(frozen=True)
 class TrainArgs:
-    """Train a steering policy, rl-* by TRPO, il-* by GAIL (validation, checkpoints, early stop)."""
+    """Train a steering policy: rl-* by TRPO (rl-*-ppo by PPO), il-* by GAIL (with early stop)."""
 
-    setup: str  # rl-* (TRPO) or il-* (GAIL): {rl,il}-{gaussian,categorical}-{positional,radar}
+    setup: str  # {rl,il}-{gaussian,categorical}-{positional,radar}; rl-*-ppo: PPO, not TRPO
     seed: int = 0  # seeds networks, action sampling and training episodes
-    iterations: int = 0  # iteration budget (TRPO or GAIL); 0: the setup's default
+    iterations: int = 0  # iteration budget; 0: the setup's default
     validate_every: int = 0  # validate on the 15 episodes every K iterations; 0: setup default
     stop_after: int = 3  # stop after this many consecutive 15/15 validations; 0: never stop early
     out: str = ""  # output folder; default usvsim-results/train/<setup>-seed<seed>
@@ -141,8 +143,8 @@ def _run_il(args: TrainArgs) -> int:
     out = _out_dir(args, setup.name)
     if args.n_envs:
         setup = setup.with_num_envs(args.n_envs)
-    try:
-        result = train_il(
+    return _train_and_report(
+        lambda: train_il(
             setup,
             out,
             seed=args.seed,
@@ -154,14 +156,23 @@ def _run_il(args: TrainArgs) -> int:
             time_budget_s=args.time_budget_s,
             quiet=args.quiet,
             command=command_of(args),
-        )
+        ),
+        setup.name,
+        out,
+    )
+
+
+def _train_and_report(train: Callable[[], RunResult], name: str, out: Path) -> int:
+    """Run ``train`` and print its outcome line; exit codes and messages of ``usvsim train``."""
+    try:
+        result = train()
     except CheckpointError as err:
         raise _fail(f"cannot resume: {err}") from None
     except (NonFiniteError, NonFiniteWeightsError) as err:
         return _report_failure(f"non-finite value in training ({err})", out)
     print(
         outcome(
-            setup.name,
+            name,
             result.iterations,
             result.env_steps,
             result.wall_time_s,
@@ -186,8 +197,8 @@ def run(args: TrainArgs) -> int:
     out = _out_dir(args, setup.name)
     if args.n_envs and not args.resume:
         setup = setup.with_num_envs(args.n_envs)
-    try:
-        result = train_rl(
+    return _train_and_report(
+        lambda: train_rl(
             setup,
             out,
             seed=args.seed,
@@ -199,20 +210,7 @@ def run(args: TrainArgs) -> int:
             quiet=args.quiet,
             train_args=dataclasses.asdict(args),
             command=command_of(args),
-        )
-    except CheckpointError as err:
-        raise _fail(f"cannot resume: {err}") from None
-    except (NonFiniteError, NonFiniteWeightsError) as err:
-        return _report_failure(f"non-finite value in training ({err})", out)
-    print(
-        outcome(
-            setup.name,
-            result.iterations,
-            result.env_steps,
-            result.wall_time_s,
-            result.stop_reason,
-            result.first_full,
-            out,
-        )
+        ),
+        setup.name,
+        out,
     )
-    return 0

@@ -58,6 +58,7 @@ from gymnasium.vector import VectorEnv, VectorWrapper
 
 from learning.algorithms.base import config_from_dict
 from learning.algorithms.networks import NetworkConfig
+from learning.algorithms.ppo import PPOConfig
 from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
@@ -137,6 +138,21 @@ RADAR_TRPO = dataclasses.replace(
     network=NetworkConfig(init_std_fraction=0.5, balanced_fusion=True),
 )
 
+# PPO on the same rollouts and networks (setups rl-*-ppo); the PPO paper's Table 3 and CleanRL's
+# defaults (PPOConfig) except a measured minibatch of 128 (learning.algorithms.ppo)
+RL_PPO = PPOConfig(
+    iterations=300,
+    num_envs=32,
+    steps_per_env=64,
+    gamma=0.99,
+    gae_lambda=0.97,
+    network=NetworkConfig(init_std_fraction=0.5),
+)
+RADAR_PPO = dataclasses.replace(
+    RL_PPO, num_envs=64, network=NetworkConfig(init_std_fraction=0.5, balanced_fusion=True)
+)
+AlgorithmConfig = TRPOConfig | PPOConfig
+
 
 @dataclass(frozen=True)
 class RLSetup:
@@ -145,7 +161,7 @@ class RLSetup:
     name: str  # e.g. "rl-gaussian-positional"
     observation: ObservationKind  # usvsim.task.observations kind
     action: ActionKind  # usvsim.task.batch action kind
-    algorithm_config: TRPOConfig = field(default=RL_TRPO)  # a registered algorithm's config
+    algorithm_config: AlgorithmConfig = field(default=RL_TRPO)  # a registered algorithm's
     validate_every: int = 5  # iterations between validations on the 15 episodes
     study_iterations: int = 0  # the study's iterations to its best validation (Table 4.1)
 
@@ -154,7 +170,7 @@ class RLSetup:
         """The registered name of the algorithm (:mod:`learning.algorithms.registry`)."""
         return algorithm_for(self.algorithm_config).name
 
-    def run_config(self, seed: int = 0, iterations: int | None = None) -> TRPOConfig:
+    def run_config(self, seed: int = 0, iterations: int | None = None) -> AlgorithmConfig:
         """The algorithm config of a run: the setup's, with ``seed`` and ``iterations`` (None:
         the setup's budget)."""
         budget = self.algorithm_config.iterations if iterations is None else iterations
@@ -191,6 +207,11 @@ SETUPS: dict[str, RLSetup] = {
         RLSetup(
             "rl-categorical-radar", "radar+goal", "categorical", RADAR_TRPO, study_iterations=4300
         ),
+        # the same four setups trained by PPO instead of TRPO
+        RLSetup("rl-gaussian-positional-ppo", "positional", "gaussian", RL_PPO, 1, 2400),
+        RLSetup("rl-categorical-positional-ppo", "positional", "categorical", RL_PPO, 1, 1000),
+        RLSetup("rl-gaussian-radar-ppo", "radar+goal", "gaussian", RADAR_PPO, 5, 1300),
+        RLSetup("rl-categorical-radar-ppo", "radar+goal", "categorical", RADAR_PPO, 5, 4300),
     )
 }
 

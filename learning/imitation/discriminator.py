@@ -33,7 +33,7 @@ __all__ = [
     "RewardKind",
     "cat_obs",
     "index_obs",
-    "normalise_actions",
+    "normalize_actions",
     "reward_from_logits",
 ]
 
@@ -43,7 +43,7 @@ N_ABSORBING = 2  # [goal end, collision end]
 STATE_FORMAT = "usvsim.learning.gail/1"
 
 
-def normalise_actions(actions: NDArray[Any], space: spaces.Space) -> NDArray[np.float32]:
+def normalize_actions(actions: NDArray[Any], space: spaces.Space) -> NDArray[np.float32]:
     """Env actions → heading change as a fraction of the bound, (B, 1) in [-1, 1]."""
     a = np.asarray(actions)
     if isinstance(space, spaces.Discrete):
@@ -153,7 +153,7 @@ class GAILTrainer:
         self.optimizer = torch.optim.Adam(self.disc.parameters(), lr=config.disc_lr)
         self.generator = torch.Generator().manual_seed(seed + 11)
         obs = self.disc_obs(expert.obs)
-        az = self._az(normalise_actions(expert.actions, action_space), np.zeros((len(expert), 2)))
+        az = self._az(normalize_actions(expert.actions, action_space), np.zeros((len(expert), 2)))
         if config.absorbing:  # one goal-absorbing sample per expert run
             n_runs = int(expert.last.sum())
             obs = cat_obs([obs, self._absorbing_obs(obs, n_runs)])
@@ -191,7 +191,7 @@ class GAILTrainer:
         valid = batch.valid.reshape(-1)
         obs = self.disc_obs(index_obs(flatten_obs(batch.obs, 2), valid))
         acts = batch.actions.reshape(-1, *batch.actions.shape[2:])[valid]
-        az = self._az(normalise_actions(acts, self.action_space), np.zeros((int(valid.sum()), 2)))
+        az = self._az(normalize_actions(acts, self.action_space), np.zeros((int(valid.sum()), 2)))
         kinds = (ends & batch.terminated[..., None]).reshape(-1, N_ABSORBING)
         kinds = kinds[kinds.any(axis=1)].astype(np.float32)
         abs_obs = self._absorbing_obs(obs, kinds.shape[0])
@@ -270,7 +270,7 @@ class GAILTrainer:
         T, N = batch.rewards.shape
         obs = self.disc_obs(flatten_obs(batch.obs, 2))
         acts = batch.actions.reshape(-1, *batch.actions.shape[2:])
-        az = self._az(normalise_actions(acts, self.action_space), np.zeros((T * N, 2)))
+        az = self._az(normalize_actions(acts, self.action_space), np.zeros((T * N, 2)))
         clip = cfg.reward_clip
         logits = self.logits(obs, az)
         r = reward_from_logits(logits, cfg.reward).clamp(-clip, clip).numpy().astype(np.float64)

@@ -77,7 +77,7 @@ from learning.imitation.discriminator import (
     GAILTrainer,
     cat_obs,
     index_obs,
-    normalise_actions,
+    normalize_actions,
     reward_from_logits,
 )
 from learning.imitation.preprocess import ExpertData
@@ -88,8 +88,8 @@ __all__ = [
     "GAILConfig",
     "GAILStats",
     "GAILTrainer",
-    "behavioural_cloning",
-    "normalise_actions",
+    "behavioral_cloning",
+    "normalize_actions",
     "reward_from_logits",
     "train_gail",
 ]
@@ -98,7 +98,7 @@ AGENT_FORMAT = "usvsim.learning.gail-agent/1"
 END_INFO = ("reached_goal", "collision")  # the env's info keys telling how an episode ended
 
 
-def behavioural_cloning(agent: TRPOAgent, expert: ExpertData, config: GAILConfig) -> float:
+def behavioral_cloning(agent: TRPOAgent, expert: ExpertData, config: GAILConfig) -> float:
     """Warm start: maximise log π(a_E | s_E) by Adam (``bc_epochs`` epochs); final mean loss.
 
     The observation normaliser and the BatchNorm statistics are first fitted to the expert's
@@ -237,8 +237,8 @@ class GAILAgent:
         return self.policy_agent.act(obs, deterministic)
 
     def warm_start(self) -> float:
-        """Behavioural cloning of the expert (:func:`behavioural_cloning`); final mean loss."""
-        return behavioural_cloning(self.policy_agent, self.expert, self.gail_config)
+        """Behavioural cloning of the expert (:func:`behavioral_cloning`); final mean loss."""
+        return behavioral_cloning(self.policy_agent, self.expert, self.gail_config)
 
     def update(self, batch: RolloutBatch) -> GAILStats:
         """Discriminator step, imitation rewards into ``batch.rewards``, TRPO step."""

@@ -116,7 +116,7 @@ def pack_servo_frame(frame: ServoFrame) -> bytes:
     )
 
 
-def _normalised(pwm_us: int) -> float:
+def _normalized(pwm_us: int) -> float:
     """PWM (µs) → [-1, 1] around 1500 µs with ±400 µs travel (Rover SERVOn_MIN/MAX 1100/1900).
 
     0 µs (channel not driven) is neutral.
@@ -128,8 +128,8 @@ def _normalised(pwm_us: int) -> float:
 
 def actuator_command(steering_pwm: int, throttle_pwm: int, act: Actuation) -> tuple[float, float]:
     """Actuator command ``a_cmd = [a1, a2]`` of the vessel model from steering/throttle PWM."""
-    s = _normalised(steering_pwm)
-    t = _normalised(throttle_pwm)
+    s = _normalized(steering_pwm)
+    t = _normalized(throttle_pwm)
     if act.kind == "waterjet":
         return max(t, 0.0) * act.a1_max, s * act.a2_max
     a1 = t * act.a1_max if t >= 0 else -t * act.a1_min
