@@ -209,6 +209,7 @@ def test_same_seed_same_update() -> None:
 # --- it learns ---------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_ppo_solves_cartpole_within_ci_budget() -> None:
     """CartPole-v1: mean return ≥ 195 over one iteration's finished episodes within 30
     iterations of 2048 steps. Measured (minibatch 256, seeds 0-2): 6-7 iterations, 1.6-2.3 s at

@@ -182,7 +182,7 @@ def test_non_finite_policy_is_never_saved_and_old_file_survives(tmp_path: Path) 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.pt"]  # no temporary left over
 
 
-MODELS = Path(__file__).resolve().parent.parent / "usvsim" / "models"
+MODELS = Path(__file__).resolve().parents[3] / "usvsim" / "models"
 SHIPPED = sorted(MODELS.glob("*.pt"))  # every shipped model has its models.json entry
 
 

@@ -64,6 +64,7 @@ def _random_batch(n_envs: int = 8, steps: int = 64):  # type: ignore[no-untyped-
     return env, RolloutCollector(env, seed=0).collect(act, steps)
 
 
+@pytest.mark.slow
 def test_discriminator_separates_expert_from_random_in_500_updates(expert: ExpertData) -> None:
     env, batch = _random_batch()
     cfg = GAILConfig(disc_steps=500, disc_minibatch=128, disc_lr=1e-3)
@@ -138,6 +139,7 @@ def _gail_run(expert: ExpertData, iterations: int, seed: int = 0):  # type: igno
     return agent, log
 
 
+@pytest.mark.slow
 def test_same_seed_same_run(expert: ExpertData) -> None:
     _, a = _gail_run(expert, 2, seed=3)
     _, b = _gail_run(expert, 2, seed=3)

@@ -243,6 +243,7 @@ def test_same_seed_same_curve() -> None:
     assert _curve(other) != runs[0][0]
 
 
+@pytest.mark.slow
 def test_trpo_solves_cartpole_within_ci_budget() -> None:
     """CartPole-v1 mean return ≥ 195 (finished episodes of one iteration) within 40 iterations
     of 2048 steps and 60 s of wall time, and ≥ 195 for the deterministic policy on 5 fresh

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import pytest
 import torch
 
 from learning.algorithms.loop import IterationStats, train
@@ -42,6 +43,7 @@ def _train(
     return agent, stats
 
 
+@pytest.mark.slow
 def test_short_positional_run_beats_the_random_policy() -> None:
     setup = get_setup("rl-gaussian-positional")
     random_records = evaluate(
@@ -59,6 +61,7 @@ def test_short_positional_run_beats_the_random_policy() -> None:
     assert stats[-1].mean_return > stats[0].mean_return
 
 
+@pytest.mark.slow
 def test_same_seed_same_training_curve_on_pole_avoidance() -> None:
     _, first = _train("rl-categorical-positional", 3, seed=5)
     _, again = _train("rl-categorical-positional", 3, seed=5)
