@@ -18,7 +18,7 @@ import json
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -31,7 +31,8 @@ from learning.experiments.checkpoint import (
     load_agent,
     load_checkpoint,
 )
-from usvsim.common.fileio import atomic_write_text
+from usvsim.common.fileio import atomic_write_text, check_writable_file, json_safe
+from usvsim.common.options import bounds
 from usvsim.evaluation.episodes import (
     EpisodeRecord,
     evaluate,
@@ -48,10 +49,10 @@ class EvaluateArgs:
     """Evaluate a trained policy checkpoint on the validation (15) and held-out episodes."""
 
     checkpoint: str  # path of a .pt checkpoint, e.g. usvsim/models/rl-gaussian-positional.pt
-    heldout: int = 200  # held-out episodes to run (0: validation only)
+    heldout: int = field(default=200, metadata=bounds(ge=0, le=100_000))  # 0: validation only
     episodes: bool = False  # also print one line per validation episode
-    json: str = ""  # also write the table as JSON to this path
-    threads: int = 2  # torch CPU threads
+    json: str = ""  # also write the table as JSON to this path (NaN, e.g. no success: null)
+    threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
 
 
 def evaluation_row(name: str, records: Sequence[EpisodeRecord]) -> dict[str, Any]:
@@ -96,6 +97,8 @@ def run(args: EvaluateArgs) -> int:
     torch.set_num_threads(max(1, args.threads))
     if args.heldout < 0:
         raise SystemExit("usvsim evaluate: --heldout must be >= 0")
+    if args.json:
+        check_writable_file(args.json, "--json")  # before the episodes, not after them
     try:
         ckpt = load_checkpoint(args.checkpoint)
         agent = load_agent(ckpt, args.checkpoint)
@@ -122,6 +125,7 @@ def run(args: EvaluateArgs) -> int:
         print(per_episode)
     if args.json:
         payload = {"checkpoint": args.checkpoint, "setup": ckpt.setup, "rows": rows}
-        atomic_write_text(args.json, json.dumps(payload, indent=2) + "\n")
+        text = json.dumps(json_safe(payload), indent=2, allow_nan=False)
+        atomic_write_text(args.json, text + "\n")
     sys.stdout.flush()
     return 0

@@ -27,8 +27,21 @@ Every ``validate_every`` iterations the deterministic policy runs the 15 validat
 ``stop_after`` consecutive validations. Files are written atomically: a crash, a NaN or Ctrl-C
 never leaves half a checkpoint, and a failing update (non-finite loss, gradient or data) stops
 the run with a clear message *before* anything is saved, so ``latest.pt`` and ``best.pt`` stay
-those of the last good validation. ``--resume`` continues from ``latest.pt`` with the setup and
-hyperparameters stored there.
+those of the last good validation. ``--resume`` continues from ``latest.pt`` with the setup,
+hyperparameters, seed and ``n_envs`` stored there; a ``--seed`` or ``--n-envs`` other than the
+default that differs from the stored value is refused (exit 2: the run cannot honour it), and
+``summary.json`` records the seed really used.
+
+Ctrl-C or SIGTERM ends a run cleanly: ``log.csv`` and ``summary.json`` (stop reason
+``"interrupted"``) are written, ``latest.pt``/``best.pt`` stay those of the last validation, one
+line says so, exit status 130; ``--resume`` continues from there. Bad options (ranges in
+:class:`TrainArgs`), an unknown setup, an unwritable ``--out`` or an unusable ``--demos`` folder
+are one line and exit status 2 before any work starts (:mod:`usvsim.cli.main`).
+
+``--demos DIR`` (il-* only) trains from your own ``usvsim-demo/1`` files (``DIR/demo_*.csv``,
+format in :mod:`learning.imitation.demonstrations`) instead of the shipped ones; files that
+cannot be read or are physically implausible are skipped with a warning, and the run says how
+many it used (also in ``summary.json``).
 """
 
 from __future__ import annotations
@@ -36,19 +49,25 @@ from __future__ import annotations
 import dataclasses
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import torch
 
 from learning.algorithms.rollout import NonFiniteError
-from learning.experiments.checkpoint import CheckpointError, NonFiniteWeightsError
-from learning.experiments.il_setups import get_il_setup
-from learning.experiments.setups import get_setup
+from learning.experiments.checkpoint import CheckpointError, NonFiniteWeightsError, load_checkpoint
+from learning.experiments.il_setups import IL_SETUPS, get_il_setup
+from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
 from learning.experiments.train_rl import train_rl
 from learning.experiments.validation import RunResult
+from learning.imitation.demonstrations import DEMOS_DIR
+from usvsim.common.errors import UserError
+from usvsim.common.fileio import check_writable_dir
+from usvsim.common.options import bounds
+
+INTERRUPTED = 130  # exit status after Ctrl-C / SIGTERM
 
 __all__ = ["TrainArgs", "command_of", "outcome", "run"]
 
@@ -58,16 +77,31 @@ class TrainArgs:
     """Train a steering policy: rl-* by TRPO (rl-*-ppo by PPO), il-* by GAIL (with early stop)."""
 
     setup: str  # {rl,il}-{gaussian,categorical}-{positional,radar}; rl-*-ppo: PPO, not TRPO
-    seed: int = 0  # seeds networks, action sampling and training episodes
-    iterations: int = 0  # iteration budget; 0: the setup's default
-    validate_every: int = 0  # validate on the 15 episodes every K iterations; 0: setup default
-    stop_after: int = 3  # stop after this many consecutive 15/15 validations; 0: never stop early
+    seed: int = field(default=0, metadata=bounds(ge=0, lt=2**32))  # networks, sampling, episodes
+    iterations: int = field(default=0, metadata=bounds(ge=0))  # iteration budget; 0: the setup's
+    validate_every: int = field(default=0, metadata=bounds(ge=0))  # every K iterations; 0: setup's
+    stop_after: int = field(default=3, metadata=bounds(ge=0))  # after N 15/15 in a row; 0: never
     out: str = ""  # output folder; default usvsim-results/train/<setup>-seed<seed>
-    resume: bool = False  # continue the run in --out from its latest.pt
-    n_envs: int = 0  # boats per batch (batch = n_envs x 64 decisions); 0: setup default
-    time_budget_s: float = 0.0  # stop after this much wall-clock, s; 0: no limit
-    threads: int = 2  # torch CPU threads (1 is faster when other jobs load the CPU)
+    resume: bool = False  # continue the run in --out from its latest.pt (its seed and n_envs)
+    n_envs: int = field(  # boats per batch (batch = n_envs x 64 decisions); 0: setup default
+        default=0, metadata=bounds(ge=1, le=65_536, zero_ok=True)
+    )
+    time_budget_s: float = field(default=0.0, metadata=bounds(ge=0))  # wall-clock limit, s; 0: none
+    threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
     quiet: bool = False  # no progress bar
+    demos: str = ""  # il-*: folder of your demo_*.csv files; default: the shipped demonstrations
+
+    def check(self) -> None:
+        """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
+        if self.setup not in SETUPS and self.setup not in IL_SETUPS:
+            raise UserError(
+                f"unknown setup {self.setup!r}; RL setups: {', '.join(SETUPS)}; "
+                f"IL setups: {', '.join(IL_SETUPS)}"
+            )
+        if self.demos and not self.setup.startswith("il-"):
+            raise UserError(f"--demos is for the il-* setups, not {self.setup!r}")
+        if self.demos and not Path(self.demos).is_dir():
+            raise UserError(f"--demos {self.demos}: no such folder")
 
 
 def _fail(message: str) -> SystemExit:
@@ -109,17 +143,50 @@ def outcome(
 
 
 def _check_options(args: TrainArgs) -> None:
-    for name in ("iterations", "validate_every", "stop_after", "n_envs"):
-        if getattr(args, name) < 0:
-            raise _fail(f"--{name.replace('_', '-')} must be >= 0")
+    """The option checks of :func:`usvsim.cli.args.check_options`, for callers of :func:`run`
+    that build a ``TrainArgs`` themselves."""
+    from usvsim.common.options import check_bounds
+
+    try:
+        check_bounds(args)
+        args.check()
+    except UserError as err:
+        raise _fail(str(err)) from None
 
 
 def _out_dir(args: TrainArgs, name: str) -> Path:
-    """``--out``, default ``usvsim-results/train/<setup>-seed<seed>``; refuses to overwrite."""
+    """``--out``, default ``usvsim-results/train/<setup>-seed<seed>``; refuses to overwrite,
+    and checks that it can be written before anything is trained."""
     out = Path(args.out or f"usvsim-results/train/{name}-seed{args.seed}")
     if not args.resume and (out / "latest.pt").exists():
         raise _fail(f"{out / 'latest.pt'} exists: use --resume, or another --out")
+    check_writable_dir(out, "--out")
+    if args.resume:
+        _check_resume(args, out)
     return out
+
+
+def _check_resume(args: TrainArgs, out: Path) -> None:
+    """Refuse a ``--seed`` / ``--n-envs`` that contradicts the run being resumed (module
+    docstring). An unreadable ``latest.pt`` is left to the training run to report."""
+    path = out / "latest.pt"
+    try:
+        ckpt = load_checkpoint(path)
+        base = get_il_setup(ckpt.setup) if ckpt.setup.startswith("il-") else get_setup(ckpt.setup)
+        stored = setup_from_params(base, ckpt.setup_params)
+        stored_seed = int(ckpt.agent["config"]["seed"])
+        stored_envs = int(stored.run_config().num_envs)
+    except (CheckpointError, ValueError, KeyError, TypeError):
+        return
+    for flag, given, value in (
+        ("--seed", args.seed, stored_seed),
+        ("--n-envs", args.n_envs, stored_envs),
+    ):
+        if given not in (0, value):
+            raise _fail(
+                f"{flag} {given} contradicts {path} ({flag} {value}); --resume continues with "
+                f"the stored value: drop {flag}, or start a new run in another --out"
+            )
 
 
 def _report_failure(error: str, out: Path) -> int:
@@ -139,7 +206,6 @@ def _run_il(args: TrainArgs) -> int:
         setup = get_il_setup(args.setup)
     except ValueError as err:
         raise _fail(str(err)) from None
-    _check_options(args)
     out = _out_dir(args, setup.name)
     if args.n_envs:
         setup = setup.with_num_envs(args.n_envs)
@@ -147,6 +213,7 @@ def _run_il(args: TrainArgs) -> int:
         lambda: train_il(
             setup,
             out,
+            demos_dir=args.demos or DEMOS_DIR,
             seed=args.seed,
             iterations=args.iterations or None,
             resume=args.resume,
@@ -170,6 +237,19 @@ def _train_and_report(train: Callable[[], RunResult], name: str, out: Path) -> i
         raise _fail(f"cannot resume: {err}") from None
     except (NonFiniteError, NonFiniteWeightsError) as err:
         return _report_failure(f"non-finite value in training ({err})", out)
+    if result.stop_reason == "interrupted":
+        kept = (
+            f"latest.pt of iteration {result.history[-1]['iteration']} kept"
+            if result.history
+            else "no checkpoint yet (interrupted before the first validation)"
+        )
+        print(
+            f"usvsim train: interrupted at iteration {result.iterations}; {kept}; "
+            f"summary.json marked interrupted in {out} (continue with --resume)",
+            file=sys.stderr,
+            flush=True,
+        )
+        return INTERRUPTED
     print(
         outcome(
             name,
@@ -185,15 +265,16 @@ def _train_and_report(train: Callable[[], RunResult], name: str, out: Path) -> i
 
 
 def run(args: TrainArgs) -> int:
-    """Run ``usvsim train`` (module docstring); 0 on success, 1 on a non-finite loss."""
-    torch.set_num_threads(max(1, args.threads))
+    """Run ``usvsim train`` (module docstring); 0 on success, 1 on a non-finite loss, 130 after
+    Ctrl-C / SIGTERM."""
+    _check_options(args)
+    torch.set_num_threads(args.threads)
     if args.setup.startswith("il-"):
         return _run_il(args)
     try:
         setup = get_setup(args.setup)
     except ValueError as err:
         raise _fail(str(err)) from None
-    _check_options(args)
     out = _out_dir(args, setup.name)
     if args.n_envs and not args.resume:
         setup = setup.with_num_envs(args.n_envs)

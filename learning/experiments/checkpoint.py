@@ -65,6 +65,7 @@ from learning.algorithms.base import Agent
 from learning.algorithms.networks import space_to_spec
 from learning.algorithms.registry import get_algorithm
 from learning.experiments.setups import RLSetup, get_setup, setup_params
+from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_open
 from usvsim.task.batch import ActionKind, action_space
 from usvsim.task.observations import ObservationKind, observation_space
@@ -90,7 +91,7 @@ VERSION = 1
 _REQUIRED = ("setup", "observation", "action", "setup_params", "agent", "slim", "weights_dtype")
 
 
-class CheckpointError(ValueError):
+class CheckpointError(UserError):
     """A checkpoint file that cannot be used: unreadable, not a checkpoint, or mismatched."""
 
 

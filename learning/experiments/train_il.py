@@ -41,10 +41,16 @@ from learning.experiments.validation import (
     validation_record,
     validation_summary,
 )
-from learning.imitation.demonstrations import DEMOS_DIR, load_recordings, quality_check
+from learning.imitation.demonstrations import (
+    DEMOS_DIR,
+    DemoFormatError,
+    LoadReport,
+    load_recordings,
+    quality_check,
+)
 from learning.imitation.gail import GAILAgent, GAILStats, train_gail
-from learning.imitation.preprocess import ExpertData, expert_data
-from usvsim.common.fileio import atomic_open, atomic_write_text
+from learning.imitation.preprocess import ExpertData, check_observations, expert_data
+from usvsim.common.fileio import atomic_open, atomic_write_text, json_safe
 from usvsim.evaluation.episodes import validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
 from usvsim.task.scenario import EpisodeSpec
@@ -201,16 +207,18 @@ class _ILRun:
         self.stop_reason = reason or self.stop_reason
         return bool(reason)
 
-    def result(self, agent: GAILAgent, wall_s: float) -> RunResult:
-        """Write ``summary.json``; the run's :class:`ILRunResult`."""
+    def result(self, iterations: int, env_steps: int, wall_s: float) -> RunResult:
+        """Write ``summary.json`` (JSON without NaN: null); the run's :class:`ILRunResult`."""
         summary = {
             "setup": self.setup.name,
             "seed": self.train_args["seed"],
             "command": self.train_args["command"],
-            "iterations": agent.iteration,
-            "env_steps": agent.env_steps,
+            "iterations": iterations,
+            "env_steps": env_steps,
             "wall_time_s": wall_s,
             "stop_reason": self.stop_reason,
+            "interrupted": self.stop_reason == "interrupted",
+            "checkpoint_iteration": int(self.history[-1]["iteration"]) if self.history else None,
             "first_14_of_15": self.milestones.first_14_of_15,
             "first_15_of_15": self.milestones.first_full,
             "best": self.best,
@@ -218,15 +226,18 @@ class _ILRun:
             "study_iterations": self.setup.study_iterations,
             "threads": torch.get_num_threads(),
             "demonstrations": self.train_args["demos"],
+            "demonstrations_folder": self.train_args.get("demos_dir", ""),
+            "demonstrations_skipped": self.train_args.get("demos_skipped", 0),
         }
-        atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        text = json.dumps(json_safe(summary), indent=2, allow_nan=False)
+        atomic_write_text(self.out / "summary.json", text + "\n")
         return RunResult(
             self.best,
             self.history,
             self.out / "best.pt",
             self.out / "latest.pt",
-            agent.iteration,
-            agent.env_steps,
+            iterations,
+            env_steps,
             wall_s,
             self.stop_reason,
             self.milestones.first_full,
@@ -276,12 +287,14 @@ def train_il(
         seed = int(state["agent"]["config"]["seed"])
         rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
     out.mkdir(parents=True, exist_ok=True)
-    data, n_demos = _expert_pairs(setup, demos_dir, log)
+    data, n_demos, n_skipped = _expert_pairs(setup, demos_dir, log)
     cfg = setup.run_config(seed, iterations)
     train_args = {
         "seed": seed,
         "iterations": iterations,
         "demos": n_demos,
+        "demos_dir": str(demos_dir),
+        "demos_skipped": n_skipped,
         "validate_every": validate_every,
         "stop_after": stop_after,
         "time_budget_s": time_budget_s,
@@ -326,24 +339,60 @@ def train_il(
             callback=callback,
             state=state,
         )
+        done = (agent.iteration, agent.env_steps)
+    except KeyboardInterrupt:  # Ctrl-C / SIGTERM: a stop rule (checkpoints are the last ones)
+        run.stop_reason = "interrupted"
+        last = run.log.rows[-1] if run.log.rows else {"iteration": start_iteration, "env_steps": 0}
+        done = (int(last["iteration"]), int(last["env_steps"]))
     finally:
         bar.close()
         run.log.write()
-    return run.result(agent, run.wall_offset_s + run.session_s())
+    return run.result(*done, run.wall_offset_s + run.session_s())
 
 
 def _expert_pairs(
     setup: ILSetup, demos_dir: str | Path, log: Callable[[str], None]
-) -> tuple[ExpertData, int]:
+) -> tuple[ExpertData, int, int]:
     """The (s, a) pairs of the demonstrations in ``demos_dir`` that pass the quality check, in
-    ``setup``'s observation and action kinds; and how many demonstrations that is."""
+    ``setup``'s observation and action kinds; how many demonstrations that is, and how many
+    files were skipped as unreadable or implausible (each named in a warning through ``log``).
+
+    Raises
+    ------
+    DemoFormatError
+        If no demonstration is left (the folder is empty, or every file is bad or rejected).
+    """
     report = load_recordings(demos_dir)
-    for path, why in report.errors.items():
-        log(f"skipping {path}: {why}")
+    errors = dict(report.errors)
+    plausible = []
+    for rec in report.recordings:
+        try:
+            check_observations(
+                expert_data([rec], setup.observation, setup.action), setup.observation
+            )
+        except (DemoFormatError, ValueError) as err:  # ValueError: streams too short to use
+            errors[rec.source] = str(err)
+            continue
+        plausible.append(rec)
+    for path, why in errors.items():
+        log(f"warning: skipping {path}: {why}")
+    report = LoadReport(plausible, errors)
     kept = [r for r in report.recordings if not quality_check(r)]
+    total = len(report.recordings) + len(report.errors)
+    if not kept:
+        raise DemoFormatError(
+            f"{demos_dir}: no usable demonstration (demo_*.csv files: {total}, unreadable or "
+            f"implausible: {len(report.errors)}, rejected by the quality filter: "
+            f"{len(report.recordings)})"
+        )
     data = expert_data(kept, setup.observation, setup.action)
-    log(f"{setup.name}: {len(kept)}/{len(report.recordings)} demonstrations, {len(data)} pairs")
-    return data, len(kept)
+    log(
+        f"{setup.name}: using {len(kept)} of {total} demonstrations in {demos_dir} "
+        f"({len(report.errors)} skipped as unreadable or implausible, "
+        f"{len(report.recordings) - len(kept)} rejected by the quality filter), "
+        f"{len(data)} pairs"
+    )
+    return data, len(kept), len(report.errors)
 
 
 def _resume_state(

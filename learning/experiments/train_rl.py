@@ -32,7 +32,7 @@ from learning.experiments.checkpoint import (
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
 from learning.experiments.validation import RunResult, validate, validation_record
-from usvsim.common.fileio import atomic_write_text
+from usvsim.common.fileio import atomic_write_text, json_safe
 
 __all__ = ["COMMON_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
 
@@ -125,8 +125,10 @@ class _Run:
             return True
         return False
 
-    def result(self, agent: Agent, wall_s: float, seed: int, command: str) -> RunResult:
-        """Write ``summary.json``; the run's :class:`RunResult`."""
+    def result(
+        self, iterations: int, env_steps: int, wall_s: float, seed: int, command: str
+    ) -> RunResult:
+        """Write ``summary.json`` (JSON without NaN: null); the run's :class:`RunResult`."""
         best = None
         if self.best is not None:
             best = {"successes": self.best[0], "mean_return": self.best[1]}
@@ -134,23 +136,26 @@ class _Run:
             "setup": self.setup.name,
             "seed": seed,
             "command": command,
-            "iterations": agent.iteration,
-            "env_steps": agent.env_steps,
+            "iterations": iterations,
+            "env_steps": env_steps,
             "wall_time_s": wall_s,
             "stop_reason": self.stop_reason,
+            "interrupted": self.stop_reason == "interrupted",
+            "checkpoint_iteration": int(self.history[-1]["iteration"]) if self.history else None,
             "first_15_of_15": self.milestones.first_full,
             "best": best,
             "study_iterations": self.setup.study_iterations,
             "threads": torch.get_num_threads(),
         }
-        atomic_write_text(self.out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        text = json.dumps(json_safe(summary), indent=2, allow_nan=False)
+        atomic_write_text(self.out / "summary.json", text + "\n")
         return RunResult(
             best,
             self.history,
             self.out / "best.pt",
             self.out / "latest.pt",
-            agent.iteration,
-            agent.env_steps,
+            iterations,
+            env_steps,
             wall_s,
             self.stop_reason,
             self.milestones.first_full,
@@ -176,8 +181,14 @@ def train_rl(
     Validation every ``validate_every`` iterations (0: the setup's); the run stops after
     ``stop_after`` consecutive 15/15 validations (0: never) or once it has run
     ``time_budget_s`` (0: no limit). ``resume`` continues from ``out_dir/latest.pt`` with the
-    setup, hyperparameters and seed stored there and keeps ``log.csv`` up to its iteration.
+    setup, hyperparameters and seed stored there (the ``seed`` argument is then ignored;
+    ``summary.json`` records the seed really used) and keeps ``log.csv`` up to its iteration.
     ``train_args`` go into the checkpoints, ``command`` into ``summary.json``.
+
+    Ctrl-C (``KeyboardInterrupt``, also SIGTERM under ``usvsim``) ends the run like a stop rule:
+    ``log.csv`` and ``summary.json`` are written (stop reason ``"interrupted"``,
+    ``"interrupted": true``), ``latest.pt`` and ``best.pt`` stay those of the last validation
+    (``checkpoint_iteration``), and the result is returned.
 
     Raises ``CheckpointError`` when ``resume`` finds no usable full checkpoint of ``setup``, and
     ``NonFiniteError`` / ``NonFiniteWeightsError`` (after writing ``log.csv``, naming the
@@ -219,11 +230,17 @@ def train_rl(
     t0 = time.perf_counter()
     try:
         agent = train(config, setup.make_vector_env, callback=callback, state=state)
+        iterations, env_steps = agent.iteration, agent.env_steps
     except (NonFiniteError, NonFiniteWeightsError) as err:
         r.log.write()
         raise type(err)(f"{err}; stopped at iteration {len(r.rows) + 1}") from err
+    except KeyboardInterrupt:
+        r.stop_reason = "interrupted"
+        stored_steps = int(state.get("env_steps", 0)) if state is not None else 0
+        last = r.rows[-1] if r.rows else {"iteration": start_iteration, "env_steps": stored_steps}
+        iterations, env_steps = int(last["iteration"]), int(last["env_steps"])
     finally:
         bar.close()
     wall = r.wall_offset_s + time.perf_counter() - t0
     r.log.write()
-    return r.result(agent, wall, seed, command)
+    return r.result(iterations, env_steps, wall, config.seed, command)

@@ -35,10 +35,23 @@ strictly increasing, and the cells a stream needs must be finite numbers (radar 
 bearing may both be empty: a sweep without an echo). A reader of a later version must refuse
 ``/1`` files only if it changes these rules.
 
+Physical plausibility (:class:`Plausibility`, checked by the loader too; a file breaking it is
+refused like a malformed one, naming file and line): metadata origin latitude in [-90, 90]° and
+longitude in [-180, 180]°, ``poles_ne`` pairs of finite metres within
+:attr:`Plausibility.max_distance_m` of the origin, ``pole_radius_m`` in (0, 100] m; every GPS
+fix within those latitude/longitude ranges and within ``max_distance_m`` (5 km) of the origin;
+between consecutive fixes no more than ``max_speed_mps`` (15 m/s, five times the task's 3 m/s)
+plus ``gps_allowance_m`` (10 m, several σ of GPS noise); compass headings in [-360, 360]°; radar
+ranges in [0, 10 km].
+
 :func:`load_recording` raises :class:`DemoFormatError` naming the file, line and column of the
 first problem; :func:`load_recordings` loads a folder and collects such errors instead of
 stopping. :func:`quality_check` is the documented filter (reasons for rejection, from the
 recorded data only).
+
+Why this module is long: the format is one idea, kept in one file: the recorder that writes it,
+the reader that parses and validates it, and the filter that judges it (the plausibility limits
+live in :mod:`learning.imitation.plausibility`).
 """
 
 from __future__ import annotations
@@ -57,7 +70,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.expert import ExpertParams, ExpertRun, run_expert
+from learning.imitation.plausibility import (
+    PLAUSIBLE,
+    DemoFormatError,
+    Plausibility,
+    check_fix,
+    check_motion,
+    check_site,
+)
 from usvsim.common.angles import ssa
+from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_write_text
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned, ned_from_geodetic
 from usvsim.task.scenario import Scenario, draw_episodes
@@ -70,6 +92,7 @@ __all__ = [
     "REQUIRED_METADATA",
     "DemoFormatError",
     "LoadReport",
+    "Plausibility",
     "RecorderParams",
     "Recording",
     "load_recording",
@@ -145,10 +168,6 @@ class Recording:
     def gps_ne(self) -> FloatArray:
         """GPS fixes in the site's NED frame, (G, 2) m."""
         return ned_from_geodetic(self.gps_latlon_deg[:, 0], self.gps_latlon_deg[:, 1], self.origin)
-
-
-class DemoFormatError(ValueError):
-    """A demonstration file breaks the format; the message names file, line and column."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -288,6 +307,7 @@ def _parse_header(path: str, lines: list[str]) -> tuple[dict[str, Any], dict[str
     missing = [k for k in REQUIRED_METADATA if k not in meta]
     if missing:
         raise DemoFormatError(f"{path}, line 1: metadata lacks {', '.join(missing)}")
+    check_site(path, meta)
     n_poles = len(meta["poles_ne"])
     if not (isinstance(meta["pole_index"], int) and 0 <= meta["pole_index"] < n_poles):
         raise DemoFormatError(
@@ -318,8 +338,12 @@ def _cell(path: str, line: int, row: list[str], col: dict[str, int], name: str) 
     return value
 
 
-def _parse_rows(path: str, lines: list[str], col: dict[str, int]) -> dict[str, list[list[float]]]:
+def _parse_rows(
+    path: str, lines: list[str], col: dict[str, int]
+) -> tuple[dict[str, list[list[float]]], list[int]]:
+    """The samples of each stream, and the file line of each GPS fix."""
     streams: dict[str, list[list[float]]] = {s: [] for s in STREAM_FIELDS}
+    gps_lines: list[int] = []
     for k, row in enumerate(csv.reader(lines[2:])):
         line = k + 3
         if not row:
@@ -343,6 +367,19 @@ def _parse_rows(path: str, lines: list[str], col: dict[str, int]) -> dict[str, l
                 if all(cells)
                 else [math.nan, math.nan]
             )
+        if stream == "gps":
+            check_fix(path, line, values[1], values[2])
+            gps_lines.append(line)
+        elif stream == "compass" and abs(values[1]) > 360.0:
+            raise DemoFormatError(
+                f"{path}, line {line}, column heading_deg: {values[1]} is not in [-360, 360]°"
+            )
+        elif stream == "radar" and not 0.0 <= values[1] <= PLAUSIBLE.max_radar_range_m:
+            if math.isfinite(values[1]):
+                raise DemoFormatError(
+                    f"{path}, line {line}, column range_m: {values[1]} is not in "
+                    f"[0, {PLAUSIBLE.max_radar_range_m:g}] m"
+                )
         previous = streams[stream][-1][0] if streams[stream] else -math.inf
         if t <= previous:
             raise DemoFormatError(
@@ -353,7 +390,7 @@ def _parse_rows(path: str, lines: list[str], col: dict[str, int]) -> dict[str, l
     for stream in ("gps", "compass"):
         if len(streams[stream]) < 2:
             raise DemoFormatError(f"{path}: fewer than 2 {stream} samples")
-    return streams
+    return streams, gps_lines
 
 
 def load_recording(path: str | Path) -> Recording:
@@ -363,12 +400,16 @@ def load_recording(path: str | Path) -> Recording:
         lines = Path(path).read_text(encoding="utf-8").splitlines()
     except UnicodeDecodeError as exc:
         raise DemoFormatError(f"{name}: not UTF-8 text ({exc.reason})") from None
+    except OSError as exc:
+        raise DemoFormatError(f"{name}: cannot read ({exc.strerror})") from None
     meta, col = _parse_header(name, lines)
-    s = _parse_rows(name, lines, col)
+    s, gps_lines = _parse_rows(name, lines, col)
     gps, cmp_, rad = (
         np.array(s[k], dtype=float).reshape(-1, n)
         for k, n in (("gps", 3), ("compass", 2), ("radar", 3))
     )
+    origin = GeoOrigin(float(meta["origin_lat_deg"]), float(meta["origin_lon_deg"]))
+    check_motion(name, gps_lines, gps[:, 0], ned_from_geodetic(gps[:, 1], gps[:, 2], origin))
     return Recording(
         meta=meta,
         gps_t_s=gps[:, 0],
@@ -457,11 +498,29 @@ def quality_check(rec: Recording, criteria: QualityCriteria | None = None) -> li
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m learning.imitation.demonstrations [FOLDER]``: record the 46 runs into FOLDER."""
+    """``python -m learning.imitation.demonstrations FOLDER``: record the 46 runs into FOLDER.
+
+    FOLDER is required: nothing is ever written into the installed package unasked (to
+    regenerate the shipped ones, name ``usvsim/demos`` of a source checkout). Exit status 2
+    with a one-line message when FOLDER is missing or cannot be written.
+    """
     import sys
 
+    from usvsim.common.fileio import check_writable_dir
+
     args = list(sys.argv[1:] if argv is None else argv)
-    folder = Path(args[0]) if args else DEMOS_DIR
+    if len(args) != 1 or args[0].startswith("-"):
+        print(
+            "usage: python -m learning.imitation.demonstrations FOLDER  (records the 46 "
+            "expert runs into FOLDER/demo_NNN.csv; FOLDER is required)",
+            file=sys.stderr,
+        )
+        return 2
+    try:
+        folder = check_writable_dir(args[0], "FOLDER")
+    except UserError as err:
+        print(f"learning.imitation.demonstrations: {err}", file=sys.stderr)
+        return 2
     recs = record_demonstrations()
     save_recordings(recs, folder)
     kept = [r for r in recs if not quality_check(r)]

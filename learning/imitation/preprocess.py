@@ -46,18 +46,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from learning.imitation.demonstrations import FORMAT, Recording
+from learning.imitation.demonstrations import FORMAT, DemoFormatError, Recording
 from usvsim.common.angles import ssa
 from usvsim.mavlink.link import read_tlog
 from usvsim.mavlink.messages import Attitude, GlobalPosition, VfrHud
 from usvsim.nav.geo import GeoOrigin
 from usvsim.task.batch import N_CATEGORIES, ActionKind
-from usvsim.task.observations import ObservationKind, build_observation
+from usvsim.task.observations import ObservationKind, build_observation, observation_space
 from usvsim.task.radar import RadarConfig
 
 __all__ = [
     "DecisionTrack",
     "ExpertData",
+    "check_observations",
     "decision_track",
     "encode_actions",
     "expert_data",
@@ -110,6 +111,7 @@ class DecisionTrack:
     goal_ne: FloatArray
     pole_ne: FloatArray
     pole_radius_m: float
+    source: str = ""  # the recording's file, if any
 
 
 def decision_track(rec: Recording, period_s: float = 2.0) -> DecisionTrack:
@@ -130,6 +132,7 @@ def decision_track(rec: Recording, period_s: float = 2.0) -> DecisionTrack:
         goal_ne=gps_ne[-1].copy(),
         pole_ne=rec.pole_ne,
         pole_radius_m=float(rec.meta["pole_radius_m"]),
+        source=rec.source,
     )
 
 
@@ -182,6 +185,41 @@ def expert_data(
     last = np.zeros(dpsi.size, dtype=bool)
     last[np.cumsum(n) - 1] = True
     return ExpertData(obs, encode_actions(dpsi, action), dpsi, episode, last, tracks)
+
+
+def check_observations(data: ExpertData, observation: ObservationKind) -> None:
+    """Every observation of ``data`` finite and inside the observation space's bounds
+    (:func:`usvsim.task.observations.observation_space`): a demonstration whose pairs a policy
+    could never see is refused rather than fed to the discriminator.
+
+    Raises
+    ------
+    DemoFormatError
+        Naming the recording's file, the decision time and the first element out of bounds.
+    """
+    space = observation_space(observation)
+    parts = data.obs if isinstance(data.obs, dict) else {"": data.obs}
+    boxes = dict(space.spaces) if hasattr(space, "spaces") else {"": space}
+    for key, values in parts.items():
+        box = boxes[key]
+        x = np.asarray(values, dtype=float).reshape(len(data), -1)
+        low = np.broadcast_to(np.asarray(box.low, dtype=float).reshape(-1), x.shape[1:])
+        high = np.broadcast_to(np.asarray(box.high, dtype=float).reshape(-1), x.shape[1:])
+        bad = ~np.isfinite(x) | (x < low) | (x > high)
+        rows = np.flatnonzero(bad.any(axis=1))
+        if rows.size == 0:
+            continue
+        row = int(rows[0])
+        col = int(np.flatnonzero(bad[row])[0])
+        episode = int(data.episode[row])
+        track = data.tracks[episode]
+        first = int(np.flatnonzero(data.episode == episode)[0])
+        t = float(track.t_s[row - first])
+        name = f"{key}[{col}]" if key else f"[{col}]"
+        raise DemoFormatError(
+            f"{track.source or 'recording'}: decision at t = {t:.1f} s: {observation} "
+            f"observation{name} = {x[row, col]:.6g} outside [{low[col]:g}, {high[col]:g}]"
+        )
 
 
 def recording_from_tlog(

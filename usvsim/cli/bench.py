@@ -2,24 +2,33 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
+from usvsim.common.fileio import check_writable_dir
 from usvsim.evaluation.bench import BenchArgs, format_table, run_bench, to_json, write_results
 
 __all__ = ["run_bench_command"]
 
+INTERRUPTED = 130  # exit status after Ctrl-C / SIGTERM
+
 
 def run_bench_command(args: BenchArgs) -> int:
-    """The ``usvsim bench`` command (module docstring)."""
+    """The ``usvsim bench`` command (module docstring); 130 after Ctrl-C (results so far kept)."""
+    check_writable_dir(args.out, "--out")  # before the evaluation, not after it
     result = run_bench(args)
     files = write_results(result, Path(args.out), plots=not args.no_plots)
     if args.json:
         print(to_json(result, [str(f) for f in files]))
-        return 0
-    print(f"usvsim bench — scenario {args.scenario}")
-    print(format_table(result.rows))
-    print(
-        f"evaluated in {result.wall_s:.1f} s; results in {args.out}/ "
-        f"({', '.join(f.name for f in files[:2])}, {len(files) - 2} path plots)"
-    )
+    else:
+        print(f"usvsim bench — scenario {args.scenario}")
+        print(format_table(result.rows))
+        print(
+            f"evaluated in {result.wall_s:.1f} s; results in {args.out}/ "
+            f"({', '.join(f.name for f in files[:2])}, {max(len(files) - 2, 0)} path plots)"
+        )
+    if result.interrupted:
+        kept = f"{len(result.rows)} sets written to {args.out}/" if result.rows else "nothing"
+        print(f"usvsim bench: interrupted; {kept}", file=sys.stderr, flush=True)
+        return INTERRUPTED
     return 0

@@ -3,17 +3,43 @@
 Each sub-command has one frozen dataclass holding its options (defined beside the code it
 configures); argparse is built from it (:mod:`usvsim.cli.args`) so ``--help`` lists every field
 with its default. Long work shows a progress bar; results are written atomically.
+
+One error path for every command (:func:`main`):
+
+==============================================  =============================================
+what happens                                    what the user sees, exit status
+==============================================  =============================================
+bad option syntax or value, option out of       one line ``usvsim CMD: ...`` naming the option
+range, bad file, URL, port, unwritable output   or file and what is allowed; status 2
+(:class:`usvsim.common.errors.UserError`,
+``OSError``, ``SystemExit("message")``)
+Ctrl-C (SIGINT) or SIGTERM                      the command keeps what it has (train: the
+                                                checkpoint, summary marked "interrupted";
+                                                bench: the results so far; bridge: HOLD), one
+                                                line; status 130
+the command's own failure (a failsafe, a        its message; status 1
+non-finite loss)
+==============================================  =============================================
+
+``usvsim --debug CMD ...`` (or ``--debug`` anywhere) shows the Python traceback of a user error
+instead of the one line.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from types import FrameType
 from typing import Any, NamedTuple
 
-from usvsim.cli.args import add_dataclass_arguments
+from usvsim.cli.args import USAGE_ERROR, OneLineParser, add_dataclass_arguments, check_options
+from usvsim.common.errors import UserError
+
+INTERRUPTED = 130  # exit status after Ctrl-C or SIGTERM (128 + SIGINT, the shell's convention)
 
 __all__ = ["COMMANDS", "Command", "build_parser", "main"]
 
@@ -48,6 +74,11 @@ COMMANDS: dict[str, Command] = {
         "learning.cli.train:TrainArgs",
         "learning.cli.train:run",
         "train a policy (rl-* by TRPO, il-* by GAIL)",
+    ),
+    "sweep": Command(
+        "learning.cli.sweep:SweepArgs",
+        "learning.cli.sweep:run",
+        "train setups x seeds x hyperparameters on Ray; across-seed statistics",
     ),
     "evaluate": Command(
         "learning.cli.evaluate:EvaluateArgs",
@@ -85,7 +116,7 @@ def _command(name: str) -> tuple[type, Callable[[Any], int]]:
 
 def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
     """The parser; only the ``chosen`` command's options are built (its module imported)."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="usvsim",
         description="usvsim: learn and test steering policies for unmanned surface vehicles.",
     )
@@ -100,17 +131,63 @@ def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM raises ``KeyboardInterrupt`` as Ctrl-C does, so both end a command the same way."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _one_line(err: BaseException) -> str:
+    if isinstance(err, OSError) and err.strerror:
+        where = err.filename if err.filename is not None else ""
+        return f"{where}: {err.strerror}" if where else err.strerror
+    return " ".join(str(err).split()) or type(err).__name__
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; the exit status of the module docstring's table."""
     args = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args
+    args = [a for a in args if a != "--debug"]
     chosen = next((a for a in args if not a.startswith("-")), None)
     parser = build_parser(chosen if chosen in COMMANDS else None)
     ns = parser.parse_args(args)
     if ns.command is None:
         parser.print_help()
         return 0
-    cls, run = _command(ns.command)
+    prog = f"usvsim {ns.command}"
     values = {k: v for k, v in vars(ns).items() if k != "command"}
-    return run(cls(**values))
+    try:
+        cls, run = _command(ns.command)
+        options = cls(**values)
+        check_options(options)
+        with _sigterm_as_interrupt():
+            return run(options)
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr, flush=True)
+        return INTERRUPTED
+    except SystemExit as stop:
+        if isinstance(stop.code, str):  # a runner's one-line refusal
+            print(stop.code, file=sys.stderr, flush=True)
+            return USAGE_ERROR
+        raise
+    except (UserError, OSError) as err:
+        if debug:
+            raise
+        print(f"{prog}: {_one_line(err)}", file=sys.stderr, flush=True)
+        return USAGE_ERROR
 
 
 if __name__ == "__main__":

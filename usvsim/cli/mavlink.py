@@ -1,7 +1,9 @@
 """The MAVLink commands: ``usvsim sitl``, ``usvsim sitl-physics`` and ``usvsim bridge``.
 
 Each runner takes its command's options dataclass (defined beside the code it configures) and
-returns the process exit code.
+returns the process exit code. User errors (a bad mission, URL, port, key file, a helmsman whose
+kinds contradict ``--observation``/``--action``) raise :class:`usvsim.common.errors.UserError`
+(or ``OSError``), which :func:`usvsim.cli.main.main` prints as one line with exit status 2.
 """
 
 from __future__ import annotations
@@ -11,8 +13,10 @@ import math
 import socket
 import time
 
+from usvsim.common.errors import UserError
 from usvsim.helm.registry import make_helmsman
 from usvsim.mavlink.bridge import Bridge, BridgeArgs
+from usvsim.mavlink.connection import check_url
 from usvsim.mavlink.mission import load_mission
 from usvsim.mavlink.sitl import RoverSitl, SitlArgs
 from usvsim.mavlink.sitl_physics import JsonPhysics, SitlPhysicsArgs, serve
@@ -25,7 +29,11 @@ __all__ = ["run_bridge", "run_sitl", "run_sitl_physics"]
 
 def run_sitl(args: SitlArgs) -> int:
     """``usvsim sitl``: serve until Ctrl-C (or ``--duration-s``)."""
-    sitl = RoverSitl(args)
+    check_url(args.listen)
+    try:
+        sitl = RoverSitl(args)
+    except ValueError as err:  # unknown vessel or autopilot
+        raise UserError(str(err)) from None
     where = args.listen
     print(
         f"usvsim sitl: Rover boat (sysid {args.system_id}) on {where}, speedup "
@@ -44,14 +52,25 @@ def run_sitl(args: SitlArgs) -> int:
 
 def run_sitl_physics(args: SitlPhysicsArgs) -> int:
     """``usvsim sitl-physics``: bind, then serve ArduPilot SITL until Ctrl-C."""
+    try:
+        vessel = get_vessel(args.vessel)
+    except ValueError as err:
+        raise UserError(f"--vessel: {err}") from None
     physics = JsonPhysics(
-        get_vessel(args.vessel),
+        vessel,
         math.radians(args.heading_deg),
         args.steering_channel,
         args.throttle_channel,
     )
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind((args.bind, args.port))
+    try:
+        sock.bind((args.bind, args.port))
+    except OSError as err:
+        sock.close()
+        raise UserError(
+            f"cannot listen on udp {args.bind}:{args.port} ({err.strerror}); is another "
+            "sitl-physics running? choose another --port or --bind"
+        ) from None
     print(
         f"usvsim sitl-physics: {args.vessel} on udp {args.bind}:{sock.getsockname()[1]}; "
         f"start: sim_vehicle.py -v Rover -f motorboat --model JSON:{args.bind}",
@@ -69,21 +88,34 @@ def run_sitl_physics(args: SitlPhysicsArgs) -> int:
     return 0
 
 
+def _kinds(args: BridgeArgs, helmsman: object) -> BridgeArgs:
+    """``args`` with the observation and action kinds the helmsman declares; an explicit
+    ``--observation``/``--action`` that contradicts them is refused (not silently replaced)."""
+    resolved: dict[str, str] = {}
+    for name, default in (("observation", "positional"), ("action", "gaussian")):
+        given, declared = getattr(args, name), getattr(helmsman, name, None)
+        if given != "auto" and declared is not None and given != declared:
+            raise UserError(
+                f"--{name} {given} contradicts helmsman {args.helmsman!r}, made for "
+                f"{name} {declared}; drop --{name} (default auto: the helmsman's)"
+            )
+        resolved[name] = declared or (given if given != "auto" else default)
+    return dataclasses.replace(
+        args,
+        observation=parse_observation_kind(resolved["observation"]),
+        action=parse_action_kind(resolved["action"]),
+    )
+
+
 def run_bridge(args: BridgeArgs) -> int:
-    """``usvsim bridge``: exit 0 when the goal is reached, 1 on a failsafe, 130 on Ctrl-C."""
+    """``usvsim bridge``: exit 0 when the goal is reached, 1 on a failsafe, 130 on Ctrl-C
+    (HOLD commanded first); 2 on a user error (module docstring)."""
     if not args.mission:
-        raise SystemExit("usvsim bridge: --mission FILE is required")
-    try:
-        mission = load_mission(args.mission)
-        helmsman = make_helmsman(args.helmsman, args.action)
-        # a trained policy or baseline declares the observation and action it was made for
-        args = dataclasses.replace(
-            args,
-            observation=parse_observation_kind(getattr(helmsman, "observation", args.observation)),
-            action=parse_action_kind(getattr(helmsman, "action", args.action)),
-        )
-    except ValueError as err:
-        raise SystemExit(f"usvsim bridge: {err}") from None
+        raise UserError("--mission FILE is required (JSON or YAML: poles and goal as lat/lon)")
+    check_url(args.connect)
+    mission = load_mission(args.mission)
+    helmsman = make_helmsman(args.helmsman, "gaussian" if args.action == "auto" else args.action)
+    args = _kinds(args, helmsman)
     bridge = Bridge(args, mission, helmsman)
     try:
         result = bridge.run()

@@ -19,10 +19,19 @@ path                        mean path length (m), successful episodes
 ``--scenario waypoints`` runs the waypoint courses of :mod:`usvsim.task.waypoints` instead (15
 validation and ``--heldout`` held-out courses; t_goal is then the time to the last waypoint).
 
-Results go to ``--out`` (default ``usvsim-results/bench/``), every file written atomically
-(:mod:`usvsim.common.fileio`): ``bench[-waypoints].md``, ``bench[-waypoints].csv`` and one path
-plot per helmsman and set, ``paths[-waypoints]-<helmsman>-<set>.png``. ``--json`` prints only
-JSON on stdout (NaN as ``null``); the progress bar goes to stderr.
+Results go to ``--out`` (default ``usvsim-results/bench/``), written as one unit
+(:func:`usvsim.common.fileio.staged_dir`: a killed or failing bench leaves the previous results
+as they were): ``bench[-waypoints].md``, ``bench[-waypoints].csv`` and one path plot per
+helmsman and set, ``paths[-waypoints]-<helmsman>-<set>.png`` (older plots of the same scenario
+are removed with the set they belonged to). ``--out`` is checked writable before anything runs.
+``--json`` prints only JSON on stdout (NaN and ±inf as ``null``); the progress bar goes to
+stderr.
+
+``--helmsmen`` takes names of :mod:`usvsim.helm.registry` and checkpoint paths alike (a path is
+labelled by its file stem); a name given twice runs once. With no ``--helmsmen``, a shipped model
+that cannot be read is skipped with a warning (the other helmsmen still run); a named one that
+cannot be read is an error. On Ctrl-C or SIGTERM the sets finished so far are written, marked
+"interrupted" (Markdown title, ``"interrupted": true`` in JSON).
 """
 
 from __future__ import annotations
@@ -34,12 +43,14 @@ import math
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, Protocol, get_args
 
 import numpy as np
 
+from usvsim.common.errors import UserError
+from usvsim.common.options import bounds, check_bounds
 from usvsim.evaluation.stats import Proportion, finite_mean, finite_median, proportion
 
 __all__ = [
@@ -69,12 +80,21 @@ class BenchArgs:
     """Compare every available helmsman on the validation and held-out episodes (the table)."""
 
     scenario: ScenarioKind = "pole"  # pole (the study's task) | waypoints (courses with poles)
-    helmsmen: str = ""  # comma-separated helmsman names; empty: every available helmsman
-    heldout: int = 200  # episodes (courses) in the held-out set
+    helmsmen: str = ""  # comma-separated names or checkpoint paths; empty: every available one
+    heldout: int = field(default=200, metadata=bounds(ge=1, le=100_000))  # held-out episodes
     out: str = "usvsim-results/bench"  # results folder: Markdown, CSV and path plots
     json: bool = False  # print JSON only (stdout)
     no_plots: bool = False  # skip the path plots
     no_likeness: bool = False  # skip the expert-likeness columns (validation, pole scenario)
+
+    def check(self) -> None:
+        """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
+        if self.scenario not in SCENARIOS:
+            raise UserError(f"--scenario must be one of {SCENARIOS}, not {self.scenario!r}")
+
+    def names(self) -> list[str]:
+        """The ``--helmsmen`` list, blanks dropped (duplicates kept: the registry drops them)."""
+        return [n.strip() for n in self.helmsmen.split(",") if n.strip()]
 
 
 class _Record(Protocol):
@@ -157,6 +177,8 @@ class BenchResult:
     rows: tuple[BenchRow, ...]
     records: dict[tuple[str, str], list[Any]]
     wall_s: float
+    interrupted: bool = False  # Ctrl-C / SIGTERM: the rows are the sets finished before it
+    skipped: tuple[str, ...] = ()  # "name: why" of shipped models that could not be loaded
 
 
 def _episode_sets(scenario: ScenarioKind, heldout: int) -> dict[str, Sequence[Any]]:
@@ -169,48 +191,82 @@ def _episode_sets(scenario: ScenarioKind, heldout: int) -> dict[str, Sequence[An
     return {"validation": validation_courses(), "held-out": heldout_courses(n=heldout)}
 
 
-def _check_args(args: BenchArgs) -> None:
-    if args.scenario not in SCENARIOS:
-        raise SystemExit(
-            f"usvsim bench: --scenario must be one of {SCENARIOS}, not {args.scenario!r}"
-        )
-    if args.heldout < 1:
-        raise SystemExit(f"usvsim bench: --heldout must be ≥ 1, got {args.heldout}")
+def _loadable(
+    factories: dict[str, Any], explicit: bool, warn: Any
+) -> tuple[dict[str, Any], tuple[str, ...]]:
+    """The factories whose helmsman can be built; the others skipped ("name: why") unless the
+    user named them (then the first failure is raised)."""
+    kept, skipped = {}, []
+    for name, factory in factories.items():
+        try:
+            factory()
+        except ValueError as err:
+            if explicit:
+                raise UserError(f"--helmsmen {name}: {err}") from None
+            skipped.append(f"{name}: {err}")
+            warn(f"usvsim bench: skipping {name}: {err}")
+            continue
+        kept[name] = factory
+    return kept, tuple(skipped)
+
+
+def _stderr(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
 
 
 def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
-    """Evaluate the selected helmsmen on both sets of ``args.scenario``; no files, no printing."""
+    """Evaluate the selected helmsmen on both sets of ``args.scenario``; no files, no printing
+    (but a warning on stderr per skipped model). Ctrl-C (``KeyboardInterrupt``) ends it early
+    with the rows finished so far and ``interrupted`` set.
+
+    Raises
+    ------
+    UserError
+        For a bad option, an unknown helmsman or a named one that cannot be loaded.
+    """
     from tqdm import tqdm
 
     from usvsim.evaluation.episodes import evaluate
     from usvsim.evaluation.waypoints import evaluate_waypoints
-    from usvsim.helm.registry import available_helmsmen, helmsman_kinds
+    from usvsim.helm.registry import helmsman_kinds, select_helmsmen
 
-    _check_args(args)
-    factories = available_helmsmen()
-    names = [n.strip() for n in args.helmsmen.split(",") if n.strip()] or list(factories)
-    unknown = [n for n in names if n not in factories]
-    if unknown:
-        raise SystemExit(f"usvsim bench: unknown helmsmen {unknown}; available: {list(factories)}")
+    check_bounds(args)
+    args.check()
+    factories, skipped = _loadable(select_helmsmen(args.names()), bool(args.names()), _stderr)
+    if not factories:
+        raise UserError("no helmsman to compare: " + "; ".join(skipped))
     sets = _episode_sets(args.scenario, args.heldout)
     start = time.perf_counter()
     reference = _expert_reference(args, sets["validation"])
     rows, records = [], {}
-    jobs = [(name, set_name) for name in names for set_name in sets]
+    jobs = [(name, set_name) for name in factories for set_name in sets]
     bar = tqdm(jobs, desc="bench", unit="set", file=sys.stderr, disable=not progress)
-    for name, set_name in bar:
-        bar.set_postfix_str(f"{name} / {set_name}")
-        helmsman = factories[name]()
-        obs_kind, act_kind = helmsman_kinds(helmsman)
-        t0 = time.perf_counter()
-        evaluator = evaluate if args.scenario == "pole" else evaluate_waypoints
-        recs = evaluator(helmsman, sets[set_name], observation=obs_kind, action=act_kind)
-        row = summarize_set(name, set_name, recs, time.perf_counter() - t0)
-        if reference is not None and set_name == "validation":
-            row = _with_likeness(row, recs, reference)
-        rows.append(row)
-        records[(name, set_name)] = recs
-    return BenchResult(args.scenario, tuple(rows), records, time.perf_counter() - start)
+    interrupted = False
+    try:
+        for name, set_name in bar:
+            bar.set_postfix_str(f"{name} / {set_name}")
+            helmsman = factories[name]()
+            obs_kind, act_kind = helmsman_kinds(helmsman)
+            t0 = time.perf_counter()
+            evaluator = evaluate if args.scenario == "pole" else evaluate_waypoints
+            recs = evaluator(helmsman, sets[set_name], observation=obs_kind, action=act_kind)
+            row = summarize_set(name, set_name, recs, time.perf_counter() - t0)
+            if reference is not None and set_name == "validation":
+                row = _with_likeness(row, recs, reference)
+            rows.append(row)
+            records[(name, set_name)] = recs
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.close()
+    return BenchResult(
+        args.scenario,
+        tuple(rows),
+        records,
+        time.perf_counter() - start,
+        interrupted=interrupted,
+        skipped=skipped,
+    )
 
 
 def _expert_reference(args: BenchArgs, specs: Sequence[Any]) -> Any:
@@ -278,8 +334,9 @@ def format_table(rows: Sequence[BenchRow]) -> str:
 
 def to_markdown(result: BenchResult) -> str:
     """The table as Markdown, with the scenario and what the columns mean."""
+    title = f"# usvsim bench — scenario `{result.scenario}`"
     lines = [
-        f"# usvsim bench — scenario `{result.scenario}`",
+        title + (" (interrupted: the sets finished before Ctrl-C)" if result.interrupted else ""),
         "",
         "| " + " | ".join(_HEADER) + " |",
         "|" + "---|" * len(_HEADER),
@@ -323,21 +380,29 @@ def to_json(result: BenchResult, files: Sequence[str] = ()) -> str:
         "rows": [{k: _json_safe(v) for k, v in r.flat().items()} for r in result.rows],
         "wall_s": result.wall_s,
         "files": list(files),
+        "interrupted": result.interrupted,
+        "skipped": list(result.skipped),
     }
     return json.dumps(payload, indent=2, allow_nan=False)
 
 
 def write_results(result: BenchResult, out: Path, plots: bool = True) -> list[Path]:
-    """Write the Markdown table, the CSV and (optionally) the path plots, each atomically."""
-    from usvsim.common.fileio import atomic_write_text
+    """Write the Markdown table, the CSV and (optionally) the path plots as one unit
+    (:func:`usvsim.common.fileio.staged_dir`; module docstring). Nothing is written when there
+    are no rows (an interrupt before the first set)."""
+    from usvsim.common.fileio import remove_stale_temporaries, staged_dir
 
+    if not result.rows:
+        return []
     stem = "bench" if result.scenario == "pole" else f"bench-{result.scenario}"
-    written = [out / f"{stem}.md", out / f"{stem}.csv"]
-    atomic_write_text(written[0], to_markdown(result))
-    atomic_write_text(written[1], to_csv(result.rows))
-    if plots:
-        written += _write_plots(result, out)
-    return written
+    prefix = "paths" if result.scenario == "pole" else f"paths-{result.scenario}"
+    remove_stale_temporaries(out)
+    # the older set's plots go too (also with plots=False): they belong to the older table
+    with staged_dir(out, stem, replaces=(f"{prefix}-*.png",)) as staging:
+        (staging / f"{stem}.csv").write_text(to_csv(result.rows))
+        names = _write_plots(result, staging) if plots else []
+        (staging / f"{stem}.md").write_text(to_markdown(result))
+    return [out / f"{stem}.md", out / f"{stem}.csv", *(out / p.name for p in names)]
 
 
 def _write_plots(result: BenchResult, out: Path) -> list[Path]:

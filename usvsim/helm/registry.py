@@ -13,7 +13,9 @@ a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
 ===========================  ===================================================================
 
 :func:`available_helmsmen` lists the compared ones (baselines, then shipped models);
-:func:`make_helmsman` builds any of the table. This module is the only place where the simulator
+:func:`make_helmsman` builds any of the table and :func:`select_helmsmen` turns a list of names
+and checkpoint paths (``usvsim bench --helmsmen``) into labelled factories, duplicates removed.
+This module is the only place where the simulator
 reaches :mod:`learning` (to load a checkpoint as a helmsman), so the simulator's layers never
 depend on the learning code.
 
@@ -24,11 +26,12 @@ gaussian).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 from pathlib import Path
 from typing import Any
 
+from usvsim.common.errors import UserError
 from usvsim.helm.protocol import Helmsman, RandomHelmsman, StraightAheadHelmsman
 from usvsim.task.batch import ActionKind, parse_action_kind
 from usvsim.task.observations import ObservationKind, parse_observation_kind
@@ -41,6 +44,7 @@ __all__ = [
     "helmsman_kinds",
     "load_checkpoint_helmsman",
     "make_helmsman",
+    "select_helmsmen",
 ]
 
 HelmsmanFactory = Callable[[], Helmsman]
@@ -67,7 +71,7 @@ def load_checkpoint_helmsman(path: str | Path) -> Helmsman:
     try:
         return load_helmsman(path)
     except CheckpointError as err:
-        raise ValueError(str(err)) from None
+        raise UserError(str(err)) from None
 
 
 def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFactory]:
@@ -94,8 +98,8 @@ def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
 
     Raises
     ------
-    ValueError
-        For unknown names and unreadable checkpoints.
+    UserError
+        (a ``ValueError``) for unknown names and unreadable checkpoints.
     """
     if name == "straight":
         return StraightAheadHelmsman(action=action)
@@ -106,10 +110,52 @@ def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
         return registry[name]()
     if Path(name).is_file():
         return load_checkpoint_helmsman(name)
-    raise ValueError(
+    raise UserError(_unknown(name, registry))
+
+
+def _unknown(name: str, registry: dict[str, HelmsmanFactory]) -> str:
+    return (
         f"unknown helmsman {name!r}; choose {', '.join((*SANITY_HELMSMEN, *registry))} "
         "or a checkpoint file (.pt)"
     )
+
+
+def select_helmsmen(
+    names: Sequence[str], action: ActionKind = "gaussian"
+) -> dict[str, HelmsmanFactory]:
+    """Label → factory of each helmsman in ``names`` (names of the table or checkpoint paths).
+
+    Duplicates are dropped (first one kept, order kept); an empty ``names`` selects every
+    :func:`available_helmsmen`. A checkpoint path is labelled by its file stem
+    (``runs/a/best.pt`` -> ``best``); nothing is loaded yet.
+
+    Raises
+    ------
+    UserError
+        For an unknown name, or two different paths or names with the same label.
+    """
+    registry = available_helmsmen()
+    if not names:
+        return dict(registry)
+    chosen: dict[str, HelmsmanFactory] = {}
+    sources: dict[str, str] = {}
+    for name in names:
+        if name in SANITY_HELMSMEN:
+            label, factory = name, partial(make_helmsman, name, action)
+        elif name in registry:
+            label, factory = name, registry[name]
+        elif Path(name).is_file():
+            label, factory = Path(name).stem, partial(load_checkpoint_helmsman, name)
+        else:
+            raise UserError(_unknown(name, registry))
+        if label in sources and sources[label] != name:
+            raise UserError(
+                f"helmsmen {sources[label]!r} and {name!r} would share the label {label!r}; "
+                "rename one of the checkpoint files"
+            )
+        sources[label] = name
+        chosen.setdefault(label, factory)
+    return chosen
 
 
 def helmsman_kinds(helmsman: Any) -> tuple[ObservationKind, ActionKind]:

@@ -31,14 +31,16 @@ import statistics
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Literal
 
 import numpy as np
 
 from usvsim.common.angles import ssa
+from usvsim.common.options import bounds
 from usvsim.helm.protocol import Helmsman
+from usvsim.helm.registry import helmsman_kinds
 from usvsim.mavlink.link import MavlinkLink, load_signing_key
 from usvsim.mavlink.messages import (
     MAV_RESULT_ACCEPTED,
@@ -80,22 +82,22 @@ class BridgeArgs:
 
     connect: str = "tcp:127.0.0.1:5760"  # MAVLink URL: tcp:, udp:, udpin:, udpout:, serial dev
     mission: str = ""  # mission file (JSON, or YAML with PyYAML): poles and goal as lat/lon
-    helmsman: str = "straight"  # baseline name (straight | random) or a checkpoint path
-    observation: ObservationKind = "positional"  # observation kind the helmsman expects
-    action: ActionKind = "gaussian"  # action kind the helmsman returns: gaussian | categorical
+    helmsman: str = "straight"  # any name of usvsim.helm.registry, or a checkpoint path
+    observation: ObservationKind | Literal["auto"] = "auto"  # auto: the helmsman's (positional)
+    action: ActionKind | Literal["auto"] = "auto"  # auto: the helmsman's (else gaussian)
     arm: bool = False  # arm the vehicle (otherwise it must be armed already)
     attitude_target: bool = False  # command SET_ATTITUDE_TARGET instead of position target
-    wp_speed_mps: float = 3.0  # vehicle WP_SPEED: thrust 1 in SET_ATTITUDE_TARGET (m/s)
-    decision_period_s: float = 2.0  # helmsman period, vehicle clock (s)
-    max_heading_change_deg: float = 30.0  # heading change of a full action (deg)
-    setpoint_rate_hz: float = 10.0  # setpoint re-send rate, vehicle clock (Hz)
-    telemetry_rate_hz: float = 10.0  # requested GLOBAL_POSITION_INT / ATTITUDE rate (Hz)
-    stale_s: float = 1.5  # telemetry older than this (vehicle clock) -> HOLD (s)
-    heartbeat_timeout_s: float = 30.0  # wait this long for the vehicle (wall clock, s)
-    command_timeout_s: float = 3.0  # wait this long for a COMMAND_ACK (wall clock, s)
-    max_duration_s: float = 0.0  # end with HOLD after this vehicle time (0 = no limit)
-    target_system: int = 0  # vehicle system id (0 = the first boat heard)
-    system_id: int = 255  # our MAVLink system id (GCS)
+    wp_speed_mps: float = field(default=3.0, metadata=bounds(gt=0, le=30))  # WP_SPEED, m/s
+    decision_period_s: float = field(default=2.0, metadata=bounds(ge=0.1, le=60))  # vehicle s
+    max_heading_change_deg: float = field(default=30.0, metadata=bounds(gt=0, le=180))  # deg
+    setpoint_rate_hz: float = field(default=10.0, metadata=bounds(ge=0.5, le=100))  # re-send, Hz
+    telemetry_rate_hz: float = field(default=10.0, metadata=bounds(ge=0.5, le=100))  # Hz
+    stale_s: float = field(default=1.5, metadata=bounds(gt=0, le=60))  # older telemetry: HOLD, s
+    heartbeat_timeout_s: float = field(default=30.0, metadata=bounds(gt=0, le=3600))  # wall s
+    command_timeout_s: float = field(default=3.0, metadata=bounds(gt=0, le=600))  # COMMAND_ACK, s
+    max_duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # HOLD after; 0: no limit
+    target_system: int = field(default=0, metadata=bounds(ge=0, le=255))  # 0: first boat heard
+    system_id: int = field(default=255, metadata=bounds(ge=1, le=255))  # our system id (GCS)
     signing_key: str = ""  # file with a 32-byte MAVLink2 signing key ('' = unsigned)
     log_csv: str = "usvsim-results/bridge/decisions.csv"  # decisions and failsafes
     tlog: str = "usvsim-results/bridge/link.tlog"  # link recording ('' = none)
@@ -140,6 +142,14 @@ class Bridge:
         link: MavlinkLink | None = None,
         clock: Callable[[], float] = time.perf_counter,
     ) -> None:
+        declared_observation, declared_action = helmsman_kinds(helmsman)
+        # "auto" (the default): the kinds the helmsman declares (usvsim.cli.mavlink refuses
+        # explicit kinds that contradict them before a Bridge is built)
+        self.observation: ObservationKind = (
+            declared_observation if args.observation == "auto" else args.observation
+        )
+        self.action: ActionKind = declared_action if args.action == "auto" else args.action
+        args = replace(args, observation=self.observation, action=self.action)
         self.args = args
         self.mission = mission
         self.helmsman = helmsman
@@ -324,7 +334,7 @@ class Bridge:
         poles = self.poles_ne
         pole = poles[np.argmin(np.hypot(*(poles - pos).T))]  # the nearest pole is "the" pole
         obs = build_observation(
-            self.args.observation,
+            self.observation,
             pos[None],
             np.array([psi]),
             pole[None],
@@ -339,7 +349,7 @@ class Bridge:
             raise FailsafeError(f"helmsman error: {type(err).__name__}: {err}") from err
         try:
             dpsi = heading_change_rad(
-                self.args.action, actions, 1, math.radians(self.args.max_heading_change_deg)
+                self.action, actions, 1, math.radians(self.args.max_heading_change_deg)
             )
         except ValueError as err:
             raise FailsafeError(f"invalid action: {err}") from err

@@ -19,6 +19,11 @@ Protocol choices (ArduPilot Rover, boat frame; checked against ``Rover/GCS_Mavli
   must stream them (5-10 Hz).
 * MAVLink 2 always (the v2 parser also reads v1 packets); optional signing with a 32-byte key.
 
+Connection errors are :class:`usvsim.mavlink.connection.LinkError` (a
+:class:`usvsim.common.errors.UserError`) with one line naming the URL and what is allowed
+(:func:`usvsim.mavlink.connection.check_url`) or what failed (refused, unknown host, no
+heartbeat); a signing key file that is missing or malformed is one too.
+
 The tlog written with ``tlog_path`` is the standard format (MAVProxy, pymavlink ``mavlogdump``):
 per packet an 8-byte big-endian wall-clock time in µs, then the raw packet, both directions.
 """
@@ -36,8 +41,22 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mav2
 
 from usvsim.mavlink import messages as msgs
+from usvsim.mavlink.connection import (
+    HeartbeatTimeoutError,
+    LinkError,
+    check_url,
+    load_signing_key,
+)
 
-__all__ = ["MavlinkLink", "load_signing_key", "message_id", "read_tlog"]
+__all__ = [
+    "HeartbeatTimeoutError",
+    "LinkError",
+    "MavlinkLink",
+    "check_url",
+    "load_signing_key",
+    "message_id",
+    "read_tlog",
+]
 
 _UNSIGNED_OK = frozenset({mav2.MAVLINK_MSG_ID_RADIO_STATUS})  # as ArduPilot accepts
 
@@ -122,25 +141,6 @@ def read_tlog(path: str | Path) -> list[tuple[float, msgs.Received]]:
     return out
 
 
-def load_signing_key(path: str | Path) -> bytes:
-    """A 32-byte MAVLink 2 signing key from a file: 32 raw bytes or 64 hex digits.
-
-    The error messages never contain the key material.
-    """
-    data = Path(path).read_bytes()
-    if len(data) == 32:
-        return data
-    text = data.strip()
-    if len(text) == 64:
-        try:
-            return bytes.fromhex(text.decode("ascii"))
-        except (UnicodeDecodeError, ValueError):
-            pass
-    raise ValueError(
-        f"{path}: a signing key must be 32 raw bytes or 64 hex digits (file has {len(data)} bytes)"
-    )
-
-
 class MavlinkLink:
     """A MAVLink 2 connection (``tcp:``, ``tcpin:``, ``udp:``, ``udpin:``, ``udpout:``, serial).
 
@@ -176,9 +176,13 @@ class MavlinkLink:
         self.system_id = system_id
         self.component_id = component_id
         self._clock = clock
-        self._conn = mavutil.mavlink_connection(
-            url, source_system=system_id, source_component=component_id
-        )
+        check_url(url)
+        try:
+            self._conn = mavutil.mavlink_connection(
+                url, source_system=system_id, source_component=component_id, retries=0
+            )
+        except OSError as err:
+            raise LinkError(f"cannot open MAVLink link {url}: {err.strerror or err}") from None
         mav = mav2.MAVLink(self._conn, srcSystem=system_id, srcComponent=component_id)
         mav.robust_parsing = True  # malformed bytes become BAD_DATA, never an exception
         # Force MAVLink 2 (pymavlink picks v1 unless an environment variable says otherwise).
@@ -293,8 +297,8 @@ class MavlinkLink:
 
         Raises
         ------
-        TimeoutError
-            If none arrives within ``timeout_s``.
+        HeartbeatTimeoutError
+            (a ``TimeoutError`` and :class:`LinkError`) if none arrives within ``timeout_s``.
         """
         deadline = time.monotonic() + timeout_s
         while (left := deadline - time.monotonic()) > 0:
@@ -305,7 +309,10 @@ class MavlinkLink:
                 ok = accept(r) if accept else r.message.type != msgs.MAV_TYPE_GCS
                 if ok:
                     return r
-        raise TimeoutError(f"no vehicle HEARTBEAT on {self.url} within {timeout_s} s")
+        raise HeartbeatTimeoutError(
+            f"no vehicle HEARTBEAT on {self.url} within {timeout_s:g} s (is the vehicle running "
+            "and the URL right? --heartbeat-timeout-s waits longer)"
+        )
 
     # --- sending: companion computer / GCS side --------------------------------------------
 

@@ -12,8 +12,9 @@ A mission is JSON (always) or YAML (when PyYAML is importable), one object::
     }
 
 Every error names the file and the exact key path (``mission.json: poles[1].lat: ...``); unknown
-keys raise. Positions are converted once to the local NED frame around the origin
-(:mod:`usvsim.nav.geo`).
+keys raise. A goal inside a pole's safety circle (:data:`SAFETY_DISTANCE_M`, 10 m: the task's
+success needs the pole never closer) is refused. Positions are converted once to the local NED
+frame around the origin (:mod:`usvsim.nav.geo`).
 """
 
 from __future__ import annotations
@@ -27,14 +28,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from usvsim.common.errors import UserError
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned, ned_from_geodetic
+from usvsim.task.scenario import Scenario
 
 __all__ = ["LatLon", "Mission", "MissionError", "load_mission", "parse_mission"]
 
+SAFETY_DISTANCE_M = Scenario().safety_distance_m  # m, success needs the pole never closer
 _TOP_KEYS = ("origin", "poles", "goal", "pole_radius_m", "goal_radius_m", "cruise_speed_mps")
 
 
-class MissionError(ValueError):
+class MissionError(UserError):
     """A mission file that cannot be used; the message names the file and the key path."""
 
 
@@ -160,6 +164,14 @@ def parse_mission(data: Any, source: str = "mission") -> Mission:
             strict_lo=True,
         ),
     )
+    to_goal = np.hypot(*(mission.poles_ne - mission.goal_ne).T)
+    k = int(np.argmin(to_goal))
+    if to_goal[k] < SAFETY_DISTANCE_M:
+        raise MissionError(
+            f"{source}: goal: lies {to_goal[k]:.1f} m from poles[{k}], inside its "
+            f"{SAFETY_DISTANCE_M:g} m safety circle (no run could reach it and succeed); "
+            f"move the goal at least {SAFETY_DISTANCE_M:g} m away"
+        )
     far = np.hypot(*np.vstack([mission.poles_ne, mission.goal_ne[None]]).T).max()
     if far > 20_000.0:  # flat-earth error ~ d²/(2R) would exceed ~3 cm beyond this
         raise MissionError(

@@ -44,6 +44,7 @@ from typing import cast
 import numpy as np
 
 from usvsim.common.angles import ssa
+from usvsim.common.options import bounds, check_bounds
 from usvsim.mavlink.link import MavlinkLink, load_signing_key, message_id
 from usvsim.mavlink.messages import (
     MAV_RESULT_ACCEPTED,
@@ -92,29 +93,26 @@ class SitlArgs:
     """Run the usvsim plant as a MAVLink vehicle (ArduPilot Rover boat subset)."""
 
     listen: str = "tcpin:127.0.0.1:5760"  # MAVLink endpoint (tcpin:, udpin:, udpout:)
-    lat: float = 63.4305  # start latitude (deg), also the local frame origin
-    lon: float = 10.3951  # start longitude (deg)
-    heading_deg: float = 0.0  # start heading (deg, clockwise from north)
-    speed_mps: float = 0.0  # start surge speed (m/s)
+    lat: float = field(default=63.4305, metadata=bounds(ge=-90, le=90))  # start, deg; origin
+    lon: float = field(default=10.3951, metadata=bounds(ge=-180, le=180))  # start longitude, deg
+    heading_deg: float = field(default=0.0, metadata=bounds(ge=-360, le=360))  # start, deg
+    speed_mps: float = field(default=0.0, metadata=bounds(ge=0, le=30))  # start surge speed, m/s
     vessel: str = "default"  # vessel preset (see usvsim demo)
     autopilot: str = "pid"  # heading autopilot: pid | rover | rover-tuned
-    speedup: float = 1.0  # simulated seconds per wall-clock second
-    wp_speed_mps: float = 3.0  # WP_SPEED: top guided speed, and speed at thrust 1 (m/s)
-    guided_timeout_s: float = 3.0  # Rover drops a guided target after this (s)
-    loiter_radius_m: float = 2.0  # LOIT_RADIUS: hold-position tolerance (m)
-    seed: int = 0  # sensor-noise seed
-    system_id: int = 1  # our MAVLink system id
+    speedup: float = field(default=1.0, metadata=bounds(gt=0, le=1000))  # sim s per wall s
+    wp_speed_mps: float = field(default=3.0, metadata=bounds(gt=0, le=30))  # WP_SPEED, m/s
+    guided_timeout_s: float = field(default=3.0, metadata=bounds(gt=0, le=600))  # target drop, s
+    loiter_radius_m: float = field(default=2.0, metadata=bounds(gt=0, le=1000))  # LOIT_RADIUS, m
+    seed: int = field(default=0, metadata=bounds(ge=0))  # sensor-noise seed
+    system_id: int = field(default=1, metadata=bounds(ge=1, le=255))  # our MAVLink system id
     signing_key: str = ""  # file with a 32-byte MAVLink2 signing key ('' = unsigned)
     wait_for_target: bool = False  # freeze the physics until the first guided target
-    duration_s: float = 0.0  # stop after this much simulated time (0 = until Ctrl-C)
-    mute_telemetry_after_s: float = 0.0  # fault injection: stop telemetry then (0 = never)
+    duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # sim s; 0: until Ctrl-C
+    mute_telemetry_after_s: float = field(default=0.0, metadata=bounds(ge=0))  # faults; 0: never
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.speedup) and self.speedup > 0):
-            raise ValueError(f"speedup must be > 0, got {self.speedup}")
-        for name in ("wp_speed_mps", "guided_timeout_s", "loiter_radius_m"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        # the ranges above (usvsim.common.options), for library callers too
+        check_bounds(self)
 
 
 def _autopilot(name: str) -> AutopilotConfig:

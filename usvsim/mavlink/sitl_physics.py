@@ -36,13 +36,15 @@ import json
 import math
 import socket
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
+from usvsim.common.errors import UserError
+from usvsim.common.options import bounds
 from usvsim.vessel.model import NX, build_dynamics, build_rk4_step
 from usvsim.vessel.vessels import Actuation, VesselParams
 
@@ -65,12 +67,20 @@ class SitlPhysicsArgs:
     """Serve the usvsim vessel model to ArduPilot SITL (--model JSON)."""
 
     bind: str = "127.0.0.1"  # address to listen on for ArduPilot's servo frames
-    port: int = 9002  # UDP port (ArduPilot's JSON backend sends to 9002)
+    port: int = field(default=9002, metadata=bounds(ge=0, le=65535))  # UDP port (ArduPilot: 9002)
     vessel: str = "default"  # vessel preset (see usvsim demo)
-    heading_deg: float = 0.0  # start heading (deg, clockwise from north)
-    steering_channel: int = 1  # servo channel of the steering (1-based; Rover SERVO1)
-    throttle_channel: int = 3  # servo channel of the throttle (1-based; Rover SERVO3)
-    duration_s: float = 0.0  # stop after this much physics time (0 = until Ctrl-C)
+    heading_deg: float = field(default=0.0, metadata=bounds(ge=-360, le=360))  # start, deg
+    steering_channel: int = field(default=1, metadata=bounds(ge=1, le=16))  # servo (Rover SERVO1)
+    throttle_channel: int = field(default=3, metadata=bounds(ge=1, le=16))  # servo (Rover SERVO3)
+    duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # physics s; 0: until Ctrl-C
+
+    def check(self) -> None:
+        """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
+        if self.steering_channel == self.throttle_channel:
+            raise UserError(
+                f"--steering-channel and --throttle-channel must differ, both are "
+                f"{self.steering_channel}"
+            )
 
 
 @dataclass(frozen=True)

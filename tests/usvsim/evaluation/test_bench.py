@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from usvsim.common.errors import UserError
+
 from usvsim.cli.args import add_dataclass_arguments as _add_dataclass_arguments
 from usvsim.cli.args import field_comments as _field_comments
 from usvsim.cli.bench import run_bench_command as run
@@ -153,8 +155,8 @@ def test_interrupted_write_leaves_the_old_results_and_no_temporary_files(
 
 
 def test_unknown_helmsman_or_scenario_is_an_error() -> None:
-    with pytest.raises(SystemExit, match="unknown helmsmen"):
+    with pytest.raises(UserError, match="unknown helmsman 'nobody'; choose straight"):
         run_bench(BenchArgs(helmsmen="nobody"), progress=False)
-    with pytest.raises(SystemExit, match="--scenario"):
+    with pytest.raises(UserError, match="--scenario"):
         run_bench(BenchArgs(scenario="docking"), progress=False)
     assert bench.SCENARIOS == ("pole", "waypoints")
