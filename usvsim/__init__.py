@@ -18,5 +18,10 @@ __version__ = "0.1.0"
 ENV_ID = "usvsim/PoleAvoidance-v0"
 
 if ENV_ID not in gymnasium.registry:
-    # string entry point: the environment module is imported only on gymnasium.make
-    gymnasium.register(id=ENV_ID, entry_point="usvsim.task.env:PoleAvoidanceEnv")
+    # string entry points: the environment modules are imported only on gymnasium.make(_vec);
+    # make_vec(ENV_ID, num_envs=N) returns the native batch (one plant call for N boats)
+    gymnasium.register(
+        id=ENV_ID,
+        entry_point="usvsim.task.env:PoleAvoidanceEnv",
+        vector_entry_point="usvsim.task.vector_env:PoleAvoidanceVectorEnv",
+    )

@@ -18,19 +18,18 @@ The reward is the study's (:class:`usvsim.task.reward.GaussianReward`) and is no
 thing differs from the study by necessity: usvsim ends an episode at a collision or at the goal
 (the study ran fixed-length episodes). Every reward of the study is negative, so with early
 termination a collision *ends the penalties*: TRPO quickly learns to ram the pole (measured: 0/15
-validation, episodes of ~12 decisions, after 90 iterations). :class:`FixedHorizonReturn` restores
-the study's fixed-length episode for training: on a terminating step the reward gets the
-discounted return of the decisions left until the time limit, with the boat staying where the
-episode ended (at the pole: about −2.5 per decision; at the goal: about −0.005)::
+validation, episodes of ~12 decisions, after 90 iterations). Training therefore runs the
+environment with ``reward_horizon="fixed"`` (:mod:`usvsim.task.horizon`, an option of the
+single and the vector env alike), which restores the study's fixed-length episode: on a
+terminating step the reward gets the discounted return of the decisions left until the time
+limit, with the boat staying where the episode ended (at the pole: about −2.5 per decision; at
+the goal: about −0.005)::
 
     r'_t = r_t + r_t · Σ_{k=1}^{m} γ^k = r_t · (1 + γ (1 − γ^m) / (1 − γ)),   m = K − (t + 1)
 
-(K decisions in the time limit). Leaving the area (a truncation in the environment) is treated
-the same way, as an absorbing state: the boat stays out with the reward of the step it left.
-Otherwise GAE would bootstrap from V(s) of states beyond the area's edge, which no rollout ever
-continues from, so nothing grounds their value and leaving early can look as cheap as ramming
-the pole did. Only the time limit stays a truncation (bootstrapped). The per-step reward is
-unchanged; evaluation uses the plain environment.
+(K decisions in the time limit). Leaving the area is treated the same way, as an absorbing
+state (a termination); only the time limit stays a truncation (bootstrapped). The per-step
+reward is unchanged; evaluation uses the plain environment.
 
 What is tuned: the batch (``num_envs`` × ``steps_per_env``), γ, λ, δ, the Fisher sub-sample
 and the critic. The radar setups also scale the goal vector up to the image's share of the first
@@ -53,8 +52,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-import numpy as np
-from gymnasium.vector import VectorEnv, VectorWrapper
+from gymnasium.vector import VectorEnv
 
 from learning.algorithms.base import config_from_dict
 from learning.algorithms.networks import NetworkConfig
@@ -67,7 +65,6 @@ from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 __all__ = [
     "SETUPS",
-    "FixedHorizonReturn",
     "RLSetup",
     "get_setup",
     "setup_from_params",
@@ -76,37 +73,6 @@ __all__ = [
 ]
 
 S = TypeVar("S")
-
-
-class FixedHorizonReturn(VectorWrapper):
-    """Adds the fixed-length episode's remaining return to terminating rewards (module docstring).
-
-    Wraps a :class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`; ``gamma`` must be the γ of the
-    training run. Leaving the area becomes a termination; the time limit stays a truncation.
-    """
-
-    def __init__(self, env: PoleAvoidanceVectorEnv, gamma: float) -> None:
-        super().__init__(env)
-        if not 0.0 <= gamma < 1.0:
-            raise ValueError(f"gamma must lie in [0, 1), got {gamma}")
-        self.gamma = gamma
-        scenario = env.sim.scenario
-        self.max_decisions = scenario.max_decisions
-        self.decision_period_s = scenario.decision_period_s
-        self.metadata = env.metadata
-
-    def step(self, actions: Any) -> tuple[Any, Any, Any, Any, dict[str, Any]]:
-        obs, reward, terminated, truncated, info = self.env.step(actions)
-        left = np.asarray(info["out_of_area"]) & np.asarray(truncated)
-        if np.any(left):
-            terminated, truncated = terminated | left, truncated & ~left
-        if np.any(terminated):
-            reward = np.array(reward, dtype=np.float64)
-            decisions = np.rint(np.asarray(info["time_s"]) / self.decision_period_s)
-            m = np.maximum(self.max_decisions - decisions, 0.0)[terminated]
-            g = self.gamma
-            reward[terminated] *= 1.0 + g * (1.0 - g**m) / (1.0 - g)
-        return obs, reward, terminated, truncated, info
 
 
 # The TRPO hyperparameters shared by the RL setups (each setup changes a few).
@@ -177,11 +143,16 @@ class RLSetup:
         return dataclasses.replace(self.algorithm_config, seed=seed, iterations=budget)
 
     def make_vector_env(self, num_envs: int, **env_kwargs: Any) -> VectorEnv:
-        """The training environment: ``num_envs`` boats with :class:`FixedHorizonReturn`."""
-        env = PoleAvoidanceVectorEnv(
-            num_envs, observation=self.observation, action=self.action, **env_kwargs
+        """The training environment: ``num_envs`` boats on the fixed reward horizon with the
+        run's γ (module docstring)."""
+        return PoleAvoidanceVectorEnv(
+            num_envs,
+            observation=self.observation,
+            action=self.action,
+            reward_horizon="fixed",
+            gamma=self.algorithm_config.gamma,
+            **env_kwargs,
         )
-        return FixedHorizonReturn(env, self.algorithm_config.gamma)
 
     def with_num_envs(self, num_envs: int) -> RLSetup:
         """A copy whose runs step ``num_envs`` boats together."""

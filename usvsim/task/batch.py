@@ -112,7 +112,10 @@ def heading_change_rad(
     a = np.asarray(actions)
     if kind == "gaussian":
         if a.shape != (n_boats, 1):
-            raise ValueError(f"gaussian actions must have shape ({n_boats}, 1), got {a.shape}")
+            raise ValueError(
+                f"gaussian actions must have shape ({n_boats}, 1) (one row per boat, one heading "
+                f"change each), got {a.shape}"
+            )
         if a.dtype.kind not in "fiu":
             raise ValueError(f"gaussian actions must be numbers, got dtype {a.dtype}")
         a = a[:, 0].astype(np.float64)
@@ -126,7 +129,10 @@ def heading_change_rad(
         return a * max_change_rad
     if kind == "categorical":
         if a.shape != (n_boats,):
-            raise ValueError(f"categorical actions must have shape ({n_boats},), got {a.shape}")
+            raise ValueError(
+                f"categorical actions must have shape ({n_boats},) (one category per boat), "
+                f"got {a.shape}"
+            )
         if a.dtype.kind not in "iu":
             raise ValueError(
                 f"categorical actions must be integers 0..{N_CATEGORIES - 1}, got dtype {a.dtype}"

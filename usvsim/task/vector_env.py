@@ -6,6 +6,11 @@ observation in ``info["final_obs"]`` (object array, ``None`` for running boats) 
 ``info["final_info"]`` (masked by ``info["_final_info"]``), and returns the *new* episode's first
 observation in ``obs``. The top-level info arrays describe the step just taken for every boat,
 finished or not.
+
+It is the registered ``vector_entry_point`` of ``usvsim/PoleAvoidance-v0``:
+``gymnasium.make_vec("usvsim/PoleAvoidance-v0", num_envs=N)`` returns it. The options it shares
+with the single env (reward horizon, normalisation, rendering) are applied by
+:class:`usvsim.task.options.EnvLayer`.
 """
 
 from __future__ import annotations
@@ -26,7 +31,10 @@ from usvsim.task.batch import (
     observation_rows,
     write_observation_rows,
 )
+from usvsim.task.horizon import RewardHorizon
 from usvsim.task.observations import ObservationKind
+from usvsim.task.options import EnvLayer, EnvOptions
+from usvsim.task.render import RENDER_MODES, RenderConfig, tile_frames
 from usvsim.task.scenario import draw_episode
 
 __all__ = ["PoleAvoidanceVectorEnv"]
@@ -43,7 +51,11 @@ class PoleAvoidanceVectorEnv(VectorEnv):
     batch equals N single environments. ``reset(options={"episodes": [spec, ...]})`` starts the
     given :class:`usvsim.task.scenario.EpisodeSpec` (one per boat); later autoresets draw again.
 
-    Keyword arguments are those of :class:`PoleAvoidanceBatch`.
+    ``reward_horizon``, ``gamma``, ``normalize_observation``, ``render_mode`` and
+    ``render_config`` mean what they mean for :class:`usvsim.task.env.PoleAvoidanceEnv`;
+    ``render()`` returns a tuple of ``num_envs`` frames (``"rgb_array"``) or shows them tiled
+    (``"human"``). After an autoreset a boat's frame shows its new episode. Further keyword
+    arguments are those of :class:`PoleAvoidanceBatch`.
     """
 
     def __init__(
@@ -51,12 +63,30 @@ class PoleAvoidanceVectorEnv(VectorEnv):
         num_envs: int,
         observation: ObservationKind = "positional",
         action: ActionKind = "gaussian",
+        render_mode: str | None = None,
+        reward_horizon: RewardHorizon = "episode",
+        gamma: float = 0.99,
+        normalize_observation: bool = False,
+        render_config: RenderConfig | None = None,
         **kwargs: Any,
     ) -> None:
-        self.metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+        options = EnvOptions(
+            reward_horizon,
+            gamma,
+            normalize_observation,
+            render_mode,
+            render_config or RenderConfig(),
+        )
+        self.metadata = {
+            "autoreset_mode": AutoresetMode.SAME_STEP,
+            "render_modes": list(RENDER_MODES),
+            "render_fps": options.render.fps,
+        }
+        self.render_mode = render_mode
         self.sim = PoleAvoidanceBatch(num_envs, observation=observation, action=action, **kwargs)
+        self.layer = EnvLayer(self.sim, options)
         self.num_envs = self.sim.n_boats
-        self.single_observation_space = self.sim.single_observation_space
+        self.single_observation_space = self.layer.single_observation_space
         self.single_action_space = self.sim.single_action_space
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -79,20 +109,23 @@ class PoleAvoidanceVectorEnv(VectorEnv):
             raise ValueError(f"unknown reset options {sorted(options)}; known: ['episodes']")
         if specs is None:
             specs = [draw_episode(g, self.sim.scenario) for g in self._boat_rngs]
-        self._obs = self.sim.reset(None, list(specs))
+        self._obs = self.layer.started(np.arange(self.num_envs), self.sim.reset(None, list(specs)))
+        if self.render_mode == "human":
+            self.render()
         return self._obs, {"pole_ne": self.sim.pole_ne.copy(), "goal_ne": self.sim.goal_ne.copy()}
 
     def step(
         self, actions: Any
     ) -> tuple[Observation, FloatArray, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
         res = self.sim.step(actions)
+        reward, terminated, truncated = self.layer.stepped(res)
         info: dict[str, Any] = {}
         everyone = np.ones(self.num_envs, dtype=bool)
         arrays = res.info_arrays()
         for key, value in arrays.items():
             info[key], info[f"_{key}"] = value, everyone
-        obs = res.observation
-        done = res.terminated | res.truncated
+        obs = self.layer.observation(res.observation)
+        done = terminated | truncated
         if done.any():
             idx = np.flatnonzero(done)
             final_obs = np.full(self.num_envs, None, dtype=object)
@@ -105,6 +138,20 @@ class PoleAvoidanceVectorEnv(VectorEnv):
                 final_obs=final_obs, _final_obs=done, final_info=final_info, _final_info=done
             )
             specs = [draw_episode(self._boat_rngs[i], self.sim.scenario) for i in idx]
-            write_observation_rows(obs, idx, self.sim.reset(idx, specs))
+            write_observation_rows(obs, idx, self.layer.started(idx, self.sim.reset(idx, specs)))
         self._obs = obs
-        return obs, res.reward, res.terminated, res.truncated, info
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, terminated, truncated, info
+
+    def render(self) -> tuple[Any, ...] | None:
+        """A tuple of ``num_envs`` frames ``(H, W, 3) uint8`` (``"rgb_array"``), or ``None``
+        after showing them tiled in a window (``"human"``)."""
+        frames = self.layer.frames()
+        if self.render_mode == "human":
+            self.layer.show(tile_frames(frames))
+            return None
+        return tuple(frames)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.layer.close()

@@ -16,7 +16,7 @@ from learning.cli.evaluate import EvaluateArgs
 from learning.cli.evaluate import run as run_evaluate
 from learning.cli.train import TrainArgs, run
 from learning.experiments.checkpoint import load_checkpoint
-from learning.experiments.setups import FixedHorizonReturn, get_setup
+from learning.experiments.setups import get_setup
 
 SETUP = "rl-categorical-positional"
 
@@ -119,23 +119,11 @@ def test_early_stop_after_consecutive_full_validations(
     assert summary["first_15_of_15"]["iteration"] == 1
 
 
-def test_fixed_horizon_return_adds_the_remaining_discounted_reward() -> None:
+def test_setups_train_on_the_fixed_reward_horizon_with_their_gamma() -> None:
+    # the horizon itself: tests/usvsim/task/test_reward_horizon.py
     setup = get_setup(SETUP)
-    env = setup.make_vector_env(2)
-    assert isinstance(env, FixedHorizonReturn)
-    gamma, K = setup.algorithm_config.gamma, env.max_decisions
-    env.reset(seed=0)
-    straight = np.full(2, 20)  # 0°: straight at the pole → collision
-    for _ in range(K):
-        _, reward, terminated, _, info = env.step(straight)
-        if terminated.any():
-            break
-    assert np.array_equal(terminated, info["collision"]) and terminated.any()
-    m = K - np.rint(info["time_s"] / 2.0)
-    plain = info["reward_pole"] + info["reward_goal"]
-    expected = np.where(terminated, plain * (1 + gamma * (1 - gamma**m) / (1 - gamma)), plain)
-    np.testing.assert_allclose(reward, expected)
-    assert (reward[terminated] < -40).all()  # ~ -2.5 for each decision left
+    options = setup.make_vector_env(2).layer.options
+    assert (options.reward_horizon, options.gamma) == ("fixed", setup.algorithm_config.gamma)
 
 
 def test_evaluate_prints_the_table(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
