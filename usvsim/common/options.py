@@ -60,8 +60,13 @@ def describe_bounds(field: dataclasses.Field[Any]) -> str:
     if spec is None:
         return ""
     limits, zero_ok = spec
-    text = " and ".join(f"{_WORDS[k]} {v:g}" for k, v in limits.items())
+    text = " and ".join(f"{_WORDS[k]} {_number(v)}" for k, v in limits.items())
     return text + (" (or 0)" if zero_ok else "")
+
+
+def _number(value: float) -> str:
+    """``value`` as the user would type it (integers in full, floats shortest)."""
+    return str(int(value)) if float(value).is_integer() else f"{value:g}"
 
 
 def check_bounds(options: Any) -> None:
@@ -85,4 +90,4 @@ def check_bounds(options: Any) -> None:
         if zero_ok and value == 0:
             continue
         if not all(_TESTS[k](value, b) for k, b in limits.items()):
-            raise UserError(f"{flag(f.name)} must be {describe_bounds(f)}, got {value:g}")
+            raise UserError(f"{flag(f.name)} must be {describe_bounds(f)}, got {_number(value)}")

@@ -10,12 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from usvsim.common.errors import UserError
-
 from usvsim.cli.args import add_dataclass_arguments as _add_dataclass_arguments
 from usvsim.cli.args import field_comments as _field_comments
 from usvsim.cli.bench import run_bench_command as run
 from usvsim.common import fileio
+from usvsim.common.errors import UserError
 from usvsim.evaluation import bench
 from usvsim.evaluation.bench import BenchArgs, run_bench, write_results
 from usvsim.helm.protocol import RandomHelmsman, StraightAheadHelmsman
