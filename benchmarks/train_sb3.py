@@ -48,6 +48,7 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 from torch import nn
 
 from learning.algorithms.loop import IterationStats, train
+from learning.algorithms.trpo import TRPOConfig
 from learning.experiments.setups import get_setup
 from learning.experiments.validation import validate
 from usvsim.common.fileio import atomic_write_text
@@ -137,6 +138,7 @@ def run_sb3(trainer: str, seed: int, max_steps: int, every: int) -> dict[str, An
         model: Any = PPO("MlpPolicy", env, seed=seed)
     else:
         c = get_setup(SETUP).algorithm_config
+        assert isinstance(c, TRPOConfig)
         env = make_sb3_vec_env(c.num_envs, seed=seed, gamma=c.gamma)
         model = TRPO(
             UsvsimMlpPolicy,

@@ -10,6 +10,11 @@ held-out episodes (:mod:`usvsim.evaluation.episodes`), and prints one table::
 ``min d_pole`` is each episode's closest approach to the pole (true positions, every 0.1 s);
 the table gives its minimum and median over all episodes of the set, and the minimum over the
 successful ones.
+
+``--video PATH`` (``.gif``, or ``.mp4`` with moviepy: ``pip install "usvsim[video]"``) also
+records the validation episodes chosen by ``--video-episodes`` (indices, e.g. ``0,3,7``, or
+``all``) one after another, one top-view frame per 2 s decision
+(:mod:`usvsim.task.render`, ``render_mode="rgb_array"``), 5 frames per second.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from typing import Any
 
 import numpy as np
 import torch
+from numpy.typing import NDArray
 
 from learning.experiments.checkpoint import (
     CheckpointError,
@@ -40,8 +46,11 @@ from usvsim.evaluation.episodes import (
     heldout_episodes,
     validation_episodes,
 )
+from usvsim.task.env import PoleAvoidanceEnv
+from usvsim.task.render import write_video
+from usvsim.task.scenario import EpisodeSpec
 
-__all__ = ["EvaluateArgs", "evaluation_row", "format_table", "run"]
+__all__ = ["EvaluateArgs", "episode_frames", "evaluation_row", "format_table", "run"]
 
 
 @dataclass(frozen=True)
@@ -53,6 +62,8 @@ class EvaluateArgs:
     episodes: bool = False  # also print one line per validation episode
     json: str = ""  # also write the table as JSON to this path (NaN, e.g. no success: null)
     threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
+    video: str = ""  # also write the chosen validation episodes as a video (.gif or .mp4)
+    video_episodes: str = "0"  # validation episodes for --video: indices 0..14 (e.g. 0,3) or all
 
 
 def evaluation_row(name: str, records: Sequence[EpisodeRecord]) -> dict[str, Any]:
@@ -92,6 +103,40 @@ def format_table(rows: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def episode_frames(
+    helmsman: Any, spec: EpisodeSpec, observation: Any, action: Any
+) -> list[NDArray[np.uint8]]:
+    """Top-view frames of one episode steered by ``helmsman``: the start, then one per decision."""
+    env = PoleAvoidanceEnv(observation, action, render_mode="rgb_array")
+    obs, _ = env.reset(options={"episode": spec})
+    helmsman.reset(1)
+    frames = [env.render()]
+    done = False
+    while not done:
+        batched = {k: v[None] for k, v in obs.items()} if isinstance(obs, dict) else obs[None]
+        obs, _, terminated, truncated, _ = env.step(np.asarray(helmsman.act(batched))[0])
+        frames.append(env.render())
+        done = terminated or truncated
+    env.close()
+    return frames
+
+
+def _video_episodes(text: str, n: int) -> list[int]:
+    """``"all"`` or comma-separated indices in 0..n-1; SystemExit naming what is allowed."""
+    if text.strip() == "all":
+        return list(range(n))
+    try:
+        chosen = [int(part) for part in text.split(",")]
+    except ValueError:
+        chosen = []
+    if not chosen or any(not 0 <= i < n for i in chosen):
+        raise SystemExit(
+            f"usvsim evaluate: --video-episodes must be 'all' or comma-separated indices "
+            f"0..{n - 1}, got {text!r}"
+        )
+    return chosen
+
+
 def run(args: EvaluateArgs) -> int:
     """Run ``usvsim evaluate`` (module docstring); 0 on success."""
     torch.set_num_threads(max(1, args.threads))
@@ -99,6 +144,14 @@ def run(args: EvaluateArgs) -> int:
         raise SystemExit("usvsim evaluate: --heldout must be >= 0")
     if args.json:
         check_writable_file(args.json, "--json")  # before the episodes, not after them
+    video_episodes: list[int] = []
+    if args.video:
+        if not args.video.lower().endswith((".gif", ".mp4")):
+            raise SystemExit(
+                f"usvsim evaluate: --video must end in .gif or .mp4, got {args.video!r}"
+            )
+        video_episodes = _video_episodes(args.video_episodes, len(validation_episodes()))
+        check_writable_file(args.video, "--video")
     try:
         ckpt = load_checkpoint(args.checkpoint)
         agent = load_agent(ckpt, args.checkpoint)
@@ -127,5 +180,16 @@ def run(args: EvaluateArgs) -> int:
         payload = {"checkpoint": args.checkpoint, "setup": ckpt.setup, "rows": rows}
         text = json.dumps(json_safe(payload), indent=2, allow_nan=False)
         atomic_write_text(args.json, text + "\n")
+    if args.video:
+        specs = validation_episodes()
+        frames: list[NDArray[np.uint8]] = []
+        for i in video_episodes:
+            episode = episode_frames(helmsman, specs[i], observation, action)
+            frames += episode + [episode[-1]] * 5  # hold each episode's end for 1 s
+        try:
+            write_video(frames, args.video, fps=5)
+        except ImportError as err:
+            raise SystemExit(f"usvsim evaluate: {err}") from None
+        print(f"video: {args.video} (validation episodes {video_episodes}, {len(frames)} frames)")
     sys.stdout.flush()
     return 0

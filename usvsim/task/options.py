@@ -18,6 +18,7 @@ networks, Stable-Baselines3's included, scale it themselves) and the goal vector
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 from gymnasium import spaces
@@ -36,7 +37,7 @@ def normalized_observation(kind: str, obs: Observation) -> Observation:
     positional one standardised (float32), radar images and ``radar+goal`` unchanged."""
     if kind == "positional":
         assert not isinstance(obs, dict)
-        return POSITIONAL_STANDARDIZATION.apply(obs)
+        return POSITIONAL_STANDARDIZATION.apply(cast(NDArray[np.floating], obs))
     return obs
 
 
