@@ -56,7 +56,7 @@ from usvsim.evaluation.likeness import ExpertReference, expert_reference, likene
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
-__all__ = ["IL_CSV_FIELDS", "ILRunResult", "train_il", "validate_il"]
+__all__ = ["IL_CSV_FIELDS", "ILRunResult", "expert_pairs", "train_il", "validate_il"]
 
 ILRunResult = RunResult  # the outcome of train_il (the same record as an RL run's)
 
@@ -287,7 +287,7 @@ def train_il(
         seed = int(state["agent"]["config"]["seed"])
         rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
     out.mkdir(parents=True, exist_ok=True)
-    data, n_demos, n_skipped = _expert_pairs(setup, demos_dir, log)
+    data, n_demos, n_skipped = expert_pairs(setup, demos_dir, log)
     cfg = setup.run_config(seed, iterations)
     train_args = {
         "seed": seed,
@@ -350,7 +350,7 @@ def train_il(
     return run.result(*done, run.wall_offset_s + run.session_s())
 
 
-def _expert_pairs(
+def expert_pairs(
     setup: ILSetup, demos_dir: str | Path, log: Callable[[str], None]
 ) -> tuple[ExpertData, int, int]:
     """The (s, a) pairs of the demonstrations in ``demos_dir`` that pass the quality check, in
