@@ -1,0 +1,223 @@
+"""``usvsim sweep``: the sweep definition (overrides of training fields, seeds, groups, trial
+folders), the across-seed statistics (IQM, shipped-seed rule) and, marked slow, a real 2-trial
+sweep on local Ray that is interrupted, resumed and checked against its trials' own logs."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from learning.experiments.setups import get_setup
+from learning.experiments.sweep import (
+    Distribution,
+    SweepSpec,
+    apply_overrides,
+    expand_setups,
+    expected_trials,
+    parse_seeds,
+    trial_dir_name,
+)
+from learning.experiments.sweep_report import TrialRecord, choose_shipped, iqm
+
+
+def test_override_reaches_nested_training_fields() -> None:
+    base = get_setup("rl-gaussian-radar")
+    s = apply_overrides(
+        base, {"max_kl": "0.005", "balanced_fusion": False, "validate_every": 7, "num_envs": 8}
+    )
+    assert s.algorithm_config.max_kl == 0.005
+    assert s.algorithm_config.network.balanced_fusion is False
+    assert s.validate_every == 7
+    assert s.algorithm_config.num_envs == 8
+    assert s.algorithm_config.gamma == base.algorithm_config.gamma  # the rest unchanged
+
+
+def test_override_of_il_discriminator_field() -> None:
+    from learning.experiments.il_setups import get_il_setup
+
+    s = apply_overrides(get_il_setup("il-gaussian-positional"), {"gail.bc_epochs": 3})
+    assert s.gail.bc_epochs == 3
+
+
+def test_unknown_or_fixed_field_is_refused_with_the_allowed_ones() -> None:
+    with pytest.raises(ValueError, match=r"unknown training field 'max_kll'.*max_kl"):
+        apply_overrides(get_setup("rl-gaussian-positional"), {"max_kll": 0.01})
+    with pytest.raises(ValueError, match="unknown training field 'seed'"):
+        apply_overrides(get_setup("rl-gaussian-positional"), {"seed": 1})
+    with pytest.raises(ValueError, match="integer"):
+        apply_overrides(get_setup("rl-gaussian-positional"), {"num_envs": 2.5})
+
+
+def test_seeds_groups_and_trial_count() -> None:
+    assert parse_seeds("0-4") == (0, 1, 2, 3, 4)
+    assert parse_seeds("3,7") == (3, 7)
+    with pytest.raises(ValueError, match="range 0-4"):
+        parse_seeds("a")
+    assert expand_setups(["positional"]) == (
+        "rl-gaussian-positional",
+        "rl-categorical-positional",
+        "il-gaussian-positional",
+        "il-categorical-positional",
+    )
+    spec = SweepSpec(
+        "t", expand_setups(["radar"]), (0, 1, 2), grid=(("max_kl", (0.01, 0.02)),), samples=1
+    )
+    assert expected_trials(spec) == 4 * 3 * 2
+
+
+def test_spec_round_trip_and_refusals() -> None:
+    spec = SweepSpec(
+        "hp",
+        ("rl-gaussian-positional",),
+        (0,),
+        random=(("max_kl", Distribution.parse("loguniform:0.005:0.05")),),
+        search="optuna",
+        samples=8,
+    )
+    assert SweepSpec.from_json(spec.to_json()) == spec
+    with pytest.raises(ValueError, match="optuna tunes one setup on one seed"):
+        SweepSpec("hp", ("rl-gaussian-positional",), (0, 1), random=spec.random, search="optuna")
+    with pytest.raises(ValueError, match="unknown setup 'rl-nope'"):
+        SweepSpec("x", ("rl-nope",), (0,))
+    with pytest.raises(ValueError, match="unknown sweep fields"):
+        SweepSpec.from_json({"name": "x", "setups": ["rl-gaussian-positional"], "sedes": [0]})
+
+
+def test_trial_folders_are_distinct_per_draw() -> None:
+    a = trial_dir_name("rl-gaussian-positional", 1, {"max_kl": 0.0123456789}, "random")
+    b = trial_dir_name("rl-gaussian-positional", 1, {"max_kl": 0.0123456788}, "random")
+    assert a != b and a.startswith("rl-gaussian-positional-seed1-h")
+    grid = trial_dir_name("rl-gaussian-positional", 0, {"max_kl": 0.01}, "grid")
+    assert grid == "rl-gaussian-positional-seed0-max_kl=0.01"
+
+
+def test_iqm_equals_rliable() -> None:
+    metrics = pytest.importorskip("rliable.metrics")  # the sweep extra
+
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 3, 5, 8, 13):
+        x = rng.uniform(size=n)
+        assert iqm(x) == pytest.approx(float(metrics.aggregate_iqm(x[:, None])), abs=1e-12)
+
+
+def _record(seed: int, best: int, auc: float, status: str = "finished") -> TrialRecord:
+    metrics = {"val_best_successes": best, "val_auc": auc}
+    return TrialRecord("s", seed, {}, Path("."), status, "", metrics, 0.5, [])
+
+
+def test_shipped_seed_is_the_validation_median() -> None:
+    trials = [_record(0, 15, 0.5), _record(1, 14, 0.9), _record(2, 15, 0.7), _record(3, 15, 0.2)]
+    trials.append(_record(4, 0, 0.0, status="crashed"))
+    # by (best, auc): seed1 (14), seed3, seed0, seed2 -> lower median of 4 = seed3
+    shipped = choose_shipped(trials, "median-validation")
+    assert shipped is not None and shipped.seed == 3
+    fixed = choose_shipped(trials, "seed:2")
+    assert fixed is not None and fixed.seed == 2
+    assert choose_shipped(trials, "seed:4") is None  # crashed: never shipped
+
+
+# --- a real sweep -----------------------------------------------------------------------------
+
+SWEEP = [
+    "--setups", "rl-categorical-positional", "--seeds", "0,1", "--iterations", "40",
+    "--validate-every", "4", "--n-envs", "4", "--heldout", "20", "--max-concurrent", "2",
+    "--no-shipped",
+]  # fmt: skip
+
+
+def _sweep(out: Path) -> subprocess.Popen[str]:
+    main = "import sys; from usvsim.cli.main import main; sys.exit(main())"
+    cmd = [sys.executable, "-c", main, "sweep", *SWEEP, "--out", str(out)]
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    env.pop("RAY_ADDRESS", None)  # always a local Ray of its own
+    return subprocess.Popen(
+        cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
+    )
+
+
+def _log(run: Path) -> list[dict[str, str]]:
+    with (run / "log.csv").open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(240)
+def test_sweep_interrupted_resumed_and_report_matches_the_logs(tmp_path: Path) -> None:
+    pytest.importorskip("ray.tune")  # the sweep extra
+    pytest.importorskip("rliable")
+    out = tmp_path / "sweep"
+    t0 = time.monotonic()
+    first = _sweep(out)
+    latest = [out / "runs" / f"rl-categorical-positional-seed{s}" / "latest.pt" for s in (0, 1)]
+    deadline = time.monotonic() + 120
+    while not any(p.exists() for p in latest) and first.poll() is None:
+        assert time.monotonic() < deadline, "no trial wrote latest.pt within 120 s"
+        time.sleep(0.2)
+    first.send_signal(signal.SIGINT)  # Ctrl-C
+    text, _ = first.communicate(timeout=120)
+    assert first.returncode == 130, text
+    assert "run the same command to continue" in text
+    trials = json.loads((out / "trials.json").read_text())
+    assert sum(t["status"] != "finished" for t in trials) >= 1
+
+    second = _sweep(out)
+    text, _ = second.communicate(timeout=180)
+    wall = time.monotonic() - t0
+    assert second.returncode == 0, text
+    assert "continuing the sweep" in text
+    assert wall < 120, f"interrupted + resumed sweep took {wall:.0f} s"
+
+    report = json.loads((out / "report.json").read_text())
+    assert [t["status"] for t in report["trials"]] == ["finished", "finished"]
+    assert report["sessions"] == 2
+    resumed = 0
+    firsts, best_auc = [], []
+    for t in report["trials"]:
+        run = out / "runs" / t["dir"]
+        rows = _log(run)
+        # one row per iteration 1..60: the resumed run continued, nothing twice or lost
+        assert [int(r["iteration"]) for r in rows] == list(range(1, 41))
+        val = [(int(r["iteration"]), int(r["val_successes"])) for r in rows if r["val_successes"]]
+        m = t["metrics"]
+        assert m["iterations"] == 40
+        assert m["env_steps"] == int(rows[-1]["env_steps"])
+        assert m["val_best_successes"] == max(v for _, v in val)
+        assert m["val_auc"] == pytest.approx(np.mean([v for _, v in val]) / 15)
+        first_full = next((i for i, v in val if v == 15), -1)
+        assert m["first_full_iteration"] == first_full
+        if first_full >= 0:
+            firsts.append(first_full)
+        best_auc.append((m["val_best_successes"], m["val_auc"], t["seed"]))
+        resumed += "--resume" in json.loads((run / "summary.json").read_text())["command"]
+        # the held-out figure is best.pt's own, re-evaluated here
+        from usvsim.evaluation.episodes import evaluate, heldout_episodes
+        from usvsim.helm.registry import helmsman_kinds, make_helmsman
+
+        helmsman = make_helmsman(str(run / "best.pt"))
+        obs, act = helmsman_kinds(helmsman)
+        records = evaluate(helmsman, heldout_episodes(n=20), observation=obs, action=act)
+        assert t["heldout_success"] == pytest.approx(np.mean([r.success for r in records]))
+    assert resumed >= 1  # the interrupted trial continued from its latest.pt
+
+    (arm,) = report["arms"]
+    heldout = [t["heldout_success"] for t in report["trials"]]
+    assert arm["heldout_success"] == pytest.approx(heldout)
+    assert arm["heldout_iqm"] == pytest.approx(np.mean(heldout))  # IQM of 2 runs: their mean
+    low, high = arm["heldout_iqm_ci95"]
+    assert min(heldout) <= low <= arm["heldout_iqm"] <= high <= max(heldout)
+    assert arm["reached_15_of_15"] == len(firsts)
+    if firsts:
+        assert arm["median_iterations_to_15_of_15"] == pytest.approx(np.median(firsts))
+    assert arm["shipped_seed"] == sorted(best_auc)[0][2]  # lower median of two by validation
+    for png in ("performance_profile.png", "efficiency_env_steps.png", "efficiency_wall_clock.png"):
+        assert (out / png).stat().st_size > 5000
+    assert "rl-categorical-positional" in (out / "report.md").read_text()
