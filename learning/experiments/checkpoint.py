@@ -296,6 +296,33 @@ def _read(path: Path) -> dict[str, Any]:
     return data
 
 
+_TYPES: dict[str, tuple[type, ...]] = {
+    "setup": (str,),
+    "observation": (str,),
+    "action": (str,),
+    "setup_params": (dict,),
+    "agent": (dict,),
+    "slim": (bool,),
+    "weights_dtype": (str,),
+    "train_args": (dict, type(None)),
+    "validation": (dict, type(None)),
+    "history": (list, type(None)),
+    "algorithm": (str,),
+}
+
+
+def _check_types(path: Path, data: dict[str, Any]) -> None:
+    """Each stored field of the type the reader expects (found by the property tests: a
+    ``None`` where a dict belongs raised ``TypeError`` from deep inside)."""
+    for key, types in _TYPES.items():
+        if key in data and not isinstance(data[key], types):
+            allowed = " or ".join(t.__name__ for t in types)
+            raise CheckpointError(
+                f"{path}: checkpoint field {key!r} must be {allowed}, got "
+                f"{type(data[key]).__name__}"
+            )
+
+
 def _check_spaces(path: Path, data: dict[str, Any]) -> None:
     """The stored spaces must be those of the stored observation/action kinds."""
     try:
@@ -329,6 +356,7 @@ def load_checkpoint(
     """
     p = Path(path)
     data = _read(p)
+    _check_types(p, data)
     if expected_setup is not None:
         want = get_setup(expected_setup) if isinstance(expected_setup, str) else expected_setup
         if (data["setup"], data["observation"], data["action"]) != (
@@ -368,7 +396,8 @@ def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>"
     """``checkpoint.make_agent()`` with weight errors reported as :class:`CheckpointError`."""
     try:
         return checkpoint.make_agent()
-    except (KeyError, TypeError, ValueError, RuntimeError) as err:
+    # AttributeError/IndexError: nested state of the wrong shape (found by the property tests)
+    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, IndexError) as err:
         raise CheckpointError(
             f"{path}: weights do not fit the {checkpoint.setup} networks: {err}"
         ) from None

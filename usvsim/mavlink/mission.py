@@ -194,6 +194,8 @@ def load_mission(path: str | Path) -> Mission:
         text = p.read_text(encoding="utf-8")
     except OSError as err:
         raise MissionError(f"{p}: cannot read mission file: {err.strerror}") from None
+    except UnicodeDecodeError as err:  # found by the property tests
+        raise MissionError(f"{p}: not UTF-8 text ({err.reason} at byte {err.start})") from None
     if p.suffix.lower() in (".yaml", ".yml"):
         try:
             import yaml
