@@ -330,7 +330,9 @@ def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
             name="sweep",
             storage_path=str(storage.resolve()),
             verbose=0,
-            callbacks=[Progress(where.root, where.say, where.progress_every_s)],
+            callbacks=[
+                Progress(where.root, where.say, where.progress_every_s, expected_trials(spec))
+            ],
             failure_config=tune.FailureConfig(max_failures=0),
         ),
     )

@@ -37,17 +37,31 @@ def _last_row(log_csv: Path) -> tuple[str, str]:
 class Progress(tune.Callback):
     """Progress lines of a sweep (module docstring); ``say`` prints one line."""
 
-    def __init__(self, root: Path, say: Callable[[str], None], every_s: float = 30.0) -> None:
-        self.root, self.say, self.every_s = root, say, every_s
+    def __init__(
+        self, root: Path, say: Callable[[str], None], every_s: float = 30.0, total: int = 0
+    ) -> None:
+        """``total``: the trials the sweep will run (0: count those Tune knows so far)."""
+        self.root, self.say, self.every_s, self.total = root, say, every_s, total
         self.last = time.monotonic()
         self.t0 = time.monotonic()
+
+    def setup(
+        self,
+        stop: Any = None,
+        num_samples: int | None = None,
+        total_num_samples: int | None = None,
+        **info: Any,
+    ) -> None:
+        """Start the clock when the experiment (or its continuation) starts."""
+        self.last = self.t0 = time.monotonic()
 
     def _count(self, trials: list[Any], ended: Any = None, as_: str = "") -> str:
         """Counts by status; ``ended`` (a trial that just ended) counted ``as_``."""
         status = [as_ if t is ended else t.status for t in trials]
         done, crashed = status.count("TERMINATED"), status.count("ERROR")
         running = status.count("RUNNING")
-        return f"{done} finished, {crashed} crashed, {running} running, {len(trials)} known"
+        total = max(self.total, len(trials))
+        return f"{done}/{total} finished, {crashed} crashed, {running} running"
 
     def on_trial_start(self, iteration: int, trials: list[Any], trial: Any, **info: Any) -> None:
         self.say(f"[sweep] start {_trial_dir(trial)} ({self._count(trials)})")

@@ -221,3 +221,26 @@ def test_sweep_interrupted_resumed_and_report_matches_the_logs(tmp_path: Path) -
     for png in ("performance_profile.png", "efficiency_env_steps.png", "efficiency_wall_clock.png"):
         assert (out / png).stat().st_size > 5000
     assert "rl-categorical-positional" in (out / "report.md").read_text()
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(180)
+def test_a_crashed_trial_is_reported_not_dropped(tmp_path: Path) -> None:
+    pytest.importorskip("ray.tune")  # the sweep extra
+    out = tmp_path / "crash"
+    main = "import sys; from usvsim.cli.main import main; sys.exit(main())"
+    args = ["sweep", "--setups", "rl-categorical-positional", "--seeds", "0", "--grid"]
+    args += ["gamma=1.5", "--iterations", "2", "--heldout", "5", "--no-shipped", "--out", str(out)]
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    done = subprocess.run(
+        [sys.executable, "-c", main, *args], capture_output=True, text=True, env=env, timeout=170
+    )
+    assert done.returncode == 1, done.stdout + done.stderr
+    (trial,) = json.loads((out / "trials.json").read_text())
+    assert trial["status"] == "crashed"
+    assert "gamma must lie in [0, 1)" in trial["error"]
+    report = json.loads((out / "report.json").read_text())
+    assert report["arms"][0]["crashed_seeds"] == [0]
+    assert report["arms"][0]["heldout_iqm"] is None
+    assert "crashed" in (out / "report.md").read_text()
+    assert "CRASHED rl-categorical-positional-seed0-gamma=1.5" in done.stdout
