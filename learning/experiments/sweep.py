@@ -143,6 +143,10 @@ def _evaluate_heldout(out: Path, n: int) -> dict[str, Any]:
     from usvsim.evaluation.episodes import evaluate, heldout_episodes
     from usvsim.helm.registry import helmsman_kinds, make_helmsman
 
+    if not (out / "best.pt").is_file():
+        raise FileNotFoundError(
+            f"{out / 'best.pt'} missing: the run stopped before its first validation (time budget?)"
+        )
     helmsman = make_helmsman(str(out / "best.pt"))
     observation, action = helmsman_kinds(helmsman)
     records = evaluate(helmsman, heldout_episodes(n=n), observation=observation, action=action)

@@ -122,6 +122,13 @@ class SweepSpec:
             base = base_setup(name)
             for key, _ in (*self.grid, *self.random):
                 apply_overrides(base, {key: _example_value(self, key)})
+            every = self.validate_every or base.validate_every
+            budget = self.iterations or base.algorithm_config.iterations
+            if budget < every:
+                raise ValueError(
+                    f"{name}: {budget} iterations < validation every {every}: no validation, "
+                    "no best.pt; raise --iterations or lower --validate-every"
+                )
         if len(set(self.seeds)) != len(self.seeds):
             raise ValueError(f"seeds repeat: {self.seeds}")
         if self.search == "grid" and self.random:

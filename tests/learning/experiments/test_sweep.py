@@ -230,7 +230,7 @@ def test_a_crashed_trial_is_reported_not_dropped(tmp_path: Path) -> None:
     out = tmp_path / "crash"
     main = "import sys; from usvsim.cli.main import main; sys.exit(main())"
     args = ["sweep", "--setups", "rl-categorical-positional", "--seeds", "0", "--grid"]
-    args += ["gamma=1.5", "--iterations", "2", "--heldout", "5", "--no-shipped", "--out", str(out)]
+    args += ["gamma=1.5", "--iterations", "5", "--heldout", "5", "--no-shipped", "--out", str(out)]
     env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
     done = subprocess.run(
         [sys.executable, "-c", main, *args], capture_output=True, text=True, env=env, timeout=170
@@ -244,3 +244,8 @@ def test_a_crashed_trial_is_reported_not_dropped(tmp_path: Path) -> None:
     assert report["arms"][0]["heldout_iqm"] is None
     assert "crashed" in (out / "report.md").read_text()
     assert "CRASHED rl-categorical-positional-seed0-gamma=1.5" in done.stdout
+
+
+def test_a_budget_without_validation_is_refused() -> None:
+    with pytest.raises(ValueError, match="2 iterations < validation every 5: no validation"):
+        SweepSpec("x", ("rl-categorical-positional",), (0,), iterations=2)
