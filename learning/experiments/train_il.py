@@ -50,7 +50,12 @@ from learning.imitation.demonstrations import (
 )
 from learning.imitation.gail import GAILAgent, GAILStats, train_gail
 from learning.imitation.preprocess import ExpertData, check_observations, expert_data
-from usvsim.common.fileio import atomic_open, atomic_write_text, json_safe
+from usvsim.common.fileio import (
+    atomic_open,
+    atomic_write_text,
+    json_safe,
+    remove_stale_temporaries,
+)
 from usvsim.evaluation.episodes import validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
 from usvsim.task.scenario import EpisodeSpec
@@ -287,6 +292,7 @@ def train_il(
         seed = int(state["agent"]["config"]["seed"])
         rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)  # half-written files of a killed earlier run
     data, n_demos, n_skipped = expert_pairs(setup, demos_dir, log)
     cfg = setup.run_config(seed, iterations)
     train_args = {

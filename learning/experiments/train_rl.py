@@ -32,7 +32,7 @@ from learning.experiments.checkpoint import (
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
 from learning.experiments.validation import RunResult, validate, validation_record
-from usvsim.common.fileio import atomic_write_text, json_safe
+from usvsim.common.fileio import atomic_write_text, json_safe, remove_stale_temporaries
 
 __all__ = ["COMMON_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
 
@@ -209,6 +209,7 @@ def train_rl(
     if state is not None:
         config = dataclasses.replace(config, seed=int(state["config"]["seed"]))
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)  # half-written files of a killed earlier run
     r = _Run(
         setup,
         out,

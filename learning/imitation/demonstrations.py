@@ -506,7 +506,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     import sys
 
-    from usvsim.common.fileio import check_writable_dir
+    from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries, staged_dir
 
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 1 or args[0].startswith("-"):
@@ -521,8 +521,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UserError as err:
         print(f"learning.imitation.demonstrations: {err}", file=sys.stderr)
         return 2
+    remove_stale_temporaries(folder)  # what a killed earlier run left
     recs = record_demonstrations()
-    save_recordings(recs, folder)
+    # the 46 files as one set: a kill leaves the previous set, never a mix of two
+    with staged_dir(folder, "demos", replaces=["demo_*.csv"]) as staging:
+        save_recordings(recs, staging)
     kept = [r for r in recs if not quality_check(r)]
     print(f"recorded {len(recs)} runs into {folder}; {len(kept)} pass the quality filter")
     for r in recs:
