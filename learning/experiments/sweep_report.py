@@ -204,6 +204,23 @@ def _arm_rows(
     return rows
 
 
+def _best_by_validation(trials: Sequence[TrialRecord]) -> dict[str, Any] | None:
+    """The search's answer: the finished trial with the best validation score (then best
+    validation, then fewer iterations); held-out plays no part."""
+    done = [t for t in trials if t.status == "finished"]
+    if not done:
+        return None
+    best = max(
+        done,
+        key=lambda t: (
+            t.metrics[OBJECTIVE],
+            t.metrics["val_best_successes"],
+            -t.metrics["iterations"],
+        ),
+    )
+    return {"dir": best.dir.name, "overrides": best.overrides, "metrics": best.metrics}
+
+
 def _first_full_wall(t: TrialRecord) -> float:
     summary = json.loads((t.dir / "summary.json").read_text())
     return float(summary["first_15_of_15"]["wall_time_s"])
@@ -350,6 +367,14 @@ def _markdown(report: dict[str, Any]) -> str:
             f"{_pct(r['study']['success'])} / {r['study']['iterations']} | "
             f"{_pct(r['usvsim_model_heldout_success'])} |"
         )
+    best = report["best_by_validation"]
+    if best is not None and len(report["trials"]) > 1:
+        lines += [
+            "",
+            f"Best trial by validation score (the search's objective): `{best['dir']}` "
+            f"(overrides {json.dumps(best['overrides'])}, validation score "
+            f"{best['metrics'][OBJECTIVE]:.3f}).",
+        ]
     if report["improvement"]:
         lines += ["", "| probability of improvement (held-out) | P | 95 % CI |", "|---|---|---|"]
         for p in report["improvement"]:
@@ -394,6 +419,7 @@ def write_report(root: Path, compare_shipped: bool = True) -> dict[str, Any]:
         "sessions": len(sessions),
         "arms": rows,
         "improvement": _improvement(trials),
+        "best_by_validation": _best_by_validation(trials),
         "efficiency": {k: _curves(trials, k) for k in ("env_steps", "wall_time_s")},
         "trials": [
             {

@@ -249,3 +249,42 @@ def test_a_crashed_trial_is_reported_not_dropped(tmp_path: Path) -> None:
 def test_a_budget_without_validation_is_refused() -> None:
     with pytest.raises(ValueError, match="2 iterations < validation every 5: no validation"):
         SweepSpec("x", ("rl-categorical-positional",), (0,), iterations=2)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(180)
+def test_optuna_search_sees_validation_only(tmp_path: Path) -> None:
+    pytest.importorskip("ray.tune")  # the sweep extra
+    pytest.importorskip("optuna")
+    out = tmp_path / "hp"
+    main = "import sys; from usvsim.cli.main import main; sys.exit(main())"
+    args = ["sweep", "--setups", "rl-categorical-positional", "--seeds", "0", "--search"]
+    args += ["optuna", "--samples", "2", "--random", "max_kl=loguniform:0.005:0.05"]
+    args += ["--iterations", "5", "--n-envs", "4", "--heldout", "5", "--no-shipped"]
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    done = subprocess.run(
+        [sys.executable, "-c", main, *args, "--out", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=170,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    trials = json.loads((out / "trials.json").read_text())
+    draws = [t["overrides"]["max_kl"] for t in trials]
+    assert len(set(draws)) == 2 and all(0.005 <= d <= 0.05 for d in draws)
+    from learning.experiments.checkpoint import load_checkpoint
+
+    for t in trials:  # the run trained with the drawn value
+        ckpt = load_checkpoint(out / "runs" / t["dir"] / "latest.pt")
+        assert ckpt.setup_params["algorithm_config"]["max_kl"] == t["overrides"]["max_kl"]
+    # what Tune (and Optuna) saw: validation metrics, no held-out number anywhere
+    results = list((out / "tune").rglob("result.json"))
+    assert len(results) == 2
+    for path in results:
+        for line in path.read_text().splitlines():
+            assert not any("heldout" in key for key in json.loads(line))
+    report = json.loads((out / "report.json").read_text())
+    best = report["best_by_validation"]
+    scores = {t["dir"]: t["metrics"]["val_auc"] for t in report["trials"]}
+    assert scores[best["dir"]] == max(scores.values())
