@@ -18,6 +18,8 @@ trainer         what runs
                 Gaussian mean, initial σ 0.5, orthogonal init) and rl-gaussian-positional's
                 hyper-parameters (32 boats × 64 steps, γ, λ, δ, CG, critic, Fisher sub-sample
                 1/4) on the same adapter: the peer row
+``sb3-trpo-full-fisher``  the same with sb3-contrib's default ``sub_sampling_factor=1``
+                (Fisher-vector products on the whole batch)
 ``usvsim-trpo``  usvsim's TRPO, ``usvsim train rl-gaussian-positional`` (its setup as it is)
 ==============  ==========================================================================
 
@@ -56,7 +58,7 @@ from usvsim.evaluation.episodes import evaluate, validation_episodes
 from usvsim.task.sb3 import SB3Helmsman, make_sb3_vec_env
 
 SETUP = "rl-gaussian-positional"
-TRAINERS = ("sb3-ppo", "sb3-trpo", "usvsim-trpo")
+TRAINERS = ("sb3-ppo", "sb3-trpo", "sb3-trpo-full-fisher", "usvsim-trpo")
 
 
 class UsvsimMlpPolicy(ActorCriticPolicy):
@@ -152,7 +154,7 @@ def run_sb3(trainer: str, seed: int, max_steps: int, every: int) -> dict[str, An
             cg_damping=c.cg_damping,
             n_critic_updates=c.critic_epochs,
             target_kl=c.max_kl,
-            sub_sampling_factor=round(1 / c.fvp_fraction),
+            sub_sampling_factor=1 if trainer.endswith("full-fisher") else round(1 / c.fvp_fraction),
             seed=seed,
         )
     progress = Progress(max_steps)

@@ -159,6 +159,22 @@ def test_record_video_writes_an_mp4(tmp_path, plant):
     assert steps >= 5
 
 
+@pytest.mark.filterwarnings("ignore:.*autoreset mode is same-step")  # documented: see render()
+def test_vector_record_video_takes_the_frame_tuple(tmp_path, plant):
+    pytest.importorskip("moviepy")
+    vec = PoleAvoidanceVectorEnv(2, render_mode="rgb_array", plant=plant)
+    folder = tmp_path / "videos"
+    env = gym.wrappers.vector.RecordVideo(
+        vec, str(folder), step_trigger=lambda s: s == 0, video_length=10, record_first_only=True
+    )
+    env.reset(seed=0)
+    for _ in range(12):
+        env.step(np.zeros((2, 1), dtype=np.float32))
+    env.close()
+    videos = list(folder.glob("*.mp4"))
+    assert len(videos) == 1 and videos[0].stat().st_size > 2_000
+
+
 def _has_pyav() -> bool:
     try:
         import av  # noqa: F401
