@@ -65,6 +65,11 @@ COMMANDS: dict[str, Command] = {
         "usvsim.cli.plant:run_demo",
         "vessel and autopilot design, plant plots (PNG)",
     ),
+    "manoeuvre": Command(
+        "usvsim.cli.plant:ManoeuvreArgs",
+        "usvsim.cli.plant:run_manoeuvre",
+        "manoeuvring trials (turning circle, zig-zags, stopping) vs IMO",
+    ),
     "perf": Command(
         "usvsim.cli.plant:PerfArgs",
         "usvsim.cli.plant:run_perf",

@@ -1,24 +1,46 @@
-"""The vessel commands: ``usvsim demo`` (design report and plant plots) and ``usvsim perf``."""
+"""The vessel commands: ``usvsim demo`` (design report and plant plots), ``usvsim manoeuvre``
+(manoeuvring trials) and ``usvsim perf``."""
 
 from __future__ import annotations
 
 import json
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["DemoArgs", "PerfArgs", "run_demo", "run_perf"]
+from usvsim.common.errors import UserError
+from usvsim.common.options import bounds
+
+__all__ = ["DemoArgs", "ManoeuvreArgs", "PerfArgs", "run_demo", "run_manoeuvre", "run_perf"]
 
 
 @dataclass(frozen=True)
 class DemoArgs:
     """Print the vessel and autopilot design and save plant plots (PNG)."""
 
-    vessel: str = "default"  # vessel preset: default, viknes830, viknes830_nr3224, cybership2
+    vessel: str = (
+        "default"  # vessel preset: default, usv105, viknes830, viknes830_nr3224, cybership2
+    )
     autopilot: str = "pid"  # pid | rover | rover-tuned
     out: str = "usvsim-results/plant"  # folder for the PNG plots
+
+
+@dataclass(frozen=True)
+class ManoeuvreArgs:
+    """Standard manoeuvring trials (turning circle, zig-zags, stopping) against IMO MSC.137(76)."""
+
+    vessel: str = "all"  # vessel preset, or all
+    speed: float = field(default=0.0, metadata=bounds(gt=0.0, zero_ok=True))  # m/s; 0: cruise
+    out: str = "usvsim-results/manoeuvre"  # folder for the table (Markdown) and the PNG plots
+
+    def check(self) -> None:
+        from usvsim.vessel.vessels import VESSELS
+
+        if self.vessel != "all" and self.vessel not in VESSELS:
+            known = ", ".join(["all", *sorted(VESSELS)])
+            raise UserError(f"--vessel must be one of {known}, not {self.vessel!r}")
 
 
 @dataclass(frozen=True)
@@ -26,7 +48,7 @@ class PerfArgs:
     """Measure plant (and environment) throughput."""
 
     json: bool = False  # print JSON only
-    seconds: float = 1.0  # measuring time per figure, s
+    seconds: float = field(default=1.0, metadata=bounds(gt=0, le=3600))  # per figure, s
     no_env: bool = False  # skip the environment figures
 
 
@@ -53,6 +75,9 @@ def run_demo(args: DemoArgs) -> int:
     plant = Plant(vessel, autopilot=_autopilot_config(args.autopilot))
     print(design_report(vessel, plant.design, plant.dt_s))
     print(f"plant fast path: {plant.backend}")
+    from usvsim.evaluation.manoeuvre import run_trials, trials_summary
+
+    print(trials_summary(run_trials(vessel)) + "  (usvsim manoeuvre: all trials)")
     from usvsim.evaluation import plant_plots
 
     out = Path(args.out)
@@ -71,6 +96,32 @@ def run_demo(args: DemoArgs) -> int:
         atomic_savefig(fig, out / name, dpi=120)
         plt.close(fig)
     print(f"plots written to {out}/: " + ", ".join(name for name, _ in steps))
+    return 0
+
+
+def run_manoeuvre(args: ManoeuvreArgs) -> int:
+    import matplotlib.pyplot as plt
+    from tqdm import tqdm
+
+    from usvsim.common.fileio import atomic_savefig, atomic_write_text
+    from usvsim.evaluation.manoeuvre import run_trials, trials_table
+    from usvsim.evaluation.plant_plots import manoeuvre_figure
+    from usvsim.vessel.vessels import VESSELS
+
+    args.check()
+    names = sorted(VESSELS) if args.vessel == "all" else [args.vessel]
+    out = Path(args.out)
+    reports = []
+    for name in tqdm(names, desc="trials", unit="vessel", file=sys.stderr):
+        report = run_trials(VESSELS[name], args.speed or None)
+        fig = manoeuvre_figure(report)
+        atomic_savefig(fig, out / f"manoeuvre_{name}.png", dpi=110)
+        plt.close(fig)
+        reports.append(report)
+    table = trials_table(reports)
+    atomic_write_text(out / "manoeuvre.md", table + "\n")
+    print(table)
+    print(f"written to {out}/: manoeuvre.md, " + ", ".join(f"manoeuvre_{n}.png" for n in names))
     return 0
 
 

@@ -1,4 +1,4 @@
-"""Plots of the plant: turning circle, heading step responses, Bode plot, Kalman filter vs GPS.
+"""Plots of the plant: turning circle, heading steps, Bode plot, Kalman filter vs GPS, trials.
 
 Every function returns a matplotlib Figure; :func:`save_plant_plots` writes them as PNG files
 (atomically) and returns their paths. Uses the non-interactive Agg backend when no display is set.
@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from usvsim.common.fileio import atomic_savefig
 from usvsim.common.mpl import use_file_backend_if_headless
+from usvsim.evaluation.manoeuvre import TrialReport
 from usvsim.vessel.plant import Plant
 
 use_file_backend_if_headless()  # before any figure: files only when headless
@@ -23,6 +24,7 @@ __all__ = [
     "bode_figure",
     "heading_step_figure",
     "kalman_figure",
+    "manoeuvre_figure",
     "save_plant_plots",
     "turning_circle_figure",
 ]
@@ -94,7 +96,7 @@ def bode_figure(plant: Plant) -> Figure:
     plt.figure(figsize=(7, 6))
     control.bode_plot(loop, omega=np.logspace(-3, 2, 400), display_margins=True)
     fig = plt.gcf()
-    fig.suptitle(f"{plant.vessel.name}: open heading loop (PID × Nomoto × actuator × delay)")
+    fig.suptitle(f"{plant.vessel.name}: full heading loop (PID × sway–yaw × actuator × delay)")
     return fig
 
 
@@ -143,6 +145,45 @@ def kalman_figure(seed: int = 0, seconds: float = 120.0) -> Figure:
     ax.set_ylabel("x north (m)")
     ax.set_title("Navigation: Kalman filter vs raw GPS (box manoeuvre)")
     ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def manoeuvre_figure(report: TrialReport) -> Figure:
+    """The trials of one vessel: turning circle (in boat lengths), both zig-zags, stopping."""
+    L = report.length_m
+    fig, axes = plt.subplots(2, 2, figsize=(10, 8))
+    ax = axes[0, 0]
+    tc = report.turning
+    ax.plot(tc.path[:, 1] / L, tc.path[:, 0] / L, lw=1.2)
+    ax.plot([0], [0], "ko")
+    ax.set_aspect("equal")
+    ax.set_xlabel("transfer (L)")
+    ax.set_ylabel("advance (L)")
+    ax.set_title(
+        f"turning circle, max helm: D_T {tc.tactical_diameter_m / L:.2f} L, "
+        f"R {tc.steady_radius_m / L:.2f} L, β {tc.drift_angle_deg:.0f}°"
+    )
+    for ax, z in ((axes[0, 1], report.zigzag10), (axes[1, 0], report.zigzag20)):
+        ax.plot(z.t_s, z.heading_deg, label="heading change ψ")
+        ax.plot(z.t_s, z.helm_deg_t, "--", label="helm δ")
+        ax.axhline(z.helm_deg, color="0.6", lw=0.6)
+        ax.axhline(-z.helm_deg, color="0.6", lw=0.6)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("deg")
+        ax.set_title(
+            f"{z.helm_deg:g}°/{z.helm_deg:g}° zig-zag: overshoots "
+            f"{z.first_overshoot_deg:.1f}° / {z.second_overshoot_deg:.1f}°"
+        )
+        ax.legend(fontsize=8)
+    ax = axes[1, 1]
+    st = report.stopping
+    ax.plot(st.t_s, st.surge_mps)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("surge u (m/s)")
+    mode = "full astern" if st.astern else "coasting (no astern)"
+    ax.set_title(f"stopping, {mode}: track reach {st.track_reach_m / L:.2f} L in {st.time_s:.1f} s")
+    fig.suptitle(f"{report.vessel}: manoeuvring trials at {report.speed_mps:g} m/s (open loop)")
     fig.tight_layout()
     return fig
 

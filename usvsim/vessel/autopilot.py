@@ -30,12 +30,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa_casadi
+from usvsim.vessel.loop import LoopAnalysis, analyse_loop, full_loop_transfer
 from usvsim.vessel.model import (
     NomotoModel,
     damping_forces,
     linearize,
+    linearize_steering,
     mass_matrix,
     nomoto_from_linear,
+    thrust_factor,
 )
 from usvsim.vessel.vessels import Actuation, VesselParams
 
@@ -43,9 +46,12 @@ __all__ = [
     "NC",
     "AutopilotConfig",
     "AutopilotDesign",
+    "YawModel",
+    "analyse_design",
     "control_law",
     "design_autopilot",
     "design_report",
+    "sway_yaw_design_model",
 ]
 
 NC = 5  # controller state size
@@ -58,7 +64,8 @@ class AutopilotConfig:
     """Design choices of the heading autopilot and speed controller (defaults: default vessel)."""
 
     kind: AutopilotKind = "pid"
-    cruise_speed_mps: float = 3.0  # m/s, linearisation point and default speed reference
+    # m/s, linearisation point and default speed reference; None: the vessel's cruise speed
+    cruise_speed_mps: float | None = None
     omega_n: float = 2.0  # rad/s, PID closed-loop natural frequency (Fossen 2021, §15.3)
     zeta: float = 1.0  # -, PID closed-loop relative damping
     ref_omega: float = 3.5  # rad/s, reference-model natural frequency
@@ -75,7 +82,10 @@ class AutopilotConfig:
     # settle within 1° in 1.5 s / 2.3 s (uncapped 1.4 s / 2.6 s)
     thrust_cap_gain: float = 2.0  # 1/s, k_cap
     speed_margin_mps: float = 0.75  # m/s, ΔU
-    brake_cap_factor: float = 2.0  # -, cap multiplier for moments that stop a turn
+    # -, cap multiplier for moments that stop a turn; None: 2.0 on a hull whose yaw is decoupled
+    # from sway, 4.0 on a coupled one (stopping the turn must also stop the sway drift whose
+    # Munk moment keeps it turning; with 2.0 the usv105's 10° step overshoots 12 %, with 4.0 7 %)
+    brake_cap_factor: float | None = None
     # ArduPilot Rover defaults (ardupilot/libraries/APM_Control/AR_AttitudeControl.cpp)
     rover_ang_p: float = 2.0  # 1/s, ATC_STR_ANG_P
     rover_rate_max: float = math.radians(120.0)  # rad/s, ATC_STR_RAT_MAX
@@ -113,7 +123,9 @@ class AutopilotConfig:
         if self.kind not in ("pid", "rover"):
             raise ValueError(f"autopilot kind must be 'pid' or 'rover', got {self.kind!r}")
         for name, value in asdict(self).items():
-            if name == "kind":
+            if name == "kind" or (
+                name in ("cruise_speed_mps", "brake_cap_factor") and value is None
+            ):
                 continue
             if not math.isfinite(value) or value <= 0:
                 raise ValueError(f"AutopilotConfig.{name} must be finite and > 0, got {value}")
@@ -124,12 +136,28 @@ class AutopilotDesign:
     """Numbers the control law needs, plus the design's diagnostics."""
 
     config: AutopilotConfig
-    nomoto: NomotoModel
+    nomoto: (
+        NomotoModel | YawModel
+    )  # design model m ṙ + d r = τ_N (m = T/K, d = 1/K), see design_autopilot
     Kp: float  # N m/rad
     Kd: float  # N m s/rad
     Ki: float  # N m/(rad s)
     m11: float  # kg, surge inertia incl. added mass
     tau_n_max: float  # N m, largest yaw moment the actuators can give (for anti-windup)
+    cruise_speed_mps: float = 3.0  # m/s, the design speed (config's, else the vessel's)
+    design_model: str = "nomoto"  # "nomoto" (first-order hull) or "sway-yaw" (coupled hull)
+    brake_cap_factor: float = 2.0  # -, the config's, else by design model (AutopilotConfig)
+
+    @property
+    def feedforward_damping(self) -> float:
+        """d of the feed-forward τ_N = m a_d + d r_d (N m s/rad): the design d, but not below 0.
+
+        A negative d (a straight-line-unstable hull) is a small-signal property; at the turn
+        rates the reference model asks for, the cross-flow drag makes the moment a turn needs
+        positive, and a negative feed-forward fights the turn (cybership2: 10° step within 1°
+        after 8.5 s instead of 1.8 s).
+        """
+        return max(self.nomoto.d, 0.0)
 
     def gains_vector(self) -> NDArray[np.float64]:
         """Parameters fed to the compiled control law (layout: see :func:`control_law`)."""
@@ -140,7 +168,7 @@ class AutopilotDesign:
                 self.Kd,
                 self.Ki,
                 self.nomoto.m,
-                self.nomoto.d,
+                self.feedforward_damping,
                 c.ref_omega,
                 c.ref_zeta,
                 c.ref_rate_max,
@@ -160,7 +188,7 @@ class AutopilotDesign:
                 c.thrust_cap_gain,
                 c.speed_margin_mps,
                 c.speed_integral_max,
-                c.brake_cap_factor,
+                self.brake_cap_factor,
             ],
             dtype=float,
         )
@@ -169,19 +197,86 @@ class AutopilotDesign:
 NG = 25  # gains vector size
 
 
-def _max_yaw_moment(act: Actuation) -> float:
+def _max_yaw_moment(act: Actuation, speed_mps: float) -> float:
     if act.kind == "forces":
-        return act.lever_m * min(abs(act.a2_min), abs(act.a2_max))
+        return abs(act.lever_m) * min(abs(act.a2_min), abs(act.a2_max))
+    if math.isfinite(act.jet_speed_mps):  # delivered thrust at the design speed
+        return (
+            act.lever_m * act.a1_max * float(thrust_factor(act, speed_mps)) * math.sin(act.a2_max)
+        )
     return act.lever_m * act.a1_max * math.sin(act.a2_max)
+
+
+@dataclass(frozen=True)
+class YawModel:
+    """Design model m ṙ + d r = τ_N given by its inertia and damping (K = 1/d, T = m/d)."""
+
+    m: float  # kg m², effective yaw inertia
+    d: float  # N m s/rad, effective yaw damping (0: none; < 0: straight-line unstable)
+
+    @property
+    def K(self) -> float:
+        return 1.0 / self.d if self.d != 0 else math.inf
+
+    @property
+    def T(self) -> float:
+        return self.m / self.d if self.d != 0 else math.inf
+
+
+def sway_yaw_design_model(vessel: VesselParams, speed_mps: float) -> YawModel:
+    """Design model m ṙ + d r = τ_N of a coupled hull, from its true sway–yaw linearisation.
+
+    The first-order Nomoto reduction (T = T1 + T2 - T3) is meaningless on a coupled hull: its
+    time constants come out with the wrong sign, and it designs for the wrong inertia (4.2× on
+    the usv105 hull, an unstable loop; hull audit). The mass–damper is instead fitted to the two
+    asymptotes of the true r / τ_N, G_r(s) = c (sI - A)⁻¹ b (c = [0, 1]; A, b from
+    :func:`usvsim.vessel.model.linearize_steering`: sway coupling through M⁻¹, the actuator's
+    side force and the hull's own instability included):
+
+    * m = 1 / (c b), the high-frequency inertia (G_r → 1 / (m s) for ω ≫ the hull's poles, the
+      range the PID's crossover lies in), so K_p = m ω_n² puts the crossover where intended;
+      on usv105 m = 5.46e4 kg m² (I_z - N_ṙ = 6.29e4: the actuator's side force helps);
+    * d = 1 / K, K = -c A⁻¹ b the static gain (steady turn rate per moment); negative on a
+      straight-line-unstable hull (usv105: d = -6.8e3 N m s), which raises the derivative gain
+      K_d = 2 ζ ω_n m - d that stabilises it; d = 0 when A is singular (e.g. Y_v = 0).
+
+    On a decoupled hull both equal the exact first-order Nomoto model (m = I_z - N_ṙ, d = -N_r).
+    Chosen over matching the impedance 1/G_r(jω_n) (which gives d = +2.5e4 on usv105, the same
+    linear margins, and a 24 % overshoot on the 10° step of the rate-limited nonlinear plant
+    instead of 5.5 %). Margins and poles are checked on the full loop (:mod:`usvsim.vessel.loop`).
+    """
+    A, b = linearize_steering(vessel, speed_mps)
+    m = 1.0 / float(b[1, 0])
+    if abs(np.linalg.det(A)) < 1e-12 * max(1.0, float(np.abs(A).max()) ** 2):
+        d = 0.0
+    else:
+        d = 1.0 / float(-(np.linalg.solve(A, b))[1, 0])
+    return YawModel(m=m, d=d)
+
+
+def _decoupled(A: NDArray[np.float64], vessel: VesselParams) -> bool:
+    """True when yaw does not see sway: the first-order Nomoto model is then exact."""
+    M = mass_matrix(vessel)
+    return bool(A[1, 0] == 0.0 and M[1, 2] == 0.0 and M[2, 1] == 0.0)
 
 
 def design_autopilot(
     vessel: VesselParams, config: AutopilotConfig | None = None
 ) -> AutopilotDesign:
-    """Design the heading PID by pole placement on the Nomoto model linearised at cruise speed."""
+    """Design the heading PID by pole placement (Fossen 2021, §15.3) on the hull at cruise speed.
+
+    The design model m ṙ + d r = τ_N is the first-order Nomoto model when the hull's yaw is
+    decoupled from sway (exact there; the Loe presets, the ``default`` vessel) and
+    :func:`sway_yaw_design_model` otherwise. The cruise speed is the config's, else the vessel's.
+    """
     config = config or AutopilotConfig()
-    A, B = linearize(vessel, config.cruise_speed_mps)
-    nomoto = nomoto_from_linear(A, B)
+    speed = vessel.cruise_speed_mps if config.cruise_speed_mps is None else config.cruise_speed_mps
+    A, B = linearize(vessel, speed)
+    nomoto: NomotoModel | YawModel
+    if _decoupled(A, vessel):
+        nomoto, model = nomoto_from_linear(A, B), "nomoto"
+    else:
+        nomoto, model = sway_yaw_design_model(vessel, speed), "sway-yaw"
     m, d, wn, z = nomoto.m, nomoto.d, config.omega_n, config.zeta
     Kp = m * wn**2  # Fossen (2021) eq. (15.85), no restoring term (k = 0)
     Kd = 2.0 * z * wn * m - d  # eq. (15.86)
@@ -193,7 +288,14 @@ def design_autopilot(
         Kd=Kd,
         Ki=Ki,
         m11=float(mass_matrix(vessel)[0, 0]),
-        tau_n_max=_max_yaw_moment(vessel.actuation),
+        tau_n_max=_max_yaw_moment(vessel.actuation, speed),
+        cruise_speed_mps=speed,
+        design_model=model,
+        brake_cap_factor=(
+            (2.0 if model == "nomoto" else 4.0)
+            if config.brake_cap_factor is None
+            else config.brake_cap_factor
+        ),
     )
 
 
@@ -201,12 +303,17 @@ def _sat(x: Any, lim: Any) -> Any:
     return ca.fmin(ca.fmax(x, -lim), lim)
 
 
-def _allocate(act: Actuation, tau_x: Any, tau_n: Any, thrust_cap: Any) -> tuple[Any, Any]:
+def _allocate(
+    act: Actuation, tau_x: Any, tau_n: Any, thrust_cap: Any, u: Any = None
+) -> tuple[Any, Any]:
     """Map desired surge force and yaw moment to (actuator command, yaw moment it gives).
 
     Waterjet: yaw has priority (a waterjet gets more yaw moment only by more thrust), but the
     thrust raised for yaw alone is limited to ``thrust_cap`` (N), which the speed loop lowers
     as the boat runs faster than its reference, so that hard steering does not speed it up.
+    With thrust loss (finite ``jet_speed_mps``) the allocation works in delivered thrust and
+    commands delivered / (1 - u / V_j) (the jet curve is known to the controller), ``u`` the
+    measured surge speed (m/s).
     """
     if act.kind == "forces":
         return ca.vertcat(tau_x, tau_n / act.lever_m), tau_n
@@ -218,13 +325,20 @@ def _allocate(act: Actuation, tau_x: Any, tau_n: Any, thrust_cap: Any) -> tuple[
     surge_thrust = fwd / ca.cos(nozzle)
     # T = max(fwd / cos δ, |side| / sin δ_max): exact when unsaturated, yaw first when saturated
     yaw_thrust = ca.fabs(side) / math.sin(act.a2_max)
+    if math.isfinite(act.jet_speed_mps):
+        eta = ca.fmax(thrust_factor(act, u), 0.05)  # never divide by a vanishing jet
+        thrust = ca.fmin(ca.fmax(surge_thrust, ca.fmin(yaw_thrust, thrust_cap)), act.a1_max * eta)
+        return ca.vertcat(thrust / eta, nozzle), act.lever_m * thrust * ca.sin(nozzle)
     thrust = ca.fmin(ca.fmax(surge_thrust, ca.fmin(yaw_thrust, thrust_cap)), act.a1_max)
     return ca.vertcat(thrust, nozzle), act.lever_m * thrust * ca.sin(nozzle)
 
 
-def _rover_steering(act: Actuation, steer: Any, tau_x: Any) -> Any:
-    if act.kind == "forces":
-        return ca.vertcat(tau_x, steer * act.a2_max)
+def _rover_steering(act: Actuation, steer: Any, tau_x: Any, u: Any) -> Any:
+    if act.kind == "forces":  # steer > 0 turns to starboard whichever end the force acts at
+        return ca.vertcat(tau_x, (steer if act.lever_m > 0 else -steer) * act.a2_max)
+    if math.isfinite(act.jet_speed_mps):
+        eta = ca.fmax(thrust_factor(act, u), 0.05)
+        return ca.vertcat(ca.fmax(tau_x, 0.0) / eta, steer * act.a2_max)
     return ca.vertcat(ca.fmax(tau_x, 0.0), steer * act.a2_max)
 
 
@@ -282,7 +396,7 @@ def control_law(
         tau_n = _sat(tau_n_des, tau_n_max)
         # moments that stop a turn may use brake_factor × the cap (stopping must not be starved)
         cap = ca.if_else(tau_n * r < 0, brake_factor * thrust_cap, thrust_cap)
-        a_cmd, tau_n_given = _allocate(vessel.actuation, tau_x, tau_n, cap)
+        a_cmd, tau_n_given = _allocate(vessel.actuation, tau_x, tau_n, cap, u)
         # conditional integration: freeze the integral while the yaw moment saturates
         unsaturated = ca.fabs(tau_n_given - tau_n_des) < 0.01 * tau_n_max
         z_next = _sat(ca.if_else(unsaturated, z_psi + dt_s * err, z_psi), z_max)
@@ -301,7 +415,7 @@ def control_law(
         r_err = r_des - r
         integ = _sat(c[3] + r_i * r_err * dt_s, r_imax)
         steer = _sat(r_ff * r_des + r_p * r_err + integ, 1.0)
-        a_cmd = _rover_steering(vessel.actuation, steer, tau_x)
+        a_cmd = _rover_steering(vessel.actuation, steer, tau_x, u)
         c_next = ca.vertcat(0.0, r_des, 0.0, integ, z_u)
     return a_cmd, c_next
 
@@ -319,13 +433,12 @@ def initial_controller_state(
 
 
 def design_report(vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0.1) -> str:
-    """Human-readable design summary: Nomoto model, gains, closed-loop poles and margins.
+    """Human-readable design summary: design model, gains, closed-loop poles and margins.
 
-    The loop is analysed in continuous time on the Nomoto model ψ/τ_N = K / (s (1 + T s)) with the
-    PID C(s) = K_p + K_i/s + K_d s and the actuator lag and a half-sample delay (Padé) in series.
+    Poles and margins are those of the FULL linear loop (:mod:`usvsim.vessel.loop`: sway–yaw
+    hull, actuator lag, half-sample delay; the slew-rate limit by its describing function), not
+    of the model the gains were placed on.
     """
-    import control
-
     lines = [
         f"vessel {vessel.name}: L = {vessel.length_m:.2f} m, B = {vessel.beam_m:.2f} m, "
         f"m = {vessel.m:.0f} kg, Iz = {vessel.Iz:.0f} kg m²"
@@ -333,23 +446,30 @@ def design_report(vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0
     n = design.nomoto
     c = design.config
     lines.append(
-        f"Nomoto at {c.cruise_speed_mps:.1f} m/s: K = {n.K:.4g} rad/(s N m), "
-        f"T = {n.T:.3f} s  (m = {n.m:.4g} kg m², d = {n.d:.4g} N m s)"
+        f"design model ({design.design_model}) at {design.cruise_speed_mps:.2f} m/s: "
+        f"K = {n.K:.4g} rad/(s N m), T = {n.T:.3f} s  (m = {n.m:.4g} kg m², d = {n.d:.4g} N m s)"
     )
     lines.append(
         f"PID ({c.kind} selected): ω_n = {c.omega_n} rad/s, ζ = {c.zeta}: "
         f"K_p = {design.Kp:.4g} N m/rad, K_d = {design.Kd:.4g} N m s/rad, "
         f"K_i = {design.Ki:.4g} N m/(rad s)"
     )
-    loop = _loop_transfer(vessel, design, dt_s)
-    gm, pm, wcg, wcp = control.margin(loop)
-    cl = control.feedback(loop, 1)
-    poles = np.sort_complex(control.poles(cl))
-    lines.append("closed-loop poles: " + ", ".join(f"{p.real:.3f}{p.imag:+.3f}j" for p in poles))
-    gm_db = 20 * math.log10(gm) if np.isfinite(gm) and gm > 0 else float("inf")
+    a = analyse_design(vessel, design, dt_s)
     lines.append(
-        f"gain margin {gm_db:.1f} dB at {wcg:.2f} rad/s, phase margin {pm:.1f}° at {wcp:.2f} rad/s"
+        "closed-loop poles (full loop): "
+        + ", ".join(f"{p.real:.3f}{p.imag:+.3f}j" for p in a.poles)
     )
+    lines.append(
+        f"full loop: gain margin {a.gain_margin_db:.1f} dB at {a.phase_crossover_rad_s:.2f} rad/s, "
+        f"phase margin {a.phase_margin_deg:.1f}° at {a.gain_crossover_rad_s:.2f} rad/s"
+    )
+    if math.isfinite(vessel.actuation.a2_rate_max):
+        lines.append(
+            f"slew-rate limit {math.degrees(vessel.actuation.a2_rate_max):.0f} units/s: inactive "
+            f"below {a.rate_linear_amplitude_deg:.1f}° amplitude at crossover; phase margin "
+            f"{a.phase_margin_rate_limited_deg:.1f}° at {a.rate_check_amplitude_deg:.0f}° "
+            "(describing function)"
+        )
     lines.append(
         f"reference model: ω = {c.ref_omega} rad/s, ζ = {c.ref_zeta}, "
         f"r_max = {math.degrees(c.ref_rate_max):.1f}°/s, "
@@ -359,18 +479,15 @@ def design_report(vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0
     return "\n".join(lines)
 
 
-def _loop_transfer(vessel: VesselParams, design: AutopilotDesign, dt_s: float) -> Any:
-    import control
-
-    s = control.tf("s")
-    n = design.nomoto
-    plant = n.K / (s * (1 + n.T * s))
-    pid = design.Kp + design.Ki / s + design.Kd * s / (1 + 0.01 * s)
-    lag = max(vessel.actuation.lag_s[1], 1e-6)
-    num, den = control.pade(dt_s / 2, 2)  # half-sample delay of the 10 Hz ZOH
-    return pid * plant / (1 + lag * s) * control.tf(num, den)
+def analyse_design(
+    vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0.1
+) -> LoopAnalysis:
+    """Margins and poles of the PID of ``design`` on the full linear loop at its design speed."""
+    return analyse_loop(vessel, design.cruise_speed_mps, design.Kp, design.Kd, design.Ki, dt_s)
 
 
 def loop_transfer(vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0.1) -> Any:
-    """Open-loop L(s) = C(s) G(s) used by :func:`design_report` (for Bode plots)."""
-    return _loop_transfer(vessel, design, dt_s)
+    """Open-loop L(s) of the full linear loop (:func:`usvsim.vessel.loop.full_loop_transfer`)."""
+    return full_loop_transfer(
+        vessel, design.cruise_speed_mps, design.Kp, design.Kd, design.Ki, dt_s
+    )

@@ -20,11 +20,19 @@ Equations (Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Contr
   M ν̇_r + C_RB(ν_r) ν_r + C_A(ν_r) ν_r + D(ν_r) ν_r = τ, and ν̇ = ν̇_r − S(r) ν_c;
 * M = M_RB + M_A (eq. 6.54), C_RB and C_A the 3-DOF Coriolis–centripetal matrices (eqs. 6.43,
   6.44), D(ν_r) linear + modulus-quadratic + cubic damping;
-* first-order actuators ȧ = (sat(a_cmd) − a) / T_a; with T_a = 0 the actuator is instantaneous.
+* first-order actuators ȧ = (sat(a_cmd) − a) / T_a; with T_a = 0 the actuator is instantaneous;
+  the steering actuator's rate optionally limited, |ȧ2| ≤ a2_rate_max; a waterjet's delivered
+  thrust optionally falls with speed (:func:`thrust_factor`).
+
+Hulls whose linear derivatives come from captive-model tests (e.g. Clarke et al. 1983) already
+contain the linearised added-mass Coriolis terms (Munk moment); this model adds C_A(ν_r) ν_r
+itself, so such derivatives must be given without it
+(:func:`usvsim.vessel.vessels.without_added_mass_coriolis`), or they count twice.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,8 +50,12 @@ __all__ = [
     "damping_forces",
     "generalized_forces",
     "linearize",
+    "linearize_steering",
     "mass_matrix",
     "nomoto_from_linear",
+    "steering_direction",
+    "surge_trim",
+    "thrust_factor",
 ]
 
 NX = 8  # plant state size
@@ -82,9 +94,13 @@ def damping_forces(v: VesselParams, nu_r: Any) -> Any:
     u, vv, r = nu_r[0], nu_r[1], nu_r[2]
     au, av, ar = ca.fabs(u), ca.fabs(vv), ca.fabs(r)
     X = v.X_u * u + v.X_uu * au * u + v.X_uuu * u**3
+    # linear sway/yaw derivatives ∝ U_r (prime system, Fossen 2021 App. D) when the vessel says so
+    Y_lin, N_lin = v.Y_v * vv + v.Y_r * r, v.N_v * vv + v.N_r * r
+    if v.linear_ref_speed_mps > 0:
+        scale = ca.sqrt(u**2 + vv**2) / v.linear_ref_speed_mps
+        Y_lin, N_lin = scale * Y_lin, scale * N_lin
     Y = (
-        v.Y_v * vv
-        + v.Y_r * r
+        Y_lin
         + v.Y_vv * av * vv
         + v.Y_rv * ar * vv
         + v.Y_vr * av * r
@@ -92,8 +108,7 @@ def damping_forces(v: VesselParams, nu_r: Any) -> Any:
         + v.Y_vvv * vv**3
     )
     N = (
-        v.N_v * vv
-        + v.N_r * r
+        N_lin
         + v.N_vv * av * vv
         + v.N_rv * ar * vv
         + v.N_vr * av * r
@@ -103,13 +118,39 @@ def damping_forces(v: VesselParams, nu_r: Any) -> Any:
     return -ca.vertcat(X, Y, N)
 
 
-def generalized_forces(act: Actuation, a: Any) -> Any:
-    """τ = [X, Y, N] (N, N, N m) produced by the actuator values ``a`` (see module docstring)."""
+def thrust_factor(act: Actuation, u_r: Any) -> Any:
+    """Delivered / bollard waterjet thrust at relative surge speed u_r: 1 - u_r / V_j, in [0, 1].
+
+    Ahead thrust only (a1 >= 0); astern (reversing bucket) thrust is taken as speed-independent
+    (ASSUMED). Returns 1.0 when the vessel has no thrust-loss model.
+    """
+    if not math.isfinite(act.jet_speed_mps):
+        return 1.0
+    return ca.fmin(ca.fmax(1.0 - u_r / act.jet_speed_mps, 0.0), 1.0)
+
+
+def generalized_forces(act: Actuation, a: Any, u_r: Any = 0.0) -> Any:
+    """τ = [X, Y, N] (N, N, N m) produced by the actuator values ``a`` (see module docstring).
+
+    ``u_r`` (m/s) is the relative surge speed, used only by a waterjet with thrust loss.
+    """
     if act.kind == "forces":
         return ca.vertcat(a[0], a[1], act.lever_m * a[1])
     thrust, nozzle = a[0], a[1]
+    if math.isfinite(act.jet_speed_mps):
+        thrust = ca.if_else(thrust > 0, thrust * thrust_factor(act, u_r), thrust)
     side = thrust * ca.sin(nozzle)
     return ca.vertcat(thrust * ca.cos(nozzle), -side, act.lever_m * side)
+
+
+def surge_trim(v: VesselParams, speed_mps: Any) -> Any:
+    """Actuator a1 (N) that holds ``speed_mps`` (m/s) straight ahead: the surge drag, as bollard
+    thrust when the waterjet loses thrust with speed (drag / (1 - u / V_j)). Not clipped.
+    """
+    drag = damping_forces(v, ca.vertcat(speed_mps, 0, 0))[0]
+    if math.isfinite(v.actuation.jet_speed_mps):
+        drag = drag / ca.fmax(thrust_factor(v.actuation, speed_mps), 0.05)
+    return drag
 
 
 def saturate_command(act: Actuation, a_cmd: Any) -> Any:
@@ -120,15 +161,21 @@ def saturate_command(act: Actuation, a_cmd: Any) -> Any:
     )
 
 
+def _current_body(x: Any, p: Any) -> Any:
+    """ν_c: the irrotational NED current p = [V_c, β_c] in body axes (3-vector)."""
+    c, s = ca.cos(x[2]), ca.sin(x[2])
+    vc_n = p[0] * ca.cos(p[1])
+    vc_e = p[0] * ca.sin(p[1])
+    return ca.vertcat(c * vc_n + s * vc_e, -s * vc_n + c * vc_e, 0.0)
+
+
 def _rigid_body_rates(v: VesselParams, x: Any, tau: Any, p: Any) -> tuple[Any, Any]:
     """Return (η̇, ν̇) for state ``x`` (≥ 6 entries) under generalised force ``tau``."""
     psi = x[2]
     nu = x[3:6]
     c, s = ca.cos(psi), ca.sin(psi)
     # current in NED -> body (irrotational, constant in NED)
-    vc_n = p[0] * ca.cos(p[1])
-    vc_e = p[0] * ca.sin(p[1])
-    nu_c = ca.vertcat(c * vc_n + s * vc_e, -s * vc_n + c * vc_e, 0.0)
+    nu_c = _current_body(x, p)
     nu_r = nu - nu_c
     Minv = np.linalg.inv(mass_matrix(v))
     nu_r_dot = ca.mtimes(ca.DM(Minv), tau - _coriolis(v, nu_r) - damping_forces(v, nu_r))
@@ -153,12 +200,16 @@ def build_dynamics(v: VesselParams) -> ca.Function:
     for i in range(2):
         lag = act.lag_s[i]
         if lag > 0:
-            a_dot.append((a_cmd[i] - x[6 + i]) / lag)
+            rate = (a_cmd[i] - x[6 + i]) / lag
+            if i == 1 and math.isfinite(act.a2_rate_max):  # slew-rate limit of the steering
+                rate = ca.fmin(ca.fmax(rate, -act.a2_rate_max), act.a2_rate_max)
+            a_dot.append(rate)
             a_eff.append(x[6 + i])
         else:  # instantaneous actuator: the state just records the applied command
             a_dot.append(ca.SX(0.0))
             a_eff.append(a_cmd[i])
-    tau = generalized_forces(act, ca.vertcat(*a_eff))
+    u_r = x[3] - _current_body(x, p)[0] if math.isfinite(act.jet_speed_mps) else 0.0
+    tau = generalized_forces(act, ca.vertcat(*a_eff), u_r)
     eta_dot, nu_dot = _rigid_body_rates(v, x, tau, p)
     xdot = ca.vertcat(eta_dot, nu_dot, *a_dot)
     return ca.Function("f", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
@@ -243,6 +294,34 @@ def linearize(
     A = np.array(A_full(x0, tau0))[np.ix_([4, 5], [4, 5])]
     B = np.array(B_full(x0, tau0))[np.ix_([4, 5], [2])]
     return A, B
+
+
+def steering_direction(act: Actuation) -> NDArray[np.float64]:
+    """Generalised force [X, Y, N] per unit yaw moment of the steering actuator (1/m, 1/m, 1).
+
+    Forces: F_y gives Y = F_y, N = l F_y; waterjet: the nozzle's side force -T sin δ acts at the
+    transom, Y = -N / l. The sway force matters on a coupled hull (it excites v, which turns).
+    """
+    sign = 1.0 if act.kind == "forces" else -1.0
+    return np.array([0.0, sign / act.lever_m, 1.0])
+
+
+def linearize_steering(
+    v: VesselParams, speed_mps: float, current: tuple[float, float] = (0.0, 0.0)
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Sway–yaw (A, b) at straight-line cruise with the actuator's own force direction.
+
+    Like :func:`linearize` (state [v, r]) but the input is the steering actuator's yaw moment
+    τ_N (N m), which also pushes sideways (:func:`steering_direction`): b = B_τ [Y/τ_N, 1].
+    """
+    A, _ = linearize(v, speed_mps, current)
+    f_tau = build_force_dynamics(v)
+    x = ca.SX.sym("x", 6)
+    tau = ca.SX.sym("tau", 3)
+    jac = ca.Function("B", [x, tau], [ca.jacobian(f_tau(x, tau, ca.DM(list(current))), tau)])
+    B_tau = np.array(jac(ca.DM([0.0, 0.0, 0.0, speed_mps, 0.0, 0.0]), ca.DM.zeros(3)))
+    b = B_tau[np.ix_([4, 5], [0, 1, 2])] @ steering_direction(v.actuation)
+    return A, b.reshape(2, 1)
 
 
 def nomoto_from_linear(A: NDArray[np.float64], B: NDArray[np.float64]) -> NomotoModel:

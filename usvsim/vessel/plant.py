@@ -38,7 +38,7 @@ from usvsim.vessel.autopilot import (
     initial_controller_state,
 )
 from usvsim.vessel.codegen import Backend, BatchStepper
-from usvsim.vessel.model import NX, build_dynamics, damping_forces, rk4_expr
+from usvsim.vessel.model import NX, build_dynamics, rk4_expr, surge_trim
 from usvsim.vessel.vessels import VesselParams, get_vessel
 
 __all__ = ["NS", "Plant", "PlantState", "build_closed_loop_step"]
@@ -106,7 +106,7 @@ class Plant:
     vessel : VesselParams or str
         A vessel or the name of a preset (:func:`usvsim.vessel.vessels.get_vessel`).
     autopilot : AutopilotConfig, optional
-        Design choices; default :class:`AutopilotConfig` (PID at 3 m/s).
+        Design choices; default :class:`AutopilotConfig` (PID at the vessel's cruise speed).
     dt_s : float
         Plant step (s), default 0.1.
     current : (speed m/s, direction rad)
@@ -136,9 +136,7 @@ class Plant:
         self.gains = self.design.gains_vector()
         self._stepper = BatchStepper(self.step_function, backend)
         u = ca.SX.sym("u")
-        self._surge_drag = ca.Function(
-            "drag", [u], [damping_forces(self.vessel, ca.vertcat(u, 0, 0))[0]]
-        )
+        self._surge_drag = ca.Function("drag", [u], [surge_trim(self.vessel, u)])
         self._trim_a1: dict[float, float] = {}  # surge trim per speed (m/s), see trim_actuator
 
     @property
@@ -148,7 +146,8 @@ class Plant:
 
     @property
     def cruise_speed_mps(self) -> float:
-        return self.design.config.cruise_speed_mps
+        """The design speed: the autopilot config's, else the vessel's (m/s)."""
+        return self.design.cruise_speed_mps
 
     def trim_actuator(self, speed_mps: NDArray[np.float64]) -> NDArray[np.float64]:
         """Actuator values (N, 2) that hold surge speed ``speed_mps`` (N,) on a straight course.

@@ -27,12 +27,15 @@ from typing import Literal
 __all__ = [
     "CYBERSHIP2",
     "DEFAULT_VESSEL",
+    "USV105",
     "VESSELS",
     "VIKNES830",
     "Actuation",
     "VesselParams",
+    "clarke83_derivatives",
     "froude_scale",
     "get_vessel",
+    "without_added_mass_coriolis",
 ]
 
 
@@ -40,10 +43,16 @@ __all__ = [
 class Actuation:
     """Actuator model: kind, limits and first-order lag.
 
-    For ``kind="forces"``: ``a1 = F_x`` (N), ``a2 = F_y`` (N), ``lever_m`` = l_N (m).
+    For ``kind="forces"``: ``a1 = F_x`` (N), ``a2 = F_y`` (N), ``lever_m`` = l_N (m): the x
+    position of the lateral force (negative aft, e.g. rudders).
     For ``kind="waterjet"``: ``a1 = T`` (N), ``a2 = δ`` (rad), ``lever_m`` = -x_jet (m, > 0).
     ``lag_s`` are the time constants of a1 and a2 (s); 0 means the actuator follows its command
-    instantly (no actuator state dynamics).
+    instantly (no actuator state dynamics). ``a2_rate_max`` caps |ȧ2| (a hydraulic steering
+    cylinder's slew rate). With a finite ``jet_speed_mps`` V_j, a1 is the thrust at rest
+    (bollard) and the thrust delivered at relative surge speed u_r is a1 (1 - u_r / V_j), the
+    momentum balance T = ρ Q (V_j - u_r) at constant volume flow Q (Allison 1993, "Marine
+    waterjet propulsion", SNAME Trans. 101; constant Q is an assumption). A negative ``a1_min``
+    models a reversing bucket (astern thrust); its side force is then reversed with the thrust.
     """
 
     kind: Literal["forces", "waterjet"]
@@ -53,15 +62,25 @@ class Actuation:
     a2_max: float  # N (forces) or rad (waterjet)
     lever_m: float  # m, yaw lever arm of the lateral force
     lag_s: tuple[float, float] = (0.0, 0.0)  # s, first-order time constants of a1, a2
+    a2_rate_max: float = math.inf  # a2 units/s, slew-rate limit of a2 (inf: none); needs a lag
+    jet_speed_mps: float = math.inf  # m/s, waterjet: thrust falls as T (1 - u_r / V_j) (inf: none)
 
     def __post_init__(self) -> None:
         _check_finite(self, ("a1_min", "a1_max", "a2_min", "a2_max", "lever_m"))
+        if not self.a2_rate_max > 0 or not self.jet_speed_mps > 0:
+            raise ValueError("Actuation.a2_rate_max and jet_speed_mps must be > 0 (inf: none)")
+        if math.isfinite(self.a2_rate_max) and self.lag_s[1] <= 0:
+            raise ValueError("Actuation.a2_rate_max needs a nozzle lag lag_s[1] > 0")
+        if math.isfinite(self.jet_speed_mps) and self.kind != "waterjet":
+            raise ValueError("Actuation.jet_speed_mps applies to kind='waterjet' only")
         if self.kind not in ("forces", "waterjet"):
             raise ValueError(f"Actuation.kind must be 'forces' or 'waterjet', got {self.kind!r}")
         if not self.a1_min < self.a1_max or not self.a2_min < self.a2_max:
             raise ValueError("Actuation limits must satisfy min < max for a1 and a2")
-        if self.lever_m <= 0:
-            raise ValueError(f"Actuation.lever_m must be > 0 m, got {self.lever_m}")
+        if self.lever_m == 0 or (self.kind == "waterjet" and self.lever_m < 0):
+            raise ValueError(
+                f"Actuation.lever_m must be > 0 m (forces: != 0, < 0 aft), got {self.lever_m}"
+            )
         if len(self.lag_s) != 2 or any(not math.isfinite(t) or t < 0 for t in self.lag_s):
             raise ValueError(f"Actuation.lag_s must be two finite values >= 0 s, got {self.lag_s}")
         if self.kind == "waterjet" and not (0 < self.a2_max < math.pi / 2):
@@ -82,6 +101,12 @@ class VesselParams:
     m: float  # kg, mass
     Iz: float  # kg m², yaw moment of inertia about the CO
     xg: float = 0.0  # m
+    draft_m: float = 0.0  # m, draught (0: not given); documents the hull, unused by the model
+    cruise_speed_mps: float = 3.0  # m/s, the speed the vessel is designed and tested at
+    # > 0: the linear sway/yaw derivatives Y_v, Y_r, N_v, N_r are the values at this speed and
+    # scale with the relative speed U_r = |ν_r[0:2]| (the prime system of Clarke et al. 1983 and
+    # Fossen 2021 App. D: Y_v = ½ρL²U Y_v'); 0: constant (the published presets)
+    linear_ref_speed_mps: float = 0.0
     # added mass (kg, kg m, kg m²)
     X_udot: float = 0.0
     Y_vdot: float = 0.0
@@ -116,7 +141,7 @@ class VesselParams:
     def __post_init__(self) -> None:
         numeric = [f.name for f in dataclasses.fields(self) if f.type in ("float", float)]
         _check_finite(self, numeric)
-        for name in ("length_m", "beam_m", "m", "Iz"):
+        for name in ("length_m", "beam_m", "m", "Iz", "cruise_speed_mps"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"VesselParams.{name} must be > 0, got {getattr(self, name)}")
         # damping must dissipate energy (Fossen 2021, §6.4): diagonal terms <= 0
@@ -131,6 +156,9 @@ class VesselParams:
                     f"VesselParams.{name} must be <= 0 (SNAME added mass), got "
                     f"{getattr(self, name)}"
                 )
+
+        if self.linear_ref_speed_mps < 0 or self.draft_m < 0:
+            raise ValueError("VesselParams.linear_ref_speed_mps and draft_m must be >= 0")
 
     @property
     def half_beam_m(self) -> float:
@@ -233,8 +261,11 @@ VIKNES830_NR3224 = dataclasses.replace(
 # 25(1):3-27, Tables 1, 2 and 4. 1:70 scale model of a supply ship (L = 1.255 m, B = 0.29 m).
 # Actuation simplified to generalised forces: |F_x| from the two main propellers' bollard thrust
 # T_|n|n n² at the highest tested speed (2 × 3.65e-3 × (2000/60)² ≈ 8.1 N forward, 2 × 5.1e-3 ×
-# (2000/60)² × 0.7 ≈ -4 N astern, ASSUMED 70 % astern efficiency); lateral force from rudders and
-# bow thruster lumped as ±2 N at the bow-thruster arm 0.466 m (ASSUMED lumping); lag 0.25 s ASSUMED.
+# (2000/60)² × 0.7 ≈ -4 N astern, ASSUMED 70 % astern efficiency); lateral force of the two
+# rudders lumped as ±2 N at the stern, x = -0.5 m (ASSUMED; at speed the bow thruster is
+# ineffective). Lumped at the bow thruster (x = +0.466 m) instead, r / τ_N has a right-half-plane
+# zero (+0.24 /s) below the hull's unstable pole (+0.65 /s): no stable controller stabilises that
+# loop (parity interlacing). Lags 0.1 s ASSUMED (model-scale servos).
 CYBERSHIP2 = VesselParams(
     name="cybership2",
     length_m=1.255,  # m (Skjetne et al. 2004)
@@ -268,9 +299,10 @@ CYBERSHIP2 = VesselParams(
         a1_max=8.1,  # N, bollard thrust of two propellers at 2000 rpm (Table 2 thrust coefficient)
         a2_min=-2.0,  # N, ASSUMED lumped lateral force
         a2_max=2.0,  # N, ASSUMED
-        lever_m=0.466,  # m, bow thruster x position (Skjetne et al. 2004)
-        lag_s=(0.25, 0.25),  # s, ASSUMED
+        lever_m=-0.5,  # m, ASSUMED rudder x position (aft)
+        lag_s=(0.1, 0.1),  # s, ASSUMED
     ),
+    cruise_speed_mps=0.5,  # m/s, half its top speed (1.01 m/s at full thrust)
     notes="Skjetne, Smogeli & Fossen (2004). Another identification of the same ship (Skjetne "
     "2005, PhD thesis) gives Y_v = -0.8612, Y_|v|v = -36.2823, Y_r = 0.1079, N_v = 0.1052.",
 )
@@ -304,13 +336,123 @@ DEFAULT_VESSEL = dataclasses.replace(
     notes="Viknes 830 (Loe 2008) Froude-scaled to 10.5 m, twin waterjets (assumptions in source).",
 )
 
+
+def clarke83_derivatives(
+    length_m: float, beam_m: float, draft_m: float, block_coefficient: float, speed_mps: float
+) -> dict[str, float]:
+    """Linear sway–yaw added mass and damping of Clarke, Gedling & Hine (1983), dimensional.
+
+    The regressions as Fossen's ``clarke83`` implements them (MSS / PythonVehicleSimulator,
+    ``gnc.py``; Fossen 2021, §7.1 and App. D prime system I): with S = π (T/L)²,
+    Y_v̇' = -S (1 + 0.16 C_b B/T - 5.1 (B/L)²), Y_ṙ' = -S (0.67 B/L - 0.0033 (B/T)²),
+    N_v̇' = -S (1.1 B/L - 0.041 B/T), N_ṙ' = -S (1/12 + 0.017 C_b B/T - 0.33 B/L),
+    Y_v' = -S (1 + 0.4 C_b B/T), Y_r' = -S (-1/2 + 2.2 B/L - 0.08 B/T),
+    N_v' = -S (1/2 + 2.4 T/L), N_r' = -S (1/4 + 0.039 B/T - 0.56 B/L); made dimensional with
+    ½ρL³, ½ρL⁴, ½ρL⁵ (accelerations) and ½ρL²U, ½ρL³U, ½ρL⁴U (velocities), ρ = 1025 kg/m³.
+
+    The velocity derivatives are the measured hydrodynamic totals: they contain the linearised
+    added-mass Coriolis terms (Munk moment), which :mod:`usvsim.vessel.model` adds itself; see
+    :func:`without_added_mass_coriolis`.
+    """
+    rho = 1025.0  # kg/m³, sea water (as clarke83)
+    L, B, T, Cb, U = length_m, beam_m, draft_m, block_coefficient, speed_mps
+    S = math.pi * (T / L) ** 2
+    q = 0.5 * rho
+    return {
+        "Y_vdot": -S * (1 + 0.16 * Cb * B / T - 5.1 * (B / L) ** 2) * q * L**3,
+        "Y_rdot": -S * (0.67 * B / L - 0.0033 * (B / T) ** 2) * q * L**4,
+        "N_vdot": -S * (1.1 * B / L - 0.041 * B / T) * q * L**4,
+        "N_rdot": -S * (1 / 12 + 0.017 * Cb * B / T - 0.33 * B / L) * q * L**5,
+        "Y_v": -S * (1 + 0.4 * Cb * B / T) * q * L**2 * U,
+        "Y_r": -S * (-1 / 2 + 2.2 * B / L - 0.08 * B / T) * q * L**3 * U,
+        "N_v": -S * (1 / 2 + 2.4 * T / L) * q * L**3 * U,
+        "N_r": -S * (1 / 4 + 0.039 * B / T - 0.56 * B / L) * q * L**4 * U,
+    }
+
+
+def without_added_mass_coriolis(
+    totals: dict[str, float], X_udot: float, speed_mps: float
+) -> dict[str, float]:
+    """Remove the linearised C_A(ν)ν at u = U from measured linear derivatives (no double count).
+
+    usvsim's model adds C_A(ν_r)ν_r (Fossen 2021, eq. 6.44, with Y_ṙ = N_v̇ symmetrised); at
+    ν = [U, v, r] its linear part is sway -X_u̇ U r and yaw (X_u̇ - Y_v̇) U v - ½(Y_ṙ + N_v̇) U r
+    (the second is the Munk moment). Captive-model derivatives already contain them, so
+    Y_r = Y_r,tot - X_u̇ U, N_v = N_v,tot + (X_u̇ - Y_v̇) U, N_r = N_r,tot - ½(Y_ṙ + N_v̇) U.
+    """
+    U = speed_mps
+    out = dict(totals)
+    out["Y_r"] = totals["Y_r"] - X_udot * U
+    out["N_v"] = totals["N_v"] + (X_udot - totals["Y_vdot"]) * U
+    out["N_r"] = totals["N_r"] - 0.5 * (totals["Y_rdot"] + totals["N_vdot"]) * U
+    return out
+
+
+# --- usv105: the study's 10.5 m x 3.5 m twin-waterjet USV with a coupled hull --------------------
+# A credible order of magnitude, not an identified model (hull audit, 2026-12-01):
+#  * hull L = 10.5 m, B = 3.5 m (Vedeler 2019), T = 0.55 m and C_b = 0.36 ASSUMED (ρLBTC_b =
+#    7458 kg, the default's mass); m and I_z as the default (Froude-scaled Viknes 830).
+#  * X_u̇ = -0.1 m (clarke83's surge added mass); sway–yaw added mass and linear damping from
+#    Clarke, Gedling & Hine (1983) at U = 3 m/s, their added-mass Coriolis part removed (the
+#    model adds it), scaled with speed (linear_ref_speed_mps). OUTSIDE THE REGRESSION'S RANGE:
+#    B/T = 6.4 and L/B = 3.0 (Clarke's hulls are slender merchant ships) and C_b = 0.36.
+#  * cross-flow drag: Fossen (2021) §6.7 strip integral Y = -½ρT ∫ C_D |v + x r|(v + x r) dx,
+#    N = -½ρT ∫ x C_D |v + x r|(v + x r) dx with Hoerner's 2-D C_D = 0.586 at B/(2T) = 3.2,
+#    fitted to the model's |·|· terms over the turning range (hull audit; 7-9 % residual). Without
+#    it the hard-over turn is a 0.26 L pirouette: the term is essential.
+#  * surge damping: the default's (Froude-scaled Loe 2008).
+_USV105_SPEED = 3.0  # m/s, speed of the Clarke derivatives
+_USV105_M = _VIKNES_SCALED.m  # kg, 7449 (as the default)
+_USV105_XUDOT = -0.1 * _USV105_M  # kg, clarke83
+_USV105_LINEAR = without_added_mass_coriolis(
+    clarke83_derivatives(10.5, 3.5, 0.55, 0.36, _USV105_SPEED), _USV105_XUDOT, _USV105_SPEED
+)
+USV105 = dataclasses.replace(
+    _VIKNES_SCALED,
+    name="usv105",
+    beam_m=3.5,  # m (Vedeler 2019)
+    draft_m=0.55,  # m, ASSUMED (C_b = 0.36 then gives the default's mass)
+    cruise_speed_mps=3.0,  # m/s, the task's speed
+    linear_ref_speed_mps=_USV105_SPEED,
+    X_udot=_USV105_XUDOT,  # kg, -745
+    Y_vdot=_USV105_LINEAR["Y_vdot"],  # kg, -4.09e3 (Clarke 1983)
+    Y_rdot=_USV105_LINEAR["Y_rdot"],  # kg m, -4.82e3 (Clarke 1983)
+    N_vdot=_USV105_LINEAR["N_vdot"],  # kg m, -5.68e3 (Clarke 1983)
+    N_rdot=_USV105_LINEAR["N_rdot"],  # kg m², -6.90e3 (Clarke 1983)
+    Y_v=_USV105_LINEAR["Y_v"],  # N s/m, -2.80e3 at 3 m/s (Clarke 1983)
+    Y_r=_USV105_LINEAR["Y_r"],  # N s/rad, +6.47e3 at 3 m/s (Clarke 1983 less C_A)
+    N_v=_USV105_LINEAR["N_v"],  # N s, +4.3e2 at 3 m/s (Clarke 1983 less the Munk moment)
+    N_r=_USV105_LINEAR["N_r"],  # N m s/rad, -3.44e4 at 3 m/s (Clarke 1983 less C_A)
+    Y_vv=-1325.0,  # N s²/m², cross-flow fit (hull audit)
+    Y_rv=-6057.0,  # N s²/rad, cross-flow fit (hull audit)
+    N_vr=-19813.0,  # N s², cross-flow fit (hull audit)
+    N_rr=-46976.0,  # N m s²/rad², cross-flow fit (hull audit)
+    N_rrr=0.0,  # the Loe cubic yaw term is replaced by the cross-flow drag
+    actuation=Actuation(
+        kind="waterjet",
+        a1_min=-0.4 * 24000.0,  # N, reversing bucket, ASSUMED 40 % of ahead thrust
+        a1_max=24000.0,  # N, bollard thrust, ASSUMED as the default's maximum
+        # rad, ASSUMED nozzle limit, the low end of the usual ±27-30° (with ±30° the steady
+        # hard-over radius is 0.96 L instead of 1.11 L at 3 m/s)
+        a2_min=-math.radians(27.0),
+        a2_max=math.radians(27.0),  # rad
+        lever_m=4.5,  # m, -x_jet, ASSUMED (as the default)
+        lag_s=(0.3, 0.15),  # s, ASSUMED (as the default)
+        a2_rate_max=math.radians(60.0),  # rad/s, ASSUMED slew rate (lock to lock in 1 s)
+        jet_speed_mps=20.0,  # m/s, ASSUMED jet speed (V_j/u ≈ 2 at 10 m/s)
+    ),
+    notes="Clarke et al. (1983) linear derivatives and cross-flow drag on the study's 10.5 m x "
+    "3.5 m hull, waterjets with slew-rate limit, thrust loss and reversing bucket (all in source).",
+)
+
 VESSELS: dict[str, VesselParams] = {
-    v.name: v for v in (DEFAULT_VESSEL, VIKNES830, VIKNES830_NR3224, CYBERSHIP2)
+    v.name: v for v in (DEFAULT_VESSEL, USV105, VIKNES830, VIKNES830_NR3224, CYBERSHIP2)
 }
 
 
 def get_vessel(name: str) -> VesselParams:
-    """Return a preset by name: ``default``, ``viknes830``, ``viknes830_nr3224``, ``cybership2``."""
+    """Return a preset by name: ``default``, ``usv105``, ``viknes830``, ``viknes830_nr3224``,
+    ``cybership2``."""
     try:
         return VESSELS[name]
     except KeyError:
