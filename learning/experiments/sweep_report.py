@@ -169,11 +169,16 @@ def _arm_rows(
     scores = {a: s for a, s in scores.items() if len(s)}
     points, cis = _bootstrap(scores, lambda x: np.array([iqm(x[:, 0])])) if scores else ({}, {})
     rows = []
+    shipped_models: dict[str, float] = {}  # held-out success of usvsim's model, per setup
     for arm, ts in arms.items():
         done = [t for t in ts if t.status == "finished"]
         firsts = [t for t in done if t.metrics["first_full_iteration"] >= 0]
         walls = [_first_full_wall(t) for t in firsts]
         shipped = choose_shipped(ts, spec.ship_rule)
+        if ts[0].setup not in shipped_models:
+            shipped_models[ts[0].setup] = (
+                _shipped_model(ts[0].setup, spec.heldout) if compare_shipped else math.nan
+            )
         rows.append(
             {
                 "arm": arm,
@@ -196,9 +201,7 @@ def _arm_rows(
                 "shipped_seed": None if shipped is None else shipped.seed,
                 "shipped_heldout_success": math.nan if shipped is None else shipped.heldout_success,
                 "study": _study(ts[0].setup),
-                "usvsim_model_heldout_success": (
-                    _shipped_model(ts[0].setup, spec.heldout) if compare_shipped else math.nan
-                ),
+                "usvsim_model_heldout_success": shipped_models[ts[0].setup],
             }
         )
     return rows

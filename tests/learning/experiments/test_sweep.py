@@ -162,9 +162,11 @@ def test_sweep_interrupted_resumed_and_report_matches_the_logs(tmp_path: Path) -
     while not any(p.exists() for p in latest) and first.poll() is None:
         assert time.monotonic() < deadline, "no trial wrote latest.pt within 120 s"
         time.sleep(0.2)
+    t_signal = time.monotonic()
     first.send_signal(signal.SIGINT)  # Ctrl-C
     text, _ = first.communicate(timeout=120)
     assert first.returncode == 130, text
+    assert time.monotonic() - t_signal < 60, "Ctrl-C did not stop the sweep within a minute"
     assert "run the same command to continue" in text
     trials = json.loads((out / "trials.json").read_text())
     assert sum(t["status"] != "finished" for t in trials) >= 1
@@ -174,7 +176,7 @@ def test_sweep_interrupted_resumed_and_report_matches_the_logs(tmp_path: Path) -
     wall = time.monotonic() - t0
     assert second.returncode == 0, text
     assert "continuing the sweep" in text
-    assert wall < 120, f"interrupted + resumed sweep took {wall:.0f} s"
+    assert wall < 200, f"interrupted + resumed sweep took {wall:.0f} s"
 
     report = json.loads((out / "report.json").read_text())
     assert [t["status"] for t in report["trials"]] == ["finished", "finished"]
