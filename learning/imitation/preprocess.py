@@ -201,10 +201,10 @@ def check_observations(data: ExpertData, observation: ObservationKind) -> None:
     parts = data.obs if isinstance(data.obs, dict) else {"": data.obs}
     boxes = dict(space.spaces) if hasattr(space, "spaces") else {"": space}
     for key, values in parts.items():
-        box = boxes[key]
-        x = np.asarray(values, dtype=float).reshape(len(data), -1)
-        low = np.broadcast_to(np.asarray(box.low, dtype=float).reshape(-1), x.shape[1:])
-        high = np.broadcast_to(np.asarray(box.high, dtype=float).reshape(-1), x.shape[1:])
+        box: Any = boxes[key]  # a Box (the observation spaces are Boxes or Dicts of Boxes)
+        x = np.asarray(values, dtype=np.float64).reshape(len(data), -1)
+        low = np.broadcast_to(np.asarray(box.low, dtype=np.float64).reshape(-1), x.shape[1:])
+        high = np.broadcast_to(np.asarray(box.high, dtype=np.float64).reshape(-1), x.shape[1:])
         bad = ~np.isfinite(x) | (x < low) | (x > high)
         rows = np.flatnonzero(bad.any(axis=1))
         if rows.size == 0:

@@ -139,6 +139,7 @@ def select_helmsmen(
         return dict(registry)
     chosen: dict[str, HelmsmanFactory] = {}
     sources: dict[str, str] = {}
+    factory: HelmsmanFactory
     for name in names:
         if name in SANITY_HELMSMEN:
             label, factory = name, partial(make_helmsman, name, action)

@@ -24,10 +24,6 @@ class HeartbeatTimeoutError(LinkError, TimeoutError):
 URL_SCHEMES = ("tcp", "tcpin", "udp", "udpin", "udpout")
 
 
-class LinkError(UserError, ConnectionError):
-    """A MAVLink connection that cannot be made: bad URL, refused, unknown host, no heartbeat."""
-
-
 def check_url(url: str) -> str:
     """``url`` if it is a connection string :class:`MavlinkLink` accepts, else :class:`LinkError`.
 
