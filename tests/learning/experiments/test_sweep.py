@@ -290,3 +290,16 @@ def test_optuna_search_sees_validation_only(tmp_path: Path) -> None:
     best = report["best_by_validation"]
     scores = {t["dir"]: t["metrics"]["val_auc"] for t in report["trials"]}
     assert scores[best["dir"]] == max(scores.values())
+
+
+def test_config_file_and_flags_define_the_same_sweep(tmp_path: Path) -> None:
+    from learning.cli.sweep import SweepArgs, spec_of
+
+    flags = SweepArgs(setups="positional", seeds="0-2", grid="max_kl=0.01,0.02", name="s")
+    config = tmp_path / "s.json"
+    config.write_text(
+        json.dumps({"setups": ["positional"], "seeds": [0, 1, 2], "grid": {"max_kl": [0.01, 0.02]}})
+    )
+    assert spec_of(SweepArgs(config=str(config))) == spec_of(flags)
+    with pytest.raises(SystemExit, match="--config defines the sweep; drop --seeds"):
+        spec_of(SweepArgs(config=str(config), seeds="0-1"))
