@@ -465,7 +465,7 @@ def design_report(vessel: VesselParams, design: AutopilotDesign, dt_s: float = 0
     )
     if math.isfinite(vessel.actuation.a2_rate_max):
         lines.append(
-            f"slew-rate limit {math.degrees(vessel.actuation.a2_rate_max):.0f} units/s: inactive "
+            f"slew-rate limit {math.degrees(vessel.actuation.a2_rate_max):.0f} °/s: inactive "
             f"below {a.rate_linear_amplitude_deg:.1f}° amplitude at crossover; phase margin "
             f"{a.phase_margin_rate_limited_deg:.1f}° at {a.rate_check_amplitude_deg:.0f}° "
             "(describing function)"

@@ -144,7 +144,7 @@ def analyse_loop(
     Kd: float,
     Ki: float,
     dt_s: float = 0.1,
-    nozzle_amplitude_deg: float = 10.0,
+    nozzle_amplitude_deg: float = 20.0,
 ) -> LoopAnalysis:
     """Margins and poles of :func:`full_loop_transfer`, and the slew-rate-limited phase margin.
 

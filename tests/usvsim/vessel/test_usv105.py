@@ -15,7 +15,7 @@ import pytest
 from scipy.optimize import brentq
 
 from usvsim.vessel.autopilot import analyse_design, design_autopilot, sway_yaw_design_model
-from usvsim.vessel.loop import full_loop_transfer, rate_limiter_df
+from usvsim.vessel.loop import analyse_loop, full_loop_transfer, rate_limiter_df
 from usvsim.vessel.model import (
     build_dynamics,
     build_rk4_step,
@@ -142,6 +142,14 @@ def test_full_loop_of_a_decoupled_hull_is_the_nomoto_loop():
     assert np.allclose(L(1j * w), ref(1j * w), rtol=1e-6)
 
 
+def test_slew_limit_costs_phase_margin_only_above_its_linear_amplitude():
+    d = design_autopilot(USV105)
+    a = {amp: analyse_loop(USV105, 3.0, d.Kp, d.Kd, d.Ki, 0.1, amp) for amp in (10.0, 27.0)}
+    assert a[10.0].rate_linear_amplitude_deg == pytest.approx(16.6, abs=0.2)  # 60 °/s / ω_c
+    assert a[10.0].phase_margin_rate_limited_deg == pytest.approx(a[10.0].phase_margin_deg, abs=0.5)
+    assert a[27.0].phase_margin_rate_limited_deg < a[10.0].phase_margin_deg - 5  # 33.4°
+
+
 def test_rate_limiter_describing_function_matches_the_triangle_wave():
     # for small ρ the output is a triangle wave: |N| = 4ρ/π, lag arccos(πρ/2)
     for rho in (0.2, 0.4):
@@ -163,7 +171,7 @@ def test_full_loop_margins_and_poles(name):
     assert a.gain_margin_db >= 6.0
     assert a.phase_margin_deg >= 35.0
     assert a.stable
-    if math.isfinite(v.actuation.a2_rate_max):  # usv105: 43.4° with the slew limit at 10°
+    if math.isfinite(v.actuation.a2_rate_max):  # usv105: 40.7° with the slew limit at 20°
         assert a.phase_margin_rate_limited_deg >= 35.0
 
 
