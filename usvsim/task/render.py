@@ -200,14 +200,17 @@ def _polyline(img: Frame, pts: NDArray[np.float64], colour: tuple[int, ...]) -> 
     """Pixels along the segments between consecutive points (K, 2) [row, col], ~1 px apart."""
     if len(pts) == 0:
         return
-    if len(pts) == 1:
-        samples = pts
-    else:
+    samples = pts  # the points themselves; segments longer than 1 px are filled in below
+    if len(pts) > 1:
         seg = np.diff(pts, axis=0)
-        n = np.ceil(np.abs(seg).max(axis=1)).astype(np.intp) + 1  # samples per segment
-        start = np.repeat(np.arange(len(seg)), n)
-        frac = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
-        samples = pts[start] + seg[start] * (frac / np.repeat(np.maximum(n - 1, 1), n))[:, None]
+        long = np.flatnonzero(np.abs(seg).max(axis=1) > 1.0)  # a trail's 0.1 s steps are not
+        if long.size:
+            seg = seg[long]
+            n = np.ceil(np.abs(seg).max(axis=1)).astype(np.intp) + 1  # samples per segment
+            start = np.repeat(np.arange(long.size), n)
+            frac = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+            step = (frac / np.repeat(n - 1, n))[:, None]
+            samples = np.vstack([pts, pts[long][start] + seg[start] * step])
     rc = np.floor(samples).astype(np.intp)
     ok = (rc[:, 0] >= 0) & (rc[:, 0] < img.shape[0]) & (rc[:, 1] >= 0) & (rc[:, 1] < img.shape[1])
     img[rc[ok, 0], rc[ok, 1]] = colour
