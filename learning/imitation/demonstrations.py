@@ -42,7 +42,7 @@ longitude in [-180, 180]°, ``poles_ne`` pairs of finite metres within
 fix within those latitude/longitude ranges and within ``max_distance_m`` (5 km) of the origin;
 between consecutive fixes no more than ``max_speed_mps`` (15 m/s, five times the task's 3 m/s)
 plus ``gps_allowance_m`` (10 m, several σ of GPS noise); compass headings in [-360, 360]°; radar
-ranges in [0, 10 km].
+ranges in [-10 m, 10 km] (noise may push an echo close to the pole below 0).
 
 :func:`load_recording` raises :class:`DemoFormatError` naming the file, line and column of the
 first problem; :func:`load_recordings` loads a folder and collects such errors instead of
@@ -374,11 +374,13 @@ def _parse_rows(
             raise DemoFormatError(
                 f"{path}, line {line}, column heading_deg: {values[1]} is not in [-360, 360]°"
             )
-        elif stream == "radar" and not 0.0 <= values[1] <= PLAUSIBLE.max_radar_range_m:
+        elif stream == "radar" and not (
+            PLAUSIBLE.min_radar_range_m <= values[1] <= PLAUSIBLE.max_radar_range_m
+        ):
             if math.isfinite(values[1]):
                 raise DemoFormatError(
                     f"{path}, line {line}, column range_m: {values[1]} is not in "
-                    f"[0, {PLAUSIBLE.max_radar_range_m:g}] m"
+                    f"[{PLAUSIBLE.min_radar_range_m:g}, {PLAUSIBLE.max_radar_range_m:g}] m"
                 )
         previous = streams[stream][-1][0] if streams[stream] else -math.inf
         if t <= previous:

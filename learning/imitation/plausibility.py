@@ -41,6 +41,7 @@ class Plausibility:
     max_speed_mps: float = 15.0  # m/s between GPS fixes, five times the task's 3 m/s
     gps_allowance_m: float = 10.0  # m, GPS noise allowed on top of max_speed_mps × Δt
     max_radar_range_m: float = 10_000.0  # m
+    min_radar_range_m: float = -10.0  # m: a noisy echo close to the pole may read below 0 (5σ)
 
 
 PLAUSIBLE = Plausibility()
