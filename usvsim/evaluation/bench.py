@@ -434,9 +434,10 @@ def plot_pole_paths(records: Sequence[Any], title: str) -> Any:
     each episode's goal ★, and the pole's 10 m safety circle; a legend names each mark.
     """
     import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
 
     fig, ax = plt.subplots(figsize=(8, 4.5))
+    n_ok = sum(bool(r.success) for r in records)
+    labels = {True: f"success ({n_ok})", False: f"failure ({len(records) - n_ok})"}
     goals = []
     for r in records:
         axis = r.goal_ne - r.pole_ne
@@ -444,28 +445,17 @@ def plot_pole_paths(records: Sequence[Any], title: str) -> Any:
         rel = r.trajectory[:, :2] - r.pole_ne
         along, across = rel @ u, rel @ np.array([-u[1], u[0]])
         ok = bool(r.success)
+        colour, lw, alpha, z = ("tab:green", 0.7, 0.5, 2) if ok else ("tab:red", 1.0, 0.8, 3)
         ax.plot(
-            along,
-            across,
-            color="tab:green" if ok else "tab:red",
-            lw=0.7 if ok else 1.0,
-            alpha=0.5 if ok else 0.8,
-            zorder=2 if ok else 3,
+            along, across, color=colour, lw=lw, alpha=alpha, zorder=z, label=labels.pop(ok, None)
         )
         goals.append(np.hypot(*axis))
-    ax.plot(goals, np.zeros(len(goals)), "*", color="tab:orange", ms=7, zorder=4)
+    ax.plot(goals, np.zeros(len(goals)), "*", color="tab:orange", ms=7, zorder=4, label="goal")
+    ax.plot(0.0, 0.0, "x", color="k", ms=8, mew=2, zorder=5, label="pole")
     t = np.linspace(0.0, 2.0 * math.pi, 100)
-    ax.plot(10.0 * np.cos(t), 10.0 * np.sin(t), "--", color="tab:red", lw=1.0, zorder=4)
-    ax.plot(0.0, 0.0, "x", color="k", ms=8, mew=2, zorder=5)
-    n_ok = sum(bool(r.success) for r in records)
-    handles = [
-        Line2D([], [], color="tab:green", lw=1.2, label=f"success ({n_ok})"),
-        Line2D([], [], color="tab:red", lw=1.2, label=f"failure ({len(records) - n_ok})"),
-        Line2D([], [], ls="", marker="*", color="tab:orange", ms=8, label="goal"),
-        Line2D([], [], ls="", marker="x", color="k", ms=8, mew=2, label="pole"),
-        Line2D([], [], ls="--", color="tab:red", lw=1.0, label="10 m safety circle"),
-    ]
-    ax.legend(handles=handles, fontsize=8, loc="best")
+    circle = (10.0 * np.cos(t), 10.0 * np.sin(t))
+    ax.plot(*circle, "--", color="tab:red", lw=1.0, zorder=4, label="10 m safety circle")
+    ax.legend(fontsize=8, loc="best")
     ax.set(
         xlabel="along start → goal, from the pole (m)",
         ylabel="across (m, starboard of the line > 0)",
@@ -480,32 +470,29 @@ def plot_waypoint_paths(records: Sequence[Any], title: str, n_courses: int = 6) 
     """The first ``n_courses`` waypoint courses: waypoints ★, poles ✕ with 10 m circles, path;
     one legend for all panels."""
     import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
 
     shown = list(records)[:n_courses]
     fig, axes = plt.subplots(2, math.ceil(len(shown) / 2), figsize=(12, 7.5), squeeze=False)
     t = np.linspace(0.0, 2.0 * math.pi, 60)
     for ax, r in zip(axes.flat, shown, strict=False):
         w, p = r.course.waypoints_ne, r.course.poles_ne
-        ax.plot(w[:, 1], w[:, 0], "*--", color="0.5", lw=0.8, ms=9)
+        ax.plot(w[:, 1], w[:, 0], "*--", color="0.5", lw=0.8, ms=9, label="waypoints")
         for pole in p:
-            ax.plot(pole[1] + 10 * np.sin(t), pole[0] + 10 * np.cos(t), "--", color="tab:red", lw=1)
-            ax.plot(pole[1], pole[0], "x", color="k", ms=5, mew=1.5)
+            ax.plot(pole[1], pole[0], "x", color="k", ms=5, mew=1.5, label="pole")
+            circle = (pole[1] + 10 * np.sin(t), pole[0] + 10 * np.cos(t))
+            ax.plot(*circle, "--", color="tab:red", lw=1, label="10 m safety circle")
         colour = "tab:green" if r.success else "tab:red"
-        ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=colour, lw=1.3, zorder=3)
+        label = "path, success" if r.success else "path, failure"
+        ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=colour, lw=1.3, zorder=3, label=label)
         ax.set_title(f"{r.outcome}, min d_pole {r.min_pole_distance_m:.1f} m", fontsize=9)
         ax.set_aspect("equal", adjustable="datalim")
         ax.tick_params(labelsize=7)
     for ax in list(axes.flat)[len(shown) :]:
         ax.set_visible(False)
-    handles = [
-        Line2D([], [], color="0.5", ls="--", marker="*", ms=9, lw=0.8, label="waypoints"),
-        Line2D([], [], ls="", marker="x", color="k", ms=6, mew=1.5, label="pole"),
-        Line2D([], [], color="tab:red", ls="--", lw=1.0, label="10 m safety circle"),
-        Line2D([], [], color="tab:green", lw=1.3, label="path, success"),
-        Line2D([], [], color="tab:red", lw=1.3, label="path, failure"),
-    ]
-    fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8)
+    legend: dict[str, Any] = {}  # one entry per label over all panels, in drawing order
+    for ax in axes.flat:
+        legend.update(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
+    fig.legend(legend.values(), legend.keys(), loc="lower center", ncol=5, fontsize=8)
     fig.suptitle(f"{title} (north up, east right, m)")
     fig.tight_layout(rect=(0.0, 0.05, 1.0, 1.0))
     return fig

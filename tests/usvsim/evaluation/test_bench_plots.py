@@ -41,14 +41,17 @@ def test_waypoint_paths_have_one_legend() -> None:
     course = SimpleNamespace(
         waypoints_ne=np.array([[0.0, 0.0], [100.0, 0.0]]), poles_ne=np.array([[50.0, 0.0]])
     )
-    r = SimpleNamespace(
-        course=course,
-        success=False,
-        trajectory=np.array([[0.0, 0.0, 0.0], [50.0, 2.0, 0.0]]),
-        outcome="collision",
-        min_pole_distance_m=2.0,
-    )
-    fig = plot_waypoint_paths([r, r], "x — waypoints")
+
+    def record(success: bool) -> SimpleNamespace:
+        return SimpleNamespace(
+            course=course,
+            success=success,
+            trajectory=np.array([[0.0, 0.0, 0.0], [50.0, 2.0, 0.0]]),
+            outcome="goal" if success else "collision",
+            min_pole_distance_m=2.0,
+        )
+
+    fig = plot_waypoint_paths([record(True), record(False), record(False)], "x — waypoints")
     assert len(fig.legends) == 1
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert labels == ["waypoints", "pole", "10 m safety circle", "path, success", "path, failure"]
