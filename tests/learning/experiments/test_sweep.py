@@ -26,7 +26,12 @@ from learning.experiments.sweep import (
     parse_seeds,
     trial_dir_name,
 )
-from learning.experiments.sweep_report import TrialRecord, choose_shipped, iqm
+from learning.experiments.sweep_report import (
+    TrialRecord,
+    choose_shipped,
+    iqm,
+    probability_of_improvement,
+)
 
 
 def test_override_reaches_nested_training_fields() -> None:
@@ -107,6 +112,17 @@ def test_iqm_equals_rliable() -> None:
     for n in (1, 2, 3, 5, 8, 13):
         x = rng.uniform(size=n)
         assert iqm(x) == pytest.approx(float(metrics.aggregate_iqm(x[:, None])), abs=1e-12)
+
+
+def test_probability_of_improvement_equals_rliable() -> None:
+    metrics = pytest.importorskip("rliable.metrics")  # the sweep extra
+    rng = np.random.default_rng(1)
+    for nx, ny in ((1, 1), (3, 5), (5, 5), (4, 2)):
+        x = np.round(rng.uniform(size=nx), 1)  # ties on purpose
+        y = np.round(rng.uniform(size=ny), 1)
+        expected = float(metrics.probability_of_improvement(x[:, None], y[:, None]))
+        assert probability_of_improvement(x, y) == pytest.approx(expected, abs=1e-12)
+    assert probability_of_improvement(np.ones(3), np.ones(3)) == 0.5
 
 
 def _record(seed: int, best: int, auc: float, status: str = "finished") -> TrialRecord:
