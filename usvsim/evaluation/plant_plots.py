@@ -33,24 +33,25 @@ __all__ = [
 def turning_circle_figure(plant: Plant, seconds: float = 120.0) -> Figure:
     """Paths of boats turning with hard-over steering, autopilot-commanded and rate-limited.
 
-    The hard-over path holds the heading reference 90° to starboard of the current heading, so
-    the autopilot saturates the nozzle; speed control stays active.
+    The path holds the heading reference 90° to starboard of the current heading, so the
+    autopilot turns at its reference model's rate limit (not hard over: the open-loop turning
+    circle at maximum helm is ``usvsim manoeuvre``); speed control stays active.
     """
     n = round(seconds / plant.dt_s)
     state = plant.initial_state(np.zeros((1, 3)))
     path = np.empty((n, 2))
-    for k in range(n):  # reference 90° ahead of the current heading: a continuous hard turn
+    for k in range(n):  # reference 90° ahead of the current heading: a continuous turn
         state, _ = plant.step(state, state.x[:, 2] + math.pi / 2)
         path[k] = state.x[0, 0:2]
     fig, ax = plt.subplots(figsize=(5, 5))
-    ax.plot(path[:, 1], path[:, 0], lw=1.2, label="hard-over turn")
+    ax.plot(path[:, 1], path[:, 0], lw=1.2, label="autopilot turn at its rate limit")
     ax.plot([0], [0], "ko", label="start")
     ax.set_xlabel("y east (m)")
     ax.set_ylabel("x north (m)")
     ax.set_aspect("equal")
     tail = path[n // 2 :]
     radius = np.hypot(*(tail - tail.mean(axis=0)).T).mean()
-    ax.set_title(f"{plant.vessel.name}: turning circle, radius ≈ {radius:.1f} m")
+    ax.set_title(f"{plant.vessel.name}: rate-limited autopilot turn, radius ≈ {radius:.1f} m")
     ax.legend(loc="best")
     fig.tight_layout()
     return fig
