@@ -15,7 +15,6 @@ as RL; 0 runs the whole budget), ``--time-budget-s``, ``--validate-every``, ``--
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -37,6 +36,7 @@ from learning.experiments.run_log import Milestones, RunLog, advance, progress_b
 from learning.experiments.setups import setup_from_params
 from learning.experiments.validation import (
     RunResult,
+    finish_run,
     policy_records,
     validation_record,
     validation_summary,
@@ -52,8 +52,6 @@ from learning.imitation.gail import GAILAgent, GAILStats, train_gail
 from learning.imitation.preprocess import ExpertData, check_observations, expert_data
 from usvsim.common.fileio import (
     atomic_open,
-    atomic_write_text,
-    json_safe,
     remove_stale_temporaries,
 )
 from usvsim.evaluation.episodes import validation_episodes
@@ -234,16 +232,12 @@ class _ILRun:
             "demonstrations_folder": self.train_args.get("demos_dir", ""),
             "demonstrations_skipped": self.train_args.get("demos_skipped", 0),
         }
-        text = json.dumps(json_safe(summary), indent=2, allow_nan=False)
-        atomic_write_text(self.out / "summary.json", text + "\n")
-        return RunResult(
+        return finish_run(
+            self.out,
+            summary,
             self.best,
             self.history,
-            self.out / "best.pt",
-            self.out / "latest.pt",
-            iterations,
-            env_steps,
-            wall_s,
+            (iterations, env_steps, wall_s),
             self.stop_reason,
             self.milestones.first_full,
         )

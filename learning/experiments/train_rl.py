@@ -11,7 +11,6 @@ value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations).
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -31,8 +30,8 @@ from learning.experiments.checkpoint import (
 )
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
-from learning.experiments.validation import RunResult, validate, validation_record
-from usvsim.common.fileio import atomic_write_text, json_safe, remove_stale_temporaries
+from learning.experiments.validation import RunResult, finish_run, validate, validation_record
+from usvsim.common.fileio import remove_stale_temporaries
 
 __all__ = ["COMMON_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
 
@@ -147,16 +146,12 @@ class _Run:
             "study_iterations": self.setup.study_iterations,
             "threads": torch.get_num_threads(),
         }
-        text = json.dumps(json_safe(summary), indent=2, allow_nan=False)
-        atomic_write_text(self.out / "summary.json", text + "\n")
-        return RunResult(
+        return finish_run(
+            self.out,
+            summary,
             best,
             self.history,
-            self.out / "best.pt",
-            self.out / "latest.pt",
-            iterations,
-            env_steps,
-            wall_s,
+            (iterations, env_steps, wall_s),
             self.stop_reason,
             self.milestones.first_full,
         )

@@ -5,6 +5,7 @@ summary, and the record a validation leaves in the checkpoints' history and ``su
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,6 +15,7 @@ import numpy as np
 
 from learning.algorithms.base import Agent
 from learning.experiments.checkpoint import PolicyHelmsman
+from usvsim.common.fileio import atomic_write_text, json_safe
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
 from usvsim.task.scenario import EpisodeSpec
 
@@ -84,3 +86,30 @@ class RunResult:
     wall_time_s: float
     stop_reason: str
     first_full: dict[str, Any] | None  # the first 15/15 validation record
+
+
+def finish_run(
+    out: Path,
+    summary: dict[str, Any],
+    best: dict[str, Any] | None,
+    history: list[dict[str, Any]],
+    progress: tuple[int, int, float],
+    stop_reason: str,
+    first_full: dict[str, Any] | None,
+) -> RunResult:
+    """Write ``out/summary.json`` atomically (strict JSON: NaN and inf as ``null``) and return
+    the run's :class:`RunResult`; ``progress`` is (iterations, env steps, wall-clock s)."""
+    text = json.dumps(json_safe(summary), indent=2, allow_nan=False)
+    atomic_write_text(out / "summary.json", text + "\n")
+    iterations, env_steps, wall_s = progress
+    return RunResult(
+        best,
+        history,
+        out / "best.pt",
+        out / "latest.pt",
+        iterations,
+        env_steps,
+        wall_s,
+        stop_reason,
+        first_full,
+    )
