@@ -20,9 +20,7 @@ __all__ = ["DemoArgs", "ManoeuvreArgs", "PerfArgs", "run_demo", "run_manoeuvre",
 class DemoArgs:
     """Print the vessel and autopilot design and save plant plots (PNG)."""
 
-    vessel: str = (
-        "default"  # vessel preset: default, usv105, viknes830, viknes830_nr3224, cybership2
-    )
+    vessel: str = "default"  # vessel preset: default (= usv105), loe-default, viknes830, ...
     autopilot: str = "pid"  # pid | rover | rover-tuned
     out: str = "usvsim-results/plant"  # folder for the PNG plots
 
@@ -36,10 +34,10 @@ class ManoeuvreArgs:
     out: str = "usvsim-results/manoeuvre"  # folder for the table (Markdown) and the PNG plots
 
     def check(self) -> None:
-        from usvsim.vessel.vessels import VESSELS
+        from usvsim.vessel.vessels import vessel_names
 
-        if self.vessel != "all" and self.vessel not in VESSELS:
-            known = ", ".join(["all", *sorted(VESSELS)])
+        if self.vessel != "all" and self.vessel not in vessel_names():
+            known = ", ".join(["all", *vessel_names()])
             raise UserError(f"--vessel must be one of {known}, not {self.vessel!r}")
 
 
@@ -106,10 +104,10 @@ def run_manoeuvre(args: ManoeuvreArgs) -> int:
     from usvsim.common.fileio import atomic_savefig, atomic_write_text
     from usvsim.evaluation.manoeuvre import run_trials, trials_table
     from usvsim.evaluation.plant_plots import manoeuvre_figure
-    from usvsim.vessel.vessels import VESSELS
+    from usvsim.vessel.vessels import VESSELS, get_vessel
 
     args.check()
-    names = sorted(VESSELS) if args.vessel == "all" else [args.vessel]
+    names = sorted(VESSELS) if args.vessel == "all" else [get_vessel(args.vessel).name]
     out = Path(args.out)
     reports = []
     for name in tqdm(names, desc="trials", unit="vessel", file=sys.stderr):

@@ -140,8 +140,7 @@ def actuator_command(steering_pwm: int, throttle_pwm: int, act: Actuation) -> tu
     """Actuator command ``a_cmd = [a1, a2]`` of the vessel model from steering/throttle PWM."""
     s = _normalized(steering_pwm)
     t = _normalized(throttle_pwm)
-    if act.kind == "waterjet":
-        return max(t, 0.0) * act.a1_max, s * act.a2_max
+    # below neutral: astern thrust where the vessel has it (a waterjet's reversing bucket), else 0
     a1 = t * act.a1_max if t >= 0 else -t * act.a1_min
     return a1, s * act.a2_max
 

@@ -13,8 +13,11 @@ Actuation is one of two kinds, both with an optional first-order lag (time const
              ``a = [T, δ]`` with thrust T (N) and nozzle angle δ (rad, positive turns to
              starboard), ``τ = [T cos δ, -T sin δ, -x_jet · T sin δ]``.
 
-Presets: :data:`VIKNES830`, :data:`CYBERSHIP2`, and :data:`DEFAULT_VESSEL` (a Froude-scaled Viknes
-830 with waterjets, standing in for the reference study's 10.5 m × 3.5 m twin-waterjet USV).
+Presets: :data:`USV105` (the default, ``"default"`` is its alias: the reference study's
+10.5 m × 3.5 m twin-waterjet USV with a coupled hull from Clarke et al. 1983), :data:`LOE_DEFAULT`
+(``"loe-default"``: the default before 2026-12, a Froude-scaled Viknes 830 without sway–yaw
+coupling, kept to reproduce earlier results), :data:`VIKNES830`, ``viknes830_nr3224`` and
+:data:`CYBERSHIP2`.
 """
 
 from __future__ import annotations
@@ -27,14 +30,17 @@ from typing import Literal
 __all__ = [
     "CYBERSHIP2",
     "DEFAULT_VESSEL",
+    "LOE_DEFAULT",
     "USV105",
     "VESSELS",
+    "VESSEL_ALIASES",
     "VIKNES830",
     "Actuation",
     "VesselParams",
     "clarke83_derivatives",
     "froude_scale",
     "get_vessel",
+    "vessel_names",
     "without_added_mass_coriolis",
 ]
 
@@ -307,7 +313,9 @@ CYBERSHIP2 = VesselParams(
     "2005, PhD thesis) gives Y_v = -0.8612, Y_|v|v = -36.2823, Y_r = 0.1079, N_v = 0.1052.",
 )
 
-# --- Default: the study's 10.5 m x 3.5 m twin-waterjet USV ------------------------------------
+# --- loe-default: the default hull until 2026-12 (Loe-derived, uncoupled) ----------------------
+# Kept to reproduce results made before the coupled usv105 hull became the default. Its sway-yaw
+# model is not physical at full helm (hull audit: 0.06 L turning radius, drift angle -104°).
 # No published 3-DOF set exists for it (Vedeler 2019 used the Maritime Robotics "Telemetron"-class
 # boat). Derivation, every step an assumption:
 #  1. Hull: the Viknes 830 (Loe 2008), the published hull closest in size and type (planing
@@ -320,8 +328,8 @@ CYBERSHIP2 = VesselParams(
 #     governed engine and impeller spool-up) and 0.15 s on the nozzle (hydraulic steering
 #     cylinder), sized so the autopilot meets its step-response requirements. Peak yaw
 #     moment is 4.5 × 24e3 × sin 30° = 54 kN m, ~20x the Viknes limit: enough to turn 10° in 2 s.
-_VIKNES_SCALED = froude_scale(VIKNES830, 10.5, name="default")
-DEFAULT_VESSEL = dataclasses.replace(
+_VIKNES_SCALED = froude_scale(VIKNES830, 10.5, name="loe-default")
+LOE_DEFAULT = dataclasses.replace(
     _VIKNES_SCALED,
     beam_m=3.5,  # m, the study's boat (Vedeler 2019); hull coefficients stay Froude-scaled
     actuation=Actuation(
@@ -333,7 +341,8 @@ DEFAULT_VESSEL = dataclasses.replace(
         lever_m=4.5,  # m, -x_jet, ASSUMED
         lag_s=(0.3, 0.15),  # s, ASSUMED thrust and nozzle lags
     ),
-    notes="Viknes 830 (Loe 2008) Froude-scaled to 10.5 m, twin waterjets (assumptions in source).",
+    notes="The default until 2026-12: Viknes 830 (Loe 2008) Froude-scaled to 10.5 m, twin "
+    "waterjets, no sway-yaw coupling (assumptions in source).",
 )
 
 
@@ -391,7 +400,7 @@ def without_added_mass_coriolis(
 # --- usv105: the study's 10.5 m x 3.5 m twin-waterjet USV with a coupled hull --------------------
 # A credible order of magnitude, not an identified model (hull audit, 2026-12-01):
 #  * hull L = 10.5 m, B = 3.5 m (Vedeler 2019), T = 0.55 m and C_b = 0.36 ASSUMED (ρLBTC_b =
-#    7458 kg, the default's mass); m and I_z as the default (Froude-scaled Viknes 830).
+#    7458 kg, loe-default's mass); m and I_z as loe-default (Froude-scaled Viknes 830).
 #  * X_u̇ = -0.1 m (clarke83's surge added mass); sway–yaw added mass and linear damping from
 #    Clarke, Gedling & Hine (1983) at U = 3 m/s, their added-mass Coriolis part removed (the
 #    model adds it), scaled with speed (linear_ref_speed_mps). OUTSIDE THE REGRESSION'S RANGE:
@@ -400,9 +409,9 @@ def without_added_mass_coriolis(
 #    N = -½ρT ∫ x C_D |v + x r|(v + x r) dx with Hoerner's 2-D C_D = 0.586 at B/(2T) = 3.2,
 #    fitted to the model's |·|· terms over the turning range (hull audit; 7-9 % residual). Without
 #    it the hard-over turn is a 0.26 L pirouette: the term is essential.
-#  * surge damping: the default's (Froude-scaled Loe 2008).
+#  * surge damping: loe-default's (Froude-scaled Loe 2008).
 _USV105_SPEED = 3.0  # m/s, speed of the Clarke derivatives
-_USV105_M = _VIKNES_SCALED.m  # kg, 7449 (as the default)
+_USV105_M = _VIKNES_SCALED.m  # kg, 7449 (as loe-default)
 _USV105_XUDOT = -0.1 * _USV105_M  # kg, clarke83
 _USV105_LINEAR = without_added_mass_coriolis(
     clarke83_derivatives(10.5, 3.5, 0.55, 0.36, _USV105_SPEED), _USV105_XUDOT, _USV105_SPEED
@@ -411,7 +420,7 @@ USV105 = dataclasses.replace(
     _VIKNES_SCALED,
     name="usv105",
     beam_m=3.5,  # m (Vedeler 2019)
-    draft_m=0.55,  # m, ASSUMED (C_b = 0.36 then gives the default's mass)
+    draft_m=0.55,  # m, ASSUMED (C_b = 0.36 then gives loe-default's mass)
     cruise_speed_mps=3.0,  # m/s, the task's speed
     linear_ref_speed_mps=_USV105_SPEED,
     X_udot=_USV105_XUDOT,  # kg, -745
@@ -431,13 +440,13 @@ USV105 = dataclasses.replace(
     actuation=Actuation(
         kind="waterjet",
         a1_min=-0.4 * 24000.0,  # N, reversing bucket, ASSUMED 40 % of ahead thrust
-        a1_max=24000.0,  # N, bollard thrust, ASSUMED as the default's maximum
+        a1_max=24000.0,  # N, bollard thrust, ASSUMED as loe-default's maximum
         # rad, ASSUMED nozzle limit, the low end of the usual ±27-30° (with ±30° the steady
         # hard-over radius is 0.96 L instead of 1.11 L at 3 m/s)
         a2_min=-math.radians(27.0),
         a2_max=math.radians(27.0),  # rad
-        lever_m=4.5,  # m, -x_jet, ASSUMED (as the default)
-        lag_s=(0.3, 0.15),  # s, ASSUMED (as the default)
+        lever_m=4.5,  # m, -x_jet, ASSUMED (as loe-default)
+        lag_s=(0.3, 0.15),  # s, ASSUMED (as loe-default)
         a2_rate_max=math.radians(60.0),  # rad/s, ASSUMED slew rate (lock to lock in 1 s)
         jet_speed_mps=20.0,  # m/s, ASSUMED jet speed (V_j/u ≈ 2 at 10 m/s)
     ),
@@ -445,16 +454,24 @@ USV105 = dataclasses.replace(
     "3.5 m hull, waterjets with slew-rate limit, thrust loss and reversing bucket (all in source).",
 )
 
+DEFAULT_VESSEL = USV105  # the coupled hull; "default" names it (VESSEL_ALIASES)
+
 VESSELS: dict[str, VesselParams] = {
-    v.name: v for v in (DEFAULT_VESSEL, USV105, VIKNES830, VIKNES830_NR3224, CYBERSHIP2)
+    v.name: v for v in (USV105, LOE_DEFAULT, VIKNES830, VIKNES830_NR3224, CYBERSHIP2)
 }
+VESSEL_ALIASES: dict[str, str] = {"default": USV105.name}
+
+
+def vessel_names() -> list[str]:
+    """Every name :func:`get_vessel` accepts: the aliases first, then the presets, sorted."""
+    return [*sorted(VESSEL_ALIASES), *sorted(VESSELS)]
 
 
 def get_vessel(name: str) -> VesselParams:
-    """Return a preset by name: ``default``, ``usv105``, ``viknes830``, ``viknes830_nr3224``,
-    ``cybership2``."""
+    """Return a preset by name: ``default`` (= ``usv105``), ``usv105``, ``loe-default``,
+    ``viknes830``, ``viknes830_nr3224``, ``cybership2``."""
     try:
-        return VESSELS[name]
+        return VESSELS[VESSEL_ALIASES.get(name, name)]
     except KeyError:
-        known = ", ".join(sorted(VESSELS))
+        known = ", ".join(vessel_names())
         raise ValueError(f"unknown vessel {name!r}; known vessels: {known}") from None

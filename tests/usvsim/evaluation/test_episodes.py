@@ -79,11 +79,16 @@ def test_records_are_consistent(straight_records):
         assert 20 * (r.n_decisions - 1) + 1 < r.trajectory.shape[0] <= 20 * r.n_decisions + 1
         assert r.est_pose.shape == (r.n_decisions + 1, 3)
         assert r.smoothness_rad == 0.0 and np.all(r.actions_rad == 0.0)
-        # straight at 3 m/s: path = speed × time, ending just short of the pole
+    # Straight ahead on the coupled hull: compass noise through the heading loop makes sway, so
+    # the boat wanders sideways (2 of 15 miss the 2.75 m collision circle, passing 2.9 and 4.0 m
+    # from the pole); the collided ones must show the collision bookkeeping
+    collided = [r for r in straight_records if r.outcome == "collision"]
+    assert len(collided) >= 12
+    for r in collided:
         # straight at 3 m/s, cut at the collision step: 2.75 m (pole radius + half beam) short
         assert r.path_length_m == pytest.approx(0.3 * (r.trajectory.shape[0] - 1), rel=0.01)
         assert 0.0 < r.spec.start_distance_m - r.path_length_m < 1.0 + 1.75 + 0.5
-        assert math.isnan(r.time_to_goal_s) and r.outcome == "collision"
+        assert math.isnan(r.time_to_goal_s)
         # the terminal reward is taken at the collision step: d_pole < 2.75 m
         assert r.reward_pole[-1] < -2.0 * math.exp(-0.5 * (2.75 / 5.0) ** 2)
     assert "collision" in format_records(straight_records)

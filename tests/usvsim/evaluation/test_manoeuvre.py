@@ -17,7 +17,7 @@ from usvsim.evaluation.manoeuvre import (
     turning_circle,
     zigzag,
 )
-from usvsim.vessel.vessels import CYBERSHIP2, DEFAULT_VESSEL, USV105
+from usvsim.vessel.vessels import CYBERSHIP2, LOE_DEFAULT, USV105
 
 L = USV105.length_m
 
@@ -74,8 +74,8 @@ def test_stopping_with_and_without_astern():
 
 def test_the_old_default_hull_fails_the_realism_bars():
     # the reason for usv105: the Loe hull pirouettes (hull audit: 0.06 L, β -104°, backwards)
-    t = turning_circle(DEFAULT_VESSEL, (3.0,))[0]
-    assert t.steady_radius_m / DEFAULT_VESSEL.length_m < 0.1
+    t = turning_circle(LOE_DEFAULT, (3.0,))[0]
+    assert t.steady_radius_m / LOE_DEFAULT.length_m < 0.1
     assert t.min_surge_mps < 0.0
 
 
@@ -104,5 +104,5 @@ def test_manoeuvre_command_writes_table_and_plots(tmp_path, capsys):
 def test_manoeuvre_command_rejects_an_unknown_vessel():
     from usvsim.cli.plant import ManoeuvreArgs
 
-    with pytest.raises(UserError, match="--vessel must be one of all, cybership2"):
+    with pytest.raises(UserError, match="--vessel must be one of all, default, cybership2, loe-default"):
         ManoeuvreArgs(vessel="titanic").check()

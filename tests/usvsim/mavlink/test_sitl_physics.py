@@ -67,8 +67,11 @@ def test_pwm_maps_to_waterjet_thrust_and_nozzle() -> None:
     act = get_vessel("default").actuation
     assert actuator_command(1500, 1500, act) == (0.0, 0.0)
     thrust, nozzle = actuator_command(1900, 1900, act)
-    assert thrust == act.a1_max and nozzle == pytest.approx(math.radians(30.0))
-    assert actuator_command(1100, 1100, act) == (0.0, -act.a2_max)  # no astern thrust
+    assert thrust == act.a1_max and nozzle == pytest.approx(math.radians(27.0))
+    assert actuator_command(1100, 1100, act) == (act.a1_min, -act.a2_max)  # reversing bucket
+    assert act.a1_min == pytest.approx(-0.4 * act.a1_max)
+    no_bucket = get_vessel("loe-default").actuation
+    assert actuator_command(1500, 1100, no_bucket) == (0.0, 0.0)  # no astern thrust
 
 
 def test_replies_parse_with_increasing_timestamps(backend) -> None:

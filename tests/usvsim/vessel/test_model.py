@@ -20,7 +20,7 @@ from usvsim.vessel.model import (
     mass_matrix,
     nomoto_from_linear,
 )
-from usvsim.vessel.vessels import CYBERSHIP2, DEFAULT_VESSEL, VIKNES830, get_vessel
+from usvsim.vessel.vessels import CYBERSHIP2, LOE_DEFAULT, VIKNES830, get_vessel
 
 NO_CURRENT = np.zeros(2)
 
@@ -38,7 +38,7 @@ def surge_drag(v, u: float) -> float:
     return float(damping_forces(v, ca.DM([u, 0.0, 0.0]))[0])
 
 
-@pytest.mark.parametrize("vessel", [DEFAULT_VESSEL, VIKNES830, CYBERSHIP2], ids=lambda v: v.name)
+@pytest.mark.parametrize("vessel", [LOE_DEFAULT, VIKNES830, CYBERSHIP2], ids=lambda v: v.name)
 def test_steady_surge_speed_is_root_of_thrust_equals_drag(vessel):
     act = vessel.actuation
     thrust = 0.3 * act.a1_max
@@ -51,7 +51,7 @@ def test_steady_surge_speed_is_root_of_thrust_equals_drag(vessel):
     assert abs(xs[-1, 4]) < 1e-9 and abs(xs[-1, 5]) < 1e-9  # straight: no sway, no yaw
 
 
-@pytest.mark.parametrize("vessel", [DEFAULT_VESSEL, VIKNES830], ids=lambda v: v.name)
+@pytest.mark.parametrize("vessel", [LOE_DEFAULT, VIKNES830], ids=lambda v: v.name)
 def test_kinetic_energy_never_increases_without_thrust(vessel):
     # With τ = 0 and no current: dE/dt = -νᵀ D(ν) ν ≤ 0 (C(ν) is skew-symmetric).
     F = build_rk4_step(build_dynamics(vessel), 0.1)
@@ -69,7 +69,7 @@ def test_kinetic_energy_never_increases_without_thrust(vessel):
         assert energy[-1] < 0.05 * energy[0]
 
 
-@pytest.mark.parametrize("vessel", [DEFAULT_VESSEL, VIKNES830], ids=lambda v: v.name)
+@pytest.mark.parametrize("vessel", [LOE_DEFAULT, VIKNES830], ids=lambda v: v.name)
 def test_turning_circle_matches_yaw_moment_balance(vessel):
     """Hard-over turn at cruise thrust.
 
@@ -164,7 +164,7 @@ def test_model_matches_second_numpy_implementation():
 
 def test_irrotational_current_drifts_an_unpowered_boat_with_the_water():
     # A boat at rest relative to the water moves with the current: ν_r = 0 stays 0.
-    v = DEFAULT_VESSEL
+    v = LOE_DEFAULT
     F = build_rk4_step(build_dynamics(v), 0.1)
     current = np.array([0.5, math.radians(60.0)])
     x0 = np.zeros(8)
@@ -177,7 +177,7 @@ def test_irrotational_current_drifts_an_unpowered_boat_with_the_water():
 
 
 def test_rk4_at_100ms_is_accurate_against_fine_reference():
-    v = DEFAULT_VESSEL
+    v = LOE_DEFAULT
     f = build_dynamics(v)
     F = build_rk4_step(f, 0.1)
     cmd = lambda t: np.array([6000.0, math.radians(20.0) * math.sin(0.3 * t)])  # noqa: E731
@@ -202,7 +202,7 @@ def test_rk4_at_100ms_is_accurate_against_fine_reference():
 
 
 def test_linear_and_nonlinear_agree_for_small_steps():
-    v = DEFAULT_VESSEL
+    v = LOE_DEFAULT
     A, B = linearize(v, 3.0)
     f_tau = build_force_dynamics(v)
     tau_x = surge_drag(v, 3.0)
@@ -220,18 +220,18 @@ def test_linear_and_nonlinear_agree_for_small_steps():
 
 
 def test_nomoto_of_decoupled_hull_is_inertia_over_damping():
-    v = DEFAULT_VESSEL  # no sway-yaw coupling: r/τ_N = 1/(Iz s - N_r) exactly
+    v = LOE_DEFAULT  # no sway-yaw coupling: r/τ_N = 1/(Iz s - N_r) exactly
     nomoto = nomoto_from_linear(*linearize(v, 3.0))
     assert nomoto.T == pytest.approx((v.Iz - v.N_rdot) / -v.N_r, rel=1e-9)
     assert nomoto.K == pytest.approx(1.0 / -v.N_r, rel=1e-9)
 
 
-def test_froude_scaled_default_keeps_froude_similarity():
-    lam = DEFAULT_VESSEL.length_m / VIKNES830.length_m
-    assert DEFAULT_VESSEL.m == pytest.approx(VIKNES830.m * lam**3)
-    assert DEFAULT_VESSEL.Iz == pytest.approx(VIKNES830.Iz * lam**5)
+def test_froude_scaled_loe_default_keeps_froude_similarity():
+    lam = LOE_DEFAULT.length_m / VIKNES830.length_m
+    assert LOE_DEFAULT.m == pytest.approx(VIKNES830.m * lam**3)
+    assert LOE_DEFAULT.Iz == pytest.approx(VIKNES830.Iz * lam**5)
     # the Nomoto time constant is a time: it scales with λ^0.5
-    t_default = DEFAULT_VESSEL.Iz / -DEFAULT_VESSEL.N_r
+    t_default = LOE_DEFAULT.Iz / -LOE_DEFAULT.N_r
     t_viknes = VIKNES830.Iz / -VIKNES830.N_r
     assert t_default == pytest.approx(t_viknes * lam**0.5)
 

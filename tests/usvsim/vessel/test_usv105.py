@@ -26,7 +26,7 @@ from usvsim.vessel.model import (
 )
 from usvsim.vessel.plant import Plant
 from usvsim.vessel.vessels import (
-    DEFAULT_VESSEL,
+    LOE_DEFAULT,
     USV105,
     VESSELS,
     clarke83_derivatives,
@@ -115,8 +115,8 @@ def test_design_model_comes_from_the_true_linearisation():
     assert d.nomoto.d == pytest.approx(1.0 / float(-np.linalg.solve(A, b)[1, 0]))
     assert d.nomoto.d < 0  # straight-line unstable hull (eigenvalue +0.052 /s)
     assert d.feedforward_damping == 0.0
-    # a decoupled hull keeps the exact Nomoto design (bit-identical gains for `default`)
-    assert design_autopilot(DEFAULT_VESSEL).design_model == "nomoto"
+    # a decoupled hull keeps the exact Nomoto design (bit-identical gains for `loe-default`)
+    assert design_autopilot(LOE_DEFAULT).design_model == "nomoto"
 
 
 def test_design_with_no_linear_sway_damping_does_not_fail():
@@ -128,11 +128,11 @@ def test_design_with_no_linear_sway_damping_does_not_fail():
 
 
 def test_full_loop_of_a_decoupled_hull_is_the_nomoto_loop():
-    """Second implementation: for `default` L(jω) equals K/(jω(1+Tjω)) · PID · lag · Padé."""
+    """Second implementation: for `loe-default` L(jω) equals K/(jω(1+Tjω)) · PID · lag · Padé."""
     import control
 
-    d = design_autopilot(DEFAULT_VESSEL)
-    L = full_loop_transfer(DEFAULT_VESSEL, 3.0, d.Kp, d.Kd, d.Ki, 0.1)
+    d = design_autopilot(LOE_DEFAULT)
+    L = full_loop_transfer(LOE_DEFAULT, 3.0, d.Kp, d.Kd, d.Ki, 0.1)
     s = control.tf("s")
     n = d.nomoto
     num, den = control.pade(0.05, 2)
