@@ -56,12 +56,7 @@ def run_sitl_physics(args: SitlPhysicsArgs) -> int:
         vessel = get_vessel(args.vessel)
     except ValueError as err:
         raise UserError(f"--vessel: {err}") from None
-    physics = JsonPhysics(
-        vessel,
-        math.radians(args.heading_deg),
-        args.steering_channel,
-        args.throttle_channel,
-    )
+    physics = JsonPhysics(vessel, math.radians(args.heading_deg), args.mapping())
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
         sock.bind((args.bind, args.port))

@@ -17,16 +17,31 @@ Reply: one JSON object per frame between newlines, ``timestamp`` (s, physics tim
 [0, 0, -9.81] at rest), ``position`` and ``velocity`` (m, m/s, NED from the start point),
 ``attitude`` ([roll, pitch, yaw], rad).
 
-Actuator mapping (Rover ``motorboat`` defaults): SERVO1 = GroundSteering (function 26), SERVO3 =
-Throttle (function 70), both 1100-1900 µs around a 1500 µs trim. Steering +1 (1900 µs) turns to
-starboard: nozzle angle ``δ = s · δ_max``; throttle ``t ∈ [-1, 1]`` gives thrust ``t · T_max``
-for t ≥ 0 and none astern (the default vessel's waterjet has no reversing bucket). For
-``forces`` vessels: ``F_x = t · F_x,max`` (``t · |F_x,min|`` astern), ``F_y = s · F_y,max``.
+The reply is *compact* JSON (``separators=(",", ":")``, no NaN): SIM_JSON.cpp's parser is no
+JSON parser. For each key of its table it finds the section (``imu``) and then the key with
+``strstr``, skips ``strlen(key) + 2`` characters (the closing quote and the colon) and reads a
+number with ``atof`` or a vector with ``sscanf(p, "[%f, %f, %f]")``, so a space after the colon
+(Python's default ``": "``) makes every vector fail ("Failed to parse Vector3f for imu/gyro")
+and the SITL clock never advances. ``tests/usvsim/mavlink/test_sitl_physics.py`` re-implements
+that scanning and checks every reply with it.
 
-Start ArduPilot against it (ArduPilot source tree, Rover)::
+Actuator mapping (Rover ``motorboat`` defaults, :class:`ServoMapping`): SERVO1 = GroundSteering
+(function 26), SERVO3 = Throttle (function 70), both SERVOn_MIN..MAX = 1000-2000 µs around a
+SERVOn_TRIM of 1500 µs (ArduPilot's ``Tools/autotest/default_params/rover.parm`` and the shipped
+``usvsim/mavlink/params/*.parm``); other ranges and channels by options. Steering +1 (MAX)
+turns to starboard: nozzle angle ``δ = s · δ_max``; throttle ``t ∈ [-1, 1]`` (above trim
+scaled by MAX − TRIM, below by TRIM − MIN, as ArduPilot's angle-type outputs) gives thrust
+``t · T_max`` for t ≥ 0 and ``|t| · T_astern`` below trim where the vessel has a reversing
+bucket (none otherwise). For ``forces`` vessels: ``F_x = t · F_x,max`` (``t · |F_x,min|``
+astern), ``F_y = s · F_y,max``.
 
+Start ArduPilot against it (ArduPilot source tree, Rover), with the Rover parameters derived for
+the vessel (:mod:`usvsim.mavlink.rover_params`)::
+
+    usvsim sitl-physics --write-params usv105.parm     # writes the file and exits
     usvsim sitl-physics --port 9002 &
-    sim_vehicle.py -v Rover -f motorboat --model JSON:127.0.0.1 --console --map
+    sim_vehicle.py -v Rover -f motorboat --model JSON:127.0.0.1 \
+        --add-param-file=usv105.parm --console --map
     usvsim bridge --connect tcp:127.0.0.1:5760 --mission m.json --arm
 """
 
@@ -51,8 +66,10 @@ from usvsim.vessel.vessels import Actuation, VesselParams
 __all__ = [
     "JsonPhysics",
     "ServoFrame",
+    "ServoMapping",
     "SitlPhysicsArgs",
     "actuator_command",
+    "compact_json",
     "parse_servo_frame",
 ]
 
@@ -72,6 +89,13 @@ class SitlPhysicsArgs:
     heading_deg: float = field(default=0.0, metadata=bounds(ge=-360, le=360))  # start, deg
     steering_channel: int = field(default=1, metadata=bounds(ge=1, le=16))  # servo (Rover SERVO1)
     throttle_channel: int = field(default=3, metadata=bounds(ge=1, le=16))  # servo (Rover SERVO3)
+    # µs, SERVOn_MIN / TRIM / MAX of the steering and throttle outputs (the shipped .parm's)
+    steering_pwm_min: int = field(default=1000, metadata=bounds(ge=500, le=2500))  # µs, full port
+    steering_pwm_trim: int = field(default=1500, metadata=bounds(ge=500, le=2500))  # µs, centre
+    steering_pwm_max: int = field(default=2000, metadata=bounds(ge=500, le=2500))  # µs, starboard
+    throttle_pwm_min: int = field(default=1000, metadata=bounds(ge=500, le=2500))  # µs, astern
+    throttle_pwm_trim: int = field(default=1500, metadata=bounds(ge=500, le=2500))  # µs, none
+    throttle_pwm_max: int = field(default=2000, metadata=bounds(ge=500, le=2500))  # µs, full
     duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # physics s; 0: until Ctrl-C
 
     def check(self) -> None:
@@ -81,6 +105,36 @@ class SitlPhysicsArgs:
                 f"--steering-channel and --throttle-channel must differ, both are "
                 f"{self.steering_channel}"
             )
+        for name in ("steering", "throttle"):
+            lo, mid, hi = (getattr(self, f"{name}_pwm_{k}") for k in ("min", "trim", "max"))
+            if not lo < mid < hi:
+                raise UserError(
+                    f"--{name}-pwm-min < --{name}-pwm-trim < --{name}-pwm-max is required, "
+                    f"got {lo} / {mid} / {hi} µs"
+                )
+
+    def mapping(self) -> ServoMapping:
+        """The servo channels and PWM ranges these options give."""
+        return ServoMapping(
+            self.steering_channel,
+            self.throttle_channel,
+            (self.steering_pwm_min, self.steering_pwm_trim, self.steering_pwm_max),
+            (self.throttle_pwm_min, self.throttle_pwm_trim, self.throttle_pwm_max),
+        )
+
+
+@dataclass(frozen=True)
+class ServoMapping:
+    """Which servo outputs steer and throttle, and their PWM ranges (µs, min / trim / max).
+
+    Defaults: Rover's SERVO1 (GroundSteering) and SERVO3 (Throttle) at 1000 / 1500 / 2000 µs,
+    as ``rover.parm`` and the shipped parameter files set them.
+    """
+
+    steering_channel: int = 1  # 1-based servo output
+    throttle_channel: int = 3  # 1-based servo output
+    steering_pwm_us: tuple[int, int, int] = (1000, 1500, 2000)  # µs, SERVO1_MIN/TRIM/MAX
+    throttle_pwm_us: tuple[int, int, int] = (1000, 1500, 2000)  # µs, SERVO3_MIN/TRIM/MAX
 
 
 @dataclass(frozen=True)
@@ -126,20 +180,26 @@ def pack_servo_frame(frame: ServoFrame) -> bytes:
     )
 
 
-def _normalized(pwm_us: int) -> float:
-    """PWM (µs) → [-1, 1] around 1500 µs with ±400 µs travel (Rover SERVOn_MIN/MAX 1100/1900).
+def _normalized(pwm_us: int, pwm_range: tuple[int, int, int]) -> float:
+    """PWM (µs) → [-1, 1]: (pwm − trim) / (max − trim) above trim, / (trim − min) below.
 
-    0 µs (channel not driven) is neutral.
+    ArduPilot's angle-type outputs (steering, boat throttle) map ±1 to MAX / MIN around TRIM
+    (``SRV_Channel::pwm_from_angle``). 0 µs (channel not driven) is neutral.
     """
     if pwm_us == 0:
         return 0.0
-    return max(-1.0, min(1.0, (pwm_us - 1500) / 400.0))
+    lo, trim, hi = pwm_range
+    span = (hi - trim) if pwm_us >= trim else (trim - lo)
+    return max(-1.0, min(1.0, (pwm_us - trim) / span))
 
 
-def actuator_command(steering_pwm: int, throttle_pwm: int, act: Actuation) -> tuple[float, float]:
+def actuator_command(
+    steering_pwm: int, throttle_pwm: int, act: Actuation, mapping: ServoMapping | None = None
+) -> tuple[float, float]:
     """Actuator command ``a_cmd = [a1, a2]`` of the vessel model from steering/throttle PWM."""
-    s = _normalized(steering_pwm)
-    t = _normalized(throttle_pwm)
+    mapping = mapping or ServoMapping()
+    s = _normalized(steering_pwm, mapping.steering_pwm_us)
+    t = _normalized(throttle_pwm, mapping.throttle_pwm_us)
     # below neutral: astern thrust where the vessel has it (a waterjet's reversing bucket), else 0
     a1 = t * act.a1_max if t >= 0 else -t * act.a1_min
     return a1, s * act.a2_max
@@ -155,13 +215,13 @@ class JsonPhysics:
         self,
         vessel: VesselParams,
         heading_rad: float = 0.0,
-        steering_channel: int = 1,
-        throttle_channel: int = 3,
+        mapping: ServoMapping | None = None,
     ) -> None:
         self.vessel = vessel
+        self.mapping = mapping or ServoMapping()
         self._f = build_dynamics(vessel)
         self._steps: dict[int, ca.Function] = {}
-        self._ch = (steering_channel - 1, throttle_channel - 1)
+        self._ch = (self.mapping.steering_channel - 1, self.mapping.throttle_channel - 1)
         self._heading0 = heading_rad
         self.reset()
 
@@ -186,7 +246,7 @@ class JsonPhysics:
         if self.last_count is not None and frame.frame_count < self.last_count:
             self.reset()  # SITL restarted
         steer, throttle = (frame.pwm_us[i] if i < len(frame.pwm_us) else 0 for i in self._ch)
-        a_cmd = actuator_command(steer, throttle, self.vessel.actuation)
+        a_cmd = actuator_command(steer, throttle, self.vessel.actuation, self.mapping)
         p = [0.0, 0.0]
         x_next = np.asarray(self._step_function(frame.frame_rate_hz)(self.x, a_cmd, p)).ravel()
         self._xdot = (x_next - self.x) * frame.frame_rate_hz  # mean rate over the frame
@@ -194,7 +254,7 @@ class JsonPhysics:
         self.x = x_next
         self.time_s += 1.0 / frame.frame_rate_hz
         self.last_count = frame.frame_count
-        self._last_reply = "\n" + json.dumps(self.state_dict()) + "\n"
+        self._last_reply = "\n" + compact_json(self.state_dict()) + "\n"
         return self._last_reply
 
     def state_dict(self) -> dict[str, object]:
@@ -211,6 +271,17 @@ class JsonPhysics:
             "velocity": [c * u - s * v, s * u + c * v, 0.0],
             "attitude": [0.0, 0.0, psi],
         }
+
+
+def compact_json(state: dict[str, object]) -> str:
+    """``state`` as the compact JSON SIM_JSON.cpp can scan: no spaces, no NaN (module docstring).
+
+    Raises
+    ------
+    ValueError
+        If a value is NaN or infinite (SIM_JSON would read garbage).
+    """
+    return json.dumps(state, separators=(",", ":"), allow_nan=False)
 
 
 def serve(
