@@ -187,24 +187,33 @@ class NavigatedPlant:
         self,
         s0: FloatArray,
         psi_ref_rad: FloatArray,
-        speed_ref_mps: float,
+        speed_ref_mps: float | FloatArray,
         n_steps: int,
         first_step_index: int,
         normals: FloatArray,
+        current: FloatArray | None = None,
+        gnss_available: NDArray[np.bool_] | None = None,
     ) -> FloatArray:
         """Advance packed states ``s0`` (N, 28) = [x, c, n] ``n_steps`` plant steps.
 
-        ``psi_ref_rad`` (N,) rad and ``speed_ref_mps`` (m/s, all boats) are held over the steps;
-        ``normals`` (N, :meth:`draws_needed`) are each boat's next standard normals, in
-        :meth:`Navigator.step` order. Returns the packed states after each step, (N, T, 28).
+        ``psi_ref_rad`` (N,) rad and ``speed_ref_mps`` (m/s, all boats or (N,)) are held over
+        the steps; ``normals`` (N, :meth:`draws_needed`) are each boat's next standard normals,
+        in :meth:`Navigator.step` order. ``current`` (N, 2): [speed m/s, direction rad] per boat
+        (default: the plant's, for all); ``gnss_available`` (N, n_steps) bool: False silences a
+        boat's GNSS fix at that step (a dropout; default: every scheduled fix arrives). Returns
+        the packed states after each step, (N, T, 28).
         """
         psi_ref = np.asarray(psi_ref_rad, dtype=float)
-        if not (np.all(np.isfinite(psi_ref)) and np.isfinite(speed_ref_mps)):
+        if not (np.all(np.isfinite(psi_ref)) and np.all(np.isfinite(speed_ref_mps))):
             raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
         w = np.empty((psi_ref.shape[0], 4))
         w[:, 0], w[:, 1] = psi_ref, speed_ref_mps
         w[:, 2], w[:, 3] = self.plant.current
+        if current is not None:
+            w[:, 2:4] = current
         noise = self.noise_steps(first_step_index, n_steps, normals)
+        if gnss_available is not None:
+            noise = _with_gnss_mask(noise, np.asarray(gnss_available, dtype=bool))
         return self._stepper.run(s0, w, self.plant.gains, n_steps, noise)
 
     def step(
@@ -238,3 +247,19 @@ class NavigatedPlant:
         import_nav_state(navigator, last[:, PACKED.nav])
         new_state = PlantState(x=last[:, PACKED.plant].copy(), c=last[:, PACKED.controller].copy())
         return new_state, traj[:, :, PACKED.closed_loop], traj[:, :, PACKED.nav]
+
+
+def _with_gnss_mask(noise: GatheredSteps, available: NDArray[np.bool_]) -> GatheredSteps:
+    """``noise`` with each boat's GNSS firing flag (column 6) times ``available`` (N, T).
+
+    The flag becomes a pool entry (appended columns holding 0 or 1) instead of a constant, so the
+    compiled step reads it per boat.
+    """
+    n, m = noise.pool.shape
+    n_steps = noise.index.shape[0]
+    if available.shape != (n, n_steps):
+        raise ValueError(f"gnss_available must have shape {(n, n_steps)}, got {available.shape}")
+    pool = np.concatenate([noise.pool, available.astype(np.float64)], axis=1)
+    index, factor = noise.index.copy(), noise.factor.copy()
+    index[:, 6] = m + np.arange(n_steps)
+    return GatheredSteps(pool, index, factor)

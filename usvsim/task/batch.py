@@ -47,6 +47,7 @@ from usvsim.nav.compiled import export_nav_state
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import PACKED, NavigatedPlant
+from usvsim.task.disturbance import BoatDisturbances, EpisodeDisturbance
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction, RewardTerms
@@ -283,6 +284,8 @@ class PoleAvoidanceBatch:
         self._t_goal = np.full(n, np.inf)
         self._plant_step = 0
         self._ready = np.zeros(n, dtype=bool)
+        # per-episode speed, current and GNSS faults (usvsim.task.disturbance); none by default
+        self.disturbances = BoatDisturbances(n, self.scenario.speed_mps, self.plant.current)
 
     @property
     def state(self) -> PlantState:
@@ -294,16 +297,25 @@ class PoleAvoidanceBatch:
         """Navigation estimate at the last decision: position (N, 2) m and heading (N,) rad."""
         return self._est_pos.copy(), self._est_psi.copy()
 
-    def reset(self, boats: NDArray[np.intp] | None, specs: Sequence[EpisodeSpec]) -> Observation:
+    def reset(
+        self,
+        boats: NDArray[np.intp] | None,
+        specs: Sequence[EpisodeSpec],
+        disturbances: Sequence[EpisodeDisturbance | None] | None = None,
+    ) -> Observation:
         """Start new episodes for ``boats`` (``None``: all) from ``specs`` (one per boat).
 
-        Returns the first observation of the reset boats only (leading axis ``len(specs)``).
+        ``disturbances`` (one per boat, or None for none): per-episode speed, current and GNSS
+        faults (:mod:`usvsim.task.disturbance`). Returns the first observation of the reset
+        boats only (leading axis ``len(specs)``).
         """
         idx = np.arange(self.n_boats) if boats is None else np.asarray(boats, dtype=np.intp)
         if len(specs) != idx.size:
             raise ValueError(f"need one EpisodeSpec per reset boat ({idx.size}), got {len(specs)}")
         geo = episode_geometry(self.scenario, specs)
-        rows = self.plant.initial_state(geo.start_eta, self.scenario.speed_mps)
+        self.disturbances.set(idx, [None] * idx.size if disturbances is None else disturbances)
+        speed = self.disturbances.speed_mps[idx] if disturbances else self.scenario.speed_mps
+        rows = self.plant.initial_state(geo.start_eta, speed)
         self._s[idx, PACKED.plant], self._s[idx, PACKED.controller] = rows.x, rows.c
         self.pole_ne[idx], self.goal_ne[idx] = geo.pole_ne, geo.goal_ne
         self._noise.seed(idx, [s.noise_seed for s in specs])
@@ -359,7 +371,16 @@ class PoleAvoidanceBatch:
         normals = self._noise.for_boats(None).standard_normal(
             (self.n_boats, self._navplant.draws_needed(first, T))
         )
-        packed = self._navplant.run(self._s, psi_ref, sc.speed_mps, T, first, normals)  # (N, T, 28)
+        speed, current, gnss = self.disturbances.inputs(
+            self._n_decisions * sc.decision_period_s, sc.dt_s, T
+        )
+        if speed is None:  # the study's call, unchanged
+            packed = self._navplant.run(self._s, psi_ref, sc.speed_mps, T, first, normals)
+        else:
+            layout = self._navplant.noise_steps(first, T, normals)
+            fires = layout.factor[:, 1:5] > 0
+            normals = self.disturbances.perturb_normals(normals, layout.index[:, 1:5][fires])
+            packed = self._navplant.run(self._s, psi_ref, speed, T, first, normals, current, gnss)
         self._s = packed[:, -1].copy()
         self._plant_step += T
         self._est_pos = self._s[:, PACKED.nav_pos].copy()

@@ -56,6 +56,10 @@ __all__ = [
 
 NC = 5  # controller state size
 IDLE_THRUST_FRACTION = 0.05  # -, waterjet idle thrust as a fraction of the maximum (ASSUMED)
+# -, idle thrust at most this fraction of the drag at the speed reference (ASSUMED), so a slow
+# reference stays reachable (usv105: 5 % of the maximum is the drag at 2.2 m/s); at 3 m/s
+# 0.6 drag = 5.2 % of the maximum, above the 5 %: the idle thrust there is unchanged
+IDLE_DRAG_FRACTION = 0.6
 AutopilotKind = Literal["pid", "rover"]
 
 
@@ -307,7 +311,7 @@ def _sat(x: Any, lim: Any) -> Any:
 
 
 def _allocate(
-    act: Actuation, tau_x: Any, tau_n: Any, thrust_cap: Any, u: Any = None
+    act: Actuation, tau_x: Any, tau_n: Any, thrust_cap: Any, u: Any = None, drag: Any = None
 ) -> tuple[Any, Any]:
     """Map desired surge force and yaw moment to (actuator command, yaw moment it gives).
 
@@ -322,8 +326,13 @@ def _allocate(
         return ca.vertcat(tau_x, tau_n / act.lever_m), tau_n
     side = tau_n / act.lever_m  # T sin δ needed
     # T cos δ needed; no reverse thrust, and at least idle thrust (5 % of max, ASSUMED) so that
-    # the nozzle keeps steering authority and does not chatter when the speed loop asks for less
-    fwd = ca.fmax(tau_x, IDLE_THRUST_FRACTION * act.a1_max)
+    # the nozzle keeps steering authority and does not chatter when the speed loop asks for less;
+    # never more than IDLE_DRAG_FRACTION of the drag at the reference (``drag``, N), which would
+    # push the boat above a slow reference
+    idle = IDLE_THRUST_FRACTION * act.a1_max
+    if drag is not None:
+        idle = ca.fmin(idle, IDLE_DRAG_FRACTION * drag)
+    fwd = ca.fmax(tau_x, idle)
     nozzle = _sat(ca.atan2(side, fwd), act.a2_max)
     surge_thrust = fwd / ca.cos(nozzle)
     # T = max(fwd / cos δ, |side| / sin δ_max): exact when unsaturated, yaw first when saturated
@@ -399,7 +408,7 @@ def control_law(
         tau_n = _sat(tau_n_des, tau_n_max)
         # moments that stop a turn may use brake_factor × the cap (stopping must not be starved)
         cap = ca.if_else(tau_n * r < 0, brake_factor * thrust_cap, thrust_cap)
-        a_cmd, tau_n_given = _allocate(vessel.actuation, tau_x, tau_n, cap, u)
+        a_cmd, tau_n_given = _allocate(vessel.actuation, tau_x, tau_n, cap, u, drag)
         # conditional integration: freeze the integral while the yaw moment saturates
         unsaturated = ca.fabs(tau_n_given - tau_n_des) < 0.01 * tau_n_max
         z_next = _sat(ca.if_else(unsaturated, z_psi + dt_s * err, z_psi), z_max)

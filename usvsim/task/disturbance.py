@@ -1,0 +1,157 @@
+"""Per-episode disturbances of the batch simulator: cruise speed, current, GNSS quality.
+
+The study's task runs every boat of a batch at one speed reference, in one current (the
+plant's), with one sensor model (:class:`usvsim.nav.models.NavConfig`). An
+:class:`EpisodeDisturbance` changes these for one episode;
+:meth:`usvsim.task.batch.PoleAvoidanceBatch.reset` takes one per reset boat. A boat reset without
+one runs exactly as before (same numbers: the study's path is not touched).
+
+GNSS faults (applied to the standard normals the batch feeds the navigation filter, so the
+filter's own noise model stays the nominal one, as on a real boat whose receiver degrades):
+
+* noise scale ``k``: every GNSS position and velocity error is ``k`` times the nominal one;
+* outliers: each fix, with probability ``p``, has its error ``outlier_scale`` times larger
+  (a multipath / jump fix; the filter is not told);
+* dropout: no fix arrives during ``[start, start + duration)`` s of the episode (the filter
+  dead-reckons on gyro and compass).
+
+Outlier draws come from the episode's own stream (seeded by ``seed``), so a boat's draws do not
+depend on the batch around it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from usvsim.task.scenario import BoatNoise
+
+__all__ = ["BoatDisturbances", "EpisodeDisturbance"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class EpisodeDisturbance:
+    """What differs in one episode from the study's calm, clean setting (module docstring)."""
+
+    speed_mps: float | None = None  # m/s, surge reference; None: the scenario's (3 m/s)
+    current_speed_mps: float = 0.0  # m/s, irrotational current over ground
+    current_direction_rad: float = 0.0  # rad, direction the current flows towards (NED)
+    gnss_noise_scale: float = 1.0  # -, multiplies the GNSS position and velocity errors
+    gnss_outlier_probability: float = 0.0  # -, per fix
+    gnss_outlier_scale: float = 10.0  # -, an outlier fix's error in nominal σ multiples
+    gnss_dropout_start_s: float = math.inf  # s, episode time the outage starts
+    gnss_dropout_duration_s: float = 0.0  # s
+    seed: int = 0  # seeds the outlier draws
+
+    def __post_init__(self) -> None:
+        if self.speed_mps is not None and not (
+            math.isfinite(self.speed_mps) and self.speed_mps > 0
+        ):
+            raise ValueError(f"speed_mps must be finite and > 0, got {self.speed_mps}")
+        if not (math.isfinite(self.current_speed_mps) and self.current_speed_mps >= 0):
+            raise ValueError(
+                f"current_speed_mps must be finite and >= 0, got {self.current_speed_mps}"
+            )
+        if not math.isfinite(self.current_direction_rad):
+            raise ValueError("current_direction_rad must be finite")
+        if not (math.isfinite(self.gnss_noise_scale) and self.gnss_noise_scale >= 0):
+            raise ValueError(
+                f"gnss_noise_scale must be finite and >= 0, got {self.gnss_noise_scale}"
+            )
+        if not 0.0 <= self.gnss_outlier_probability <= 1.0:
+            raise ValueError("gnss_outlier_probability must lie in [0, 1]")
+        if not (math.isfinite(self.gnss_outlier_scale) and self.gnss_outlier_scale >= 1):
+            raise ValueError("gnss_outlier_scale must be finite and >= 1")
+        if math.isnan(self.gnss_dropout_start_s) or self.gnss_dropout_duration_s < 0:
+            raise ValueError("gnss_dropout_start_s must not be NaN; duration must be >= 0")
+
+    @property
+    def gnss_faulty(self) -> bool:
+        """True when the GNSS normals need changing (scale or outliers)."""
+        return self.gnss_noise_scale != 1.0 or self.gnss_outlier_probability > 0
+
+
+class BoatDisturbances:
+    """Per-boat disturbance state of a batch: what :meth:`PoleAvoidanceBatch.step` hands the plant.
+
+    Boats start undisturbed; :meth:`set` gives reset boats their episode's disturbance (or clears
+    it). :meth:`inputs` returns ``(speed, current, gnss_available)`` for one decision period, with
+    ``None`` wherever every boat is undisturbed, so the study's call is made unchanged.
+    """
+
+    def __init__(self, n_boats: int, speed_mps: float, current: tuple[float, float]) -> None:
+        self._default_speed = speed_mps
+        self._default_current = current
+        self.speed_mps = np.full(n_boats, speed_mps)
+        self.current = np.tile(np.asarray(current, dtype=float), (n_boats, 1))  # (N, 2)
+        self.noise_scale = np.ones(n_boats)
+        self.outlier_p = np.zeros(n_boats)
+        self.outlier_scale = np.ones(n_boats)
+        self.dropout = np.full((n_boats, 2), np.inf)  # [start, end) s
+        self.active = np.zeros(n_boats, dtype=bool)
+        self._noise = BoatNoise(n_boats)
+
+    def set(self, boats: NDArray[np.intp], items: Sequence[EpisodeDisturbance | None]) -> None:
+        """Give ``boats`` their disturbances (``None``: the study's calm, clean setting)."""
+        boats = np.asarray(boats, dtype=np.intp)
+        if len(items) != boats.size:
+            raise ValueError(f"need one disturbance (or None) per reset boat ({boats.size})")
+        calm = EpisodeDisturbance()
+        for i, d in zip(boats.tolist(), items, strict=True):
+            e = calm if d is None else d
+            self.speed_mps[i] = self._default_speed if e.speed_mps is None else e.speed_mps
+            if d is None:
+                self.current[i] = self._default_current
+            else:
+                self.current[i] = (e.current_speed_mps, e.current_direction_rad)
+            self.noise_scale[i] = e.gnss_noise_scale
+            self.outlier_p[i] = e.gnss_outlier_probability
+            self.outlier_scale[i] = e.gnss_outlier_scale
+            self.dropout[i] = (
+                e.gnss_dropout_start_s,
+                e.gnss_dropout_start_s + e.gnss_dropout_duration_s,
+            )
+            self.active[i] = d is not None
+        given = [k for k, d in enumerate(items) if d is not None]
+        if given:
+            self._noise.seed(boats[given], [items[k].seed for k in given])  # type: ignore[union-attr]
+
+    def inputs(
+        self, episode_time_s: FloatArray, dt_s: float, n_steps: int
+    ) -> tuple[FloatArray | None, FloatArray | None, NDArray[np.bool_] | None]:
+        """Speed (N,), current (N, 2) and GNSS availability (N, T) of the next period, or None.
+
+        ``episode_time_s`` (N,): each boat's episode time at the period's start.
+        """
+        if not self.active.any():
+            return None, None, None
+        t = episode_time_s[:, None] + dt_s * np.arange(1, n_steps + 1)  # (N, T) at each step
+        dropped = (t >= self.dropout[:, 0:1]) & (t < self.dropout[:, 1:2])
+        return self.speed_mps, self.current, (~dropped if dropped.any() else None)
+
+    def perturb_normals(self, normals: FloatArray, gnss_index: NDArray[np.intp]) -> FloatArray:
+        """``normals`` (N, M) with the GNSS columns ``gnss_index`` scaled (noise, outliers)."""
+        faulty = self.active & ((self.noise_scale != 1.0) | (self.outlier_p > 0))
+        if not faulty.any() or gnss_index.size == 0:
+            return normals
+        out = normals.copy()
+        scale = np.broadcast_to(self.noise_scale[:, None], (normals.shape[0], gnss_index.size))
+        drawing = np.flatnonzero(self.active & (self.outlier_p > 0))
+        if drawing.size:
+            # one uniform per GNSS error entry, from the boat's own stream: every boat with
+            # outliers draws every period, so its draws do not depend on its neighbours
+            u = self._noise.for_boats(drawing).random((drawing.size, gnss_index.size))
+            self._noise.for_boats(None)
+            jump = np.zeros(scale.shape, dtype=bool)
+            jump[drawing] = u < self.outlier_p[drawing, None]
+            scale = np.where(jump, scale * self.outlier_scale[:, None], scale)
+        out[:, gnss_index] = np.where(
+            faulty[:, None], normals[:, gnss_index] * scale, normals[:, gnss_index]
+        )
+        return out
