@@ -297,6 +297,11 @@ class PoleAvoidanceBatch:
         """Navigation estimate at the last decision: position (N, 2) m and heading (N,) rad."""
         return self._est_pos.copy(), self._est_psi.copy()
 
+    @property
+    def estimated_velocity(self) -> FloatArray:
+        """Navigation estimate of the velocity over ground (N, 2) m/s, [v_N, v_E], now."""
+        return self._s[:, PACKED.nav_vel].copy()
+
     def reset(
         self,
         boats: NDArray[np.intp] | None,
@@ -352,6 +357,7 @@ class PoleAvoidanceBatch:
             self.scenario.pole_radius_m,
             self.radar,
             noise,
+            self._s[sl, PACKED.nav_vel] if self.observation_kind == "scene" else None,
         )
         self._noise.for_boats(None)
         return obs

@@ -9,7 +9,16 @@ name            single-boat value                            space
 ``positional``  ``[r_pole, φ_pole, r_goal, φ_goal]``         ``Box((4,), float32)``, raw m and rad
 ``radar``       image (:mod:`usvsim.task.radar`)             ``Box(0, 255, (1, 50, 119), uint8)``
 ``radar+goal``  ``{"radar": image, "goal": ĝ}``              ``Dict``; ĝ the standardised goal
+``scene``       ``[r_goal, φ_goal, u, v, (r, φ, R, v_x, v_y,  ``Box((52,), float32)``, raw m, rad,
+                valid) × 8]``: the goal, the own velocity   m/s (issue 16)
+                over ground and the k = 8 nearest obstacles
 ==============  ===========================================  =====================================
+
+``scene`` (the k-nearest form): ``u, v`` the estimated velocity over ground in the body frame
+(forward, starboard); for each of the :data:`SCENE_K` obstacles nearest by edge distance
+``r − R``: centre range r, bearing φ, radius R, velocity relative to the own boat (body frame,
+m/s) and a validity flag (1 = an obstacle, 0 = an empty slot, all its entries 0). In the pole task
+the one pole fills the first slot. The study's 4-vector ``positional`` stays the default.
 
 Ranges in m; bearings in rad relative to the estimated heading, clockwise positive, in [-π, π)
 (:func:`usvsim.common.angles.ssa`). The positional observation is left raw (the study's definition);
@@ -40,15 +49,18 @@ __all__ = [
     "GOAL_STANDARDIZATION",
     "OBSERVATION_KINDS",
     "POSITIONAL_STANDARDIZATION",
+    "SCENE_FEATURES",
+    "SCENE_K",
     "ObservationKind",
     "Standardization",
     "build_observation",
     "observation_space",
     "parse_observation_kind",
     "relative_polar",
+    "scene_observation",
 ]
 
-ObservationKind = Literal["positional", "radar", "radar+goal"]
+ObservationKind = Literal["positional", "radar", "radar+goal", "scene"]
 OBSERVATION_KINDS: tuple[str, ...] = get_args(ObservationKind)
 FloatArray = NDArray[np.float64]
 
@@ -66,6 +78,9 @@ class Standardization:
 
 
 MAX_RANGE_M = 10_000.0  # m, Box bound on ranges: far beyond any area (an episode ends first)
+SCENE_K = 8  # obstacles in the scene observation
+SCENE_FEATURES = 6  # per obstacle: r, φ, R, v_x, v_y, valid
+MAX_SPEED_MPS = 50.0  # m/s, Box bound on velocities
 _BEARING_STD = math.pi / math.sqrt(3.0)  # std of U[-π, π)
 GOAL_STANDARDIZATION = Standardization(
     mean=(110.0, 0.0), std=(220.0 / math.sqrt(12.0), _BEARING_STD)
@@ -118,6 +133,14 @@ def observation_space(kind: ObservationKind, radar: RadarConfig | None = None) -
         return spaces.Box(low, high, dtype=np.float32)
     if kind == "radar":
         return image
+    if kind == "scene":
+        own_hi = [MAX_RANGE_M, np.pi, MAX_SPEED_MPS, MAX_SPEED_MPS]
+        own_lo = [0.0, -np.pi, -MAX_SPEED_MPS, -MAX_SPEED_MPS]
+        slot_hi = [MAX_RANGE_M, np.pi, MAX_RANGE_M, 2 * MAX_SPEED_MPS, 2 * MAX_SPEED_MPS, 1.0]
+        slot_lo = [0.0, -np.pi, 0.0, -2 * MAX_SPEED_MPS, -2 * MAX_SPEED_MPS, 0.0]
+        high = np.array(own_hi + slot_hi * SCENE_K, dtype=np.float32)
+        low = np.array(own_lo + slot_lo * SCENE_K, dtype=np.float32)
+        return spaces.Box(low, high, dtype=np.float32)
     goal_high = GOAL_STANDARDIZATION.apply(np.array([MAX_RANGE_M, np.pi]))
     goal_low = GOAL_STANDARDIZATION.apply(np.array([0.0, -np.pi]))
     goal = spaces.Box(goal_low, goal_high, dtype=np.float32)
@@ -133,13 +156,22 @@ def build_observation(
     pole_radius_m: float,
     radar: RadarConfig | None = None,
     noise: UniformSource | None = None,
+    velocity_ne: FloatArray | None = None,
 ) -> NDArray[np.generic] | dict[str, NDArray[np.generic]]:
     """Batched observation of N boats (leading axis N) from their estimated pose.
 
     ``pos_ne`` (N, 2) m and ``psi_rad`` (N,) rad are the navigation estimate; ``pole_ne`` and
-    ``goal_ne`` (N, 2) m. Returns an array or, for ``radar+goal``, a dict of arrays.
+    ``goal_ne`` (N, 2) m; ``velocity_ne`` (N, 2) m/s the estimated velocity over ground (used by
+    ``scene`` only; default 0). Returns an array or, for ``radar+goal``, a dict of arrays.
     """
     parse_observation_kind(kind)
+    if kind == "scene":
+        n = pos_ne.shape[0]
+        vel = np.zeros((n, 2)) if velocity_ne is None else velocity_ne
+        return scene_observation(
+            pos_ne, psi_rad, vel, goal_ne, pole_ne[:, None, :], np.full((n, 1), pole_radius_m),
+            np.zeros((n, 1, 2)), np.ones((n, 1), dtype=bool),
+        )  # fmt: skip
     if kind == "positional":
         # pole and goal in one pass: r, b (N, 2) → rows [r_pole, φ_pole, r_goal, φ_goal]
         r, b = relative_polar(pos_ne, psi_rad, np.stack([pole_ne, goal_ne], axis=1))
@@ -153,3 +185,45 @@ def build_observation(
     r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
     goal = GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], axis=-1))
     return {"radar": image, "goal": goal}
+
+
+def scene_observation(
+    pos_ne: FloatArray,
+    psi_rad: FloatArray,
+    velocity_ne: FloatArray,
+    goal_ne: FloatArray,
+    centres_ne: FloatArray,
+    radii_m: FloatArray,
+    obstacle_velocity_ne: FloatArray,
+    valid: NDArray[np.bool_],
+    k: int = SCENE_K,
+) -> NDArray[np.float32]:
+    """The ``scene`` observation (N, 4 + 6 k) float32 (module docstring).
+
+    ``pos_ne``, ``velocity_ne``, ``goal_ne`` (N, 2); ``psi_rad`` (N,); ``centres_ne`` (N, J, 2),
+    ``radii_m`` (N, J), ``obstacle_velocity_ne`` (N, J, 2) m/s over ground, ``valid`` (N, J).
+    """
+    n, j = radii_m.shape
+    out = np.zeros((n, 4 + SCENE_FEATURES * k), dtype=np.float32)
+    r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
+    c, s = np.cos(psi_rad), np.sin(psi_rad)
+
+    def body(v: FloatArray) -> tuple[FloatArray, FloatArray]:  # NED → (forward, starboard)
+        cc, ss = (c, s) if v.ndim == 2 else (c[:, None], s[:, None])
+        return cc * v[..., 0] + ss * v[..., 1], -ss * v[..., 0] + cc * v[..., 1]
+
+    out[:, 0], out[:, 1] = r_g, b_g
+    out[:, 2], out[:, 3] = body(velocity_ne)
+    if j == 0:
+        return out
+    r, b = relative_polar(pos_ne, psi_rad, centres_ne)
+    edge = np.where(valid, r - radii_m, np.inf)
+    order = np.argsort(edge, axis=1, kind="stable")[:, :k]
+    rows = np.arange(n)[:, None]
+    m = order.shape[1]
+    ok = valid[rows, order]
+    vx, vy = body(obstacle_velocity_ne[rows, order] - velocity_ne[:, None, :])
+    feats = np.stack([r[rows, order], b[rows, order], radii_m[rows, order], vx, vy, ok], axis=-1)
+    feats[~ok] = 0.0
+    out[:, 4 : 4 + SCENE_FEATURES * m] = feats.reshape(n, -1)
+    return out

@@ -48,7 +48,7 @@ def test_idle_thrust_at_cruise_is_the_fixed_fraction():
 
 def test_current_per_boat_drifts_only_that_boat():
     east = EpisodeDisturbance(current_speed_mps=0.5, current_direction_rad=math.pi / 2)
-    batch, out = _run([None, east], steps=10)  # 20 s
+    batch, _ = _run([None, east], steps=10)  # 20 s
     y = batch.state.x[:, 1]
     # same noise streams: the autopilot holds heading, not course, so the second boat drifts
     # east with the current, 0.5 m/s x 20 s = 10 m, beside the calm one
@@ -77,7 +77,7 @@ def test_boat_does_not_depend_on_its_neighbours():
 
 
 def _position_error(dist, steps=15):
-    batch, out = _run([dist], steps=steps)
+    _, out = _run([dist], steps=steps)
     true = np.array([r.trajectory[0, -1, :2] for r in out])
     est = np.array([r.est_pos_ne[0] for r in out])
     return np.hypot(*(est - true).T)

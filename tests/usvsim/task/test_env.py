@@ -214,6 +214,7 @@ def test_kinds_parse_only_known_names():
         "positional",
         "radar",
         "radar+goal",
+        "scene",
     ]
     assert [parse_action_kind(k) for k in ACTION_KINDS] == ["gaussian", "categorical"]
     with pytest.raises(ValueError, match="observation must be one of"):

@@ -1,0 +1,349 @@
+"""The ``open-water`` scenario family: many, large and moving obstacles, goals anywhere, currents,
+degraded sensors. The study's pole task is one member (:func:`from_pole_episodes`).
+
+Geometry (NED, angles clockwise from north), drawn per episode by :func:`draw_open_water`::
+
+    primary obstacle  A = (0, 0)                       the study's pole (if ``primary_obstacle``)
+    start             S = A + d (cos β, sin β)         d ~ U[start range], β ~ U[0, 2π)
+    reference line    u = (cos χ, sin χ), χ = β + π    the direction S → A
+    goal              G = S + D (cos(χ + γ), sin(χ + γ)) + L n,   n = (−sin χ, cos χ)
+                      D ~ U[goal range], γ ~ U[goal bearing range], L ~ U[goal lateral range]
+    start heading     ψ0 = χ + δ,  δ ~ U[heading offset range]
+
+Static obstacles are discs (centre, radius): a pole (1 m) up to an islet tens of metres across.
+Extra obstacles lie in a corridor along S → G or, for ``near_primary_range_m``, at that centre
+distance from A; a draw is repeated (same generator) while one lies within ``clearance_m`` of
+S or G or closer than ``min_gap_m`` to another obstacle. Discs keep the hot path exact and
+vectorised (distances, radar extents); shapely would add a dependency the per-step NumPy code
+could not use.
+
+Moving vessels are discs of radius ``vessel_radius_m`` on a constant or slowly turning course
+(constant turn rate ω): p(t) = p0 + (V/ω)(sin(χ_v + ωt) − sin χ_v, cos χ_v − cos(χ_v + ωt)).
+Each is placed so that, on the own boat's nominal run S → G at its cruise speed, the two would
+meet at time t_c with miss distance m: head-on (χ_v ≈ χ_g + π), crossing (χ_v ≈ χ_g ± 90°,
+from either side) or overtaking (χ_v ≈ χ_g, slower than the own boat). They do not react.
+
+Success rule (the study's, generalised): reach the goal (within 10 m) without ever coming closer
+than the safety distance to any obstacle, measured as for the study's pole: for an obstacle of
+radius R, the distance ``|p − c| − R + R_pole`` (R_pole = 1 m, so a pole's is its centre
+distance) must stay ≥ 10 m, i.e. 9 m of clear water from every disc's edge; the same for
+moving vessels at their position at every 0.1 s plant step. A collision is the boat's centre
+within R + half beam of a centre.
+
+Every draw of an episode comes from its own generator ``default_rng([seed, k])``, in a fixed
+order whatever the parameters, so an episode set is reproducible and a changed range moves only
+what it names.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from usvsim.common.angles import ssa
+from usvsim.task.disturbance import EpisodeDisturbance
+from usvsim.task.scenario import EpisodeSpec, Scenario, episode_geometry
+
+__all__ = [
+    "ENCOUNTERS",
+    "OpenWaterEpisode",
+    "OpenWaterScenario",
+    "RadarQuality",
+    "Vessel",
+    "draw_open_water",
+    "from_pole_episodes",
+    "vessel_motion",
+]
+
+FloatArray = NDArray[np.float64]
+ENCOUNTERS = ("head-on", "crossing", "overtaking")
+Range = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class RadarQuality:
+    """Per-episode radar degradation (all off: the study's clean image)."""
+
+    clutter_probability: float = 0.0  # -, per pixel and frame, a false return
+    speckle: float = 0.0  # -, a lit pixel's intensity times U[1 − speckle, 1]
+    missed_probability: float = 0.0  # -, per obstacle and frame, its return is missing
+    noise_amplitude: float = 0.0  # intensity units, uniform additive noise
+
+    @property
+    def clean(self) -> bool:
+        return (
+            not (self.clutter_probability or self.speckle or self.missed_probability)
+            and not self.noise_amplitude
+        )
+
+
+@dataclass(frozen=True)
+class Vessel:
+    """A moving vessel: start position (m), course (rad), speed (m/s), turn rate (rad/s)."""
+
+    x0_n: float
+    y0_e: float
+    course_rad: float
+    speed_mps: float
+    turn_rate_radps: float = 0.0
+    radius_m: float = 5.0  # m, hull disc (a 10 m boat)
+    encounter: str = "crossing"
+
+
+@dataclass(frozen=True)
+class OpenWaterEpisode:
+    """One episode of the family. The start is the study's representation (an
+    :class:`usvsim.task.scenario.EpisodeSpec` relative to ``anchor_ne``) so the batch starts the
+    boat and its noise stream exactly as in the pole task."""
+
+    anchor_ne: tuple[float, float]  # m, the point the start is given from (the primary obstacle)
+    start: EpisodeSpec  # pole_index ignored: distance, bearing, heading offset, noise seed
+    goal_ne: tuple[float, float]  # m
+    obstacles: tuple[tuple[float, float, float], ...] = ()  # (x_N m, y_E m, radius m)
+    vessels: tuple[Vessel, ...] = ()
+    disturbance: EpisodeDisturbance | None = None  # None: calm, clean GNSS, study speed
+    radar: RadarQuality = field(default_factory=RadarQuality)
+    radar_seed: int = 0
+    time_limit_s: float = 150.0  # s
+    area_radius_m: float = 250.0  # m, around anchor_ne: "left the area" beyond it (truncation)
+
+    @property
+    def start_ne(self) -> FloatArray:
+        b = self.start.start_bearing_rad
+        return np.asarray(self.anchor_ne) + self.start.start_distance_m * np.array(
+            [math.cos(b), math.sin(b)]
+        )
+
+
+@dataclass(frozen=True)
+class OpenWaterScenario:
+    """Parameters of the family; the defaults are the study's pole task (module docstring)."""
+
+    start_distance_range_m: Range = (50.0, 100.0)  # m, d; study
+    goal_distance_range_m: Range = (220.0, 220.0)  # m, D; study
+    goal_bearing_range_rad: Range = (0.0, 0.0)  # rad, γ; study: on the line
+    goal_lateral_range_m: Range = (0.0, 0.0)  # m, L; study: on the line
+    heading_offset_range_rad: Range = (0.0, 0.0)  # rad, δ; study: at the pole
+    primary_obstacle: bool = True  # the study's pole at A
+    primary_radius_range_m: Range = (1.0, 1.0)  # m; study pole 1 m (issue 3)
+    n_extra_range: tuple[int, int] = (0, 0)  # further static obstacles, uniform integer
+    extra_radius_range_m: Range = (1.0, 1.0)  # m, poles by default
+    islet_probability: float = 0.0  # -, an extra obstacle is an islet
+    islet_radius_range_m: Range = (8.0, 25.0)  # m, 16-50 m across
+    near_primary_range_m: Range | None = None  # m, extra centres at this distance from A
+    corridor_along_range: Range = (0.15, 0.85)  # -, extra centres along S → G (fraction)
+    corridor_half_width_m: float = 40.0  # m, and across it
+    clearance_m: float = 25.0  # m, no obstacle edge this close to S or G
+    min_gap_m: float = 5.0  # m, between obstacle edges
+    n_vessels_range: tuple[int, int] = (0, 0)
+    encounters: tuple[str, ...] = ENCOUNTERS
+    vessel_speed_range_mps: Range = (1.5, 4.0)  # m/s, head-on and crossing vessels
+    overtaken_speed_fraction_range: Range = (0.3, 0.6)  # -, of the own speed
+    vessel_turn_rate_range_radps: Range = (0.0, 0.0)  # rad/s, slowly changing courses
+    vessel_radius_m: float = 5.0  # m
+    meet_fraction_range: Range = (0.3, 0.7)  # -, t_c as a fraction of D / U
+    miss_distance_range_m: Range = (-8.0, 8.0)  # m, signed miss distance at t_c
+    current_speed_range_mps: Range = (0.0, 0.0)  # m/s
+    current_direction_range_rad: Range = (-math.pi, math.pi)  # rad, relative to χ_g (0: following)
+    speed_range_mps: Range = (3.0, 3.0)  # m/s, cruise speed reference; study 3
+    gnss_noise_scale_range: Range = (1.0, 1.0)
+    gnss_outlier_probability_range: Range = (0.0, 0.0)
+    gnss_dropout_probability: float = 0.0  # -, an episode has one outage
+    gnss_dropout_duration_range_s: Range = (10.0, 30.0)  # s
+    radar_clutter_range: Range = (0.0, 0.0)  # -, per pixel
+    radar_speckle_range: Range = (0.0, 0.0)
+    radar_missed_range: Range = (0.0, 0.0)
+    radar_noise_range: Range = (0.0, 0.0)  # intensity units
+    time_factor: float = 2.0  # -, time limit = max(150 s, factor × |S G| / U)
+    area_margin_m: float = 150.0  # m, area radius = |A − mid(S, G)| + |S G| / 2 + margin
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if name.endswith(
+                ("_range_m", "_range_rad", "_range_mps", "_range_s", "_range_radps")
+            ) or (name.endswith("_range") and name != "n_extra_range"):
+                if value is None:
+                    continue
+                lo, hi = value
+                if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+                    raise ValueError(f"OpenWaterScenario.{name} must be finite with lo <= hi")
+        for name in ("n_extra_range", "n_vessels_range"):
+            lo, hi = getattr(self, name)
+            if not 0 <= lo <= hi:
+                raise ValueError(f"OpenWaterScenario.{name} must satisfy 0 <= lo <= hi")
+        if any(e not in ENCOUNTERS for e in self.encounters) or not self.encounters:
+            raise ValueError(f"encounters must be a non-empty subset of {ENCOUNTERS}")
+        if self.speed_range_mps[0] <= 0 or self.start_distance_range_m[0] <= 0:
+            raise ValueError("speed_range_mps and start_distance_range_m must be > 0")
+
+
+def _u(rng: np.random.Generator, r: Range) -> float:
+    return float(rng.uniform(r[0], r[1]))
+
+
+def _place_extras(
+    rng: np.random.Generator, sc: OpenWaterScenario, s: FloatArray, g: FloatArray,
+    obstacles: list[tuple[float, float, float]], n: int,
+) -> None:  # fmt: skip
+    """Append ``n`` extra obstacles (module docstring), rejection-sampled from ``rng``."""
+    u = (g - s) / max(float(np.hypot(*(g - s))), 1e-9)
+    normal = np.array([-u[1], u[0]])
+    length = float(np.hypot(*(g - s)))
+    for _ in range(n):
+        for _attempt in range(200):
+            islet = rng.random() < sc.islet_probability
+            radius = _u(rng, sc.islet_radius_range_m if islet else sc.extra_radius_range_m)
+            if sc.near_primary_range_m is not None and obstacles:
+                ang = rng.uniform(0.0, 2.0 * math.pi)
+                c = np.asarray(obstacles[0][:2]) + _u(rng, sc.near_primary_range_m) * np.array(
+                    [math.cos(ang), math.sin(ang)]
+                )
+            else:
+                along = _u(rng, sc.corridor_along_range) * length
+                across = rng.uniform(-sc.corridor_half_width_m, sc.corridor_half_width_m)
+                c = s + along * u + across * normal
+            edge_s = np.hypot(*(c - s)) - radius
+            edge_g = np.hypot(*(c - g)) - radius
+            gaps = [np.hypot(c[0] - x, c[1] - y) - radius - r for x, y, r in obstacles]
+            if min(edge_s, edge_g) >= sc.clearance_m and min(gaps, default=np.inf) >= sc.min_gap_m:
+                obstacles.append((float(c[0]), float(c[1]), radius))
+                break
+
+
+def _vessel(
+    rng: np.random.Generator, sc: OpenWaterScenario, s: FloatArray, chi_g: float, own_mps: float,
+    length_m: float,
+) -> Vessel:  # fmt: skip
+    """One vessel meeting the own boat's nominal run (module docstring)."""
+    kind = sc.encounters[int(rng.integers(len(sc.encounters)))]
+    side = 1.0 if rng.random() < 0.5 else -1.0
+    jitter = rng.uniform(-math.radians(10.0), math.radians(10.0))
+    if kind == "head-on":
+        course, speed = chi_g + math.pi + jitter, _u(rng, sc.vessel_speed_range_mps)
+    elif kind == "crossing":
+        course = chi_g + side * (math.pi / 2 + 3.0 * jitter)  # 60°-120° across
+        speed = _u(rng, sc.vessel_speed_range_mps)
+    else:
+        course, speed = chi_g + 0.5 * jitter, own_mps * _u(rng, sc.overtaken_speed_fraction_range)
+    t_c = _u(rng, sc.meet_fraction_range) * length_m / own_mps
+    miss = _u(rng, sc.miss_distance_range_m)
+    turn = _u(rng, sc.vessel_turn_rate_range_radps)
+    u = np.array([math.cos(chi_g), math.sin(chi_g)])
+    meet = s + own_mps * t_c * u + miss * np.array([-u[1], u[0]])
+    p0 = meet - speed * t_c * np.array([math.cos(course), math.sin(course)])
+    return Vessel(
+        float(p0[0]), float(p0[1]), float(ssa(course)), speed, turn, sc.vessel_radius_m, kind
+    )
+
+
+def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpisode:
+    d = _u(rng, sc.start_distance_range_m)
+    beta = float(rng.uniform(0.0, 2.0 * math.pi))
+    delta = _u(rng, sc.heading_offset_range_rad)
+    noise_seed, radar_seed, dist_seed = (int(x) for x in rng.integers(2**63, size=3))
+    chi = beta + math.pi
+    s = d * np.array([math.cos(beta), math.sin(beta)])
+    gamma, big_d, lateral = (
+        _u(rng, sc.goal_bearing_range_rad), _u(rng, sc.goal_distance_range_m),
+        _u(rng, sc.goal_lateral_range_m),
+    )  # fmt: skip
+    g = s + big_d * np.array([math.cos(chi + gamma), math.sin(chi + gamma)])
+    g = g + lateral * np.array([-math.sin(chi), math.cos(chi)])
+    speed = _u(rng, sc.speed_range_mps)
+    primary_r = _u(rng, sc.primary_radius_range_m)
+    obstacles: list[tuple[float, float, float]] = [(0.0, 0.0, primary_r)]
+    n_extra = int(rng.integers(sc.n_extra_range[0], sc.n_extra_range[1] + 1))
+    _place_extras(rng, sc, s, g, obstacles, n_extra)
+    if not sc.primary_obstacle:
+        obstacles = obstacles[1:]
+    length = float(np.hypot(*(g - s)))
+    chi_g = math.atan2(g[1] - s[1], g[0] - s[0])
+    n_v = int(rng.integers(sc.n_vessels_range[0], sc.n_vessels_range[1] + 1))
+    vessels = tuple(_vessel(rng, sc, s, chi_g, speed, length) for _ in range(n_v))
+    current = _u(rng, sc.current_speed_range_mps)
+    current_dir = float(ssa(chi_g + _u(rng, sc.current_direction_range_rad)))
+    gnss_scale = _u(rng, sc.gnss_noise_scale_range)
+    outlier = _u(rng, sc.gnss_outlier_probability_range)
+    time_limit = max(150.0, sc.time_factor * length / speed)
+    time_limit = 2.0 * math.ceil(time_limit / 2.0 - 1e-9)
+    dropout = rng.random() < sc.gnss_dropout_probability
+    drop_start = float(rng.uniform(0.0, 0.5 * time_limit))
+    drop_len = _u(rng, sc.gnss_dropout_duration_range_s)
+    radar = RadarQuality(
+        _u(rng, sc.radar_clutter_range), _u(rng, sc.radar_speckle_range),
+        _u(rng, sc.radar_missed_range), _u(rng, sc.radar_noise_range),
+    )  # fmt: skip
+    disturbance = EpisodeDisturbance(
+        speed_mps=speed,
+        current_speed_mps=current,
+        current_direction_rad=current_dir,
+        gnss_noise_scale=gnss_scale,
+        gnss_outlier_probability=outlier,
+        gnss_dropout_start_s=drop_start if dropout else math.inf,
+        gnss_dropout_duration_s=drop_len if dropout else 0.0,
+        seed=dist_seed,
+    )
+    mid = 0.5 * (s + g)
+    area = float(np.hypot(*mid)) + 0.5 * length + sc.area_margin_m
+    return OpenWaterEpisode(
+        anchor_ne=(0.0, 0.0),
+        start=EpisodeSpec(0, d, beta % (2.0 * math.pi), delta, noise_seed),
+        goal_ne=(float(g[0]), float(g[1])),
+        obstacles=tuple(obstacles),
+        vessels=vessels,
+        disturbance=disturbance,
+        radar=radar,
+        radar_seed=radar_seed,
+        time_limit_s=time_limit,
+        area_radius_m=area,
+    )
+
+
+def draw_open_water(sc: OpenWaterScenario, seed: int, n: int) -> tuple[OpenWaterEpisode, ...]:
+    """``n`` episodes of ``sc``; episode k from ``default_rng([seed, k])`` (module docstring)."""
+    return tuple(_draw_one(np.random.default_rng([seed, k]), sc) for k in range(n))
+
+
+def from_pole_episodes(
+    specs: Sequence[EpisodeSpec], scenario: Scenario | None = None
+) -> tuple[OpenWaterEpisode, ...]:
+    """The study's pole episodes as members of the family: same start, pole, goal, noise seed,
+    time limit and area; no disturbance (the batch then runs exactly the study's numbers)."""
+    scenario = scenario or Scenario()
+    geo = episode_geometry(scenario, specs)
+    return tuple(
+        OpenWaterEpisode(
+            anchor_ne=(float(geo.pole_ne[i, 0]), float(geo.pole_ne[i, 1])),
+            start=spec,
+            goal_ne=(float(geo.goal_ne[i, 0]), float(geo.goal_ne[i, 1])),
+            obstacles=(
+                (float(geo.pole_ne[i, 0]), float(geo.pole_ne[i, 1]), scenario.pole_radius_m),
+            ),
+            time_limit_s=scenario.time_limit_s,
+            area_radius_m=scenario.area_radius_m,
+        )
+        for i, spec in enumerate(specs)
+    )
+
+
+def vessel_motion(
+    p0: FloatArray, course: FloatArray, speed: FloatArray, turn: FloatArray, t_s: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Positions and velocities of vessels at times ``t_s``.
+
+    ``p0`` (..., 2) m, ``course``, ``speed``, ``turn`` (...) and ``t_s`` broadcastable to
+    (...); returns position (..., 2) m and velocity (..., 2) m/s over ground (module docstring;
+    the straight-line limit where |ω| t < 1e-9).
+    """
+    chi = course + turn * t_s
+    small = np.abs(turn * t_s) < 1e-9
+    w = np.where(small, 1.0, turn)
+    dx = np.where(small, speed * t_s * np.cos(course), speed / w * (np.sin(chi) - np.sin(course)))
+    dy = np.where(small, speed * t_s * np.sin(course), speed / w * (np.cos(course) - np.cos(chi)))
+    pos = np.stack([p0[..., 0] + dx, p0[..., 1] + dy], axis=-1)
+    vel = np.stack([speed * np.cos(chi), speed * np.sin(chi)], axis=-1)
+    return pos, vel

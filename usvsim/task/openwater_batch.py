@@ -1,0 +1,309 @@
+"""N boats on open-water episodes (:mod:`usvsim.task.openwater`), stepped together.
+
+:class:`OpenWaterBatch` drives a :class:`usvsim.task.batch.PoleAvoidanceBatch` (the plant, the
+navigation filter, the noise streams, the per-boat disturbances: the one task step) and judges
+the scene itself, the way the waypoint courses do (:mod:`usvsim.task.waypoints`):
+
+* the inner batch starts each boat from the episode's start (its ``EpisodeSpec`` relative to the
+  episode's anchor, so a study episode starts exactly as in the pole task) with the episode's
+  :class:`usvsim.task.disturbance.EpisodeDisturbance`; its own pole/goal flags are ignored;
+* every 0.1 s plant step of the returned true trajectory is checked against every static disc
+  and every vessel (at its position at that step): collision, the pole-equivalent distance
+  ``|p − c| − R + R_pole`` (the success rule of :mod:`usvsim.task.openwater`), the goal;
+  vectorised over boats, obstacles and steps, (N, J, T) arrays, no Python loop;
+* observations come from the navigation estimate: ``positional`` reports the obstacle nearest
+  by pole-equivalent distance as the study's pole ([r_eq, φ, r_goal, φ_goal]; no obstacle: a
+  pole 1 km astern); ``radar`` / ``radar+goal`` draw every disc at its true extent
+  (:mod:`usvsim.task.scene_radar`, with the episode's radar degradation); ``scene`` is the
+  k-nearest form (:func:`usvsim.task.observations.scene_observation`).
+
+On a study episode (:func:`usvsim.task.openwater.from_pole_episodes`) with the positional
+observation, the records equal the pole task's (tested).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from usvsim.task.batch import ActionKind, PoleAvoidanceBatch, within_radius
+from usvsim.task.observations import (
+    GOAL_STANDARDIZATION,
+    ObservationKind,
+    observation_space,
+    relative_polar,
+    scene_observation,
+)
+from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
+from usvsim.task.radar import RadarConfig
+from usvsim.task.scenario import BoatNoise, Scenario
+from usvsim.task.scene_radar import RadarDegradation, render_scene
+from usvsim.vessel.plant import Plant
+
+__all__ = ["OpenWaterBatch", "OpenWaterStep"]
+
+FloatArray = NDArray[np.float64]
+NO_OBSTACLE_RANGE_M = 1000.0  # m, the positional observation's pole when nothing is around
+
+
+@dataclass(frozen=True)
+class OpenWaterStep:
+    """One decision step of N boats; arrays (N,) unless stated (true state, like BatchStep)."""
+
+    observation: Any
+    terminated: NDArray[np.bool_]  # reached_goal | collision
+    truncated: NDArray[np.bool_]  # (time_limit | out_of_area) and not terminated
+    heading_change_rad: FloatArray
+    min_distance_m: FloatArray  # pole-equivalent, over every obstacle and plant step so far
+    distance_to_goal_m: FloatArray  # at the end step
+    reached_goal: NDArray[np.bool_]
+    collision: NDArray[np.bool_]
+    out_of_area: NDArray[np.bool_]
+    time_limit: NDArray[np.bool_]
+    is_success: NDArray[np.bool_]
+    time_to_goal_s: FloatArray  # inf if not yet
+    trajectory: FloatArray  # (N, T, 13)
+    end_step: NDArray[np.intp]
+
+
+class OpenWaterBatch:
+    """N boats on open-water episodes (module docstring); no autoreset.
+
+    Parameters
+    ----------
+    n_boats : int
+    observation : "positional" | "radar" | "radar+goal" | "scene"
+    action : "gaussian" | "categorical"
+    plant : Plant, optional
+        Shared plant; default ``Plant("default")``.
+    radar : RadarConfig, optional
+        Image geometry (degradation comes from each episode).
+    """
+
+    def __init__(
+        self,
+        n_boats: int,
+        *,
+        observation: ObservationKind = "positional",
+        action: ActionKind = "gaussian",
+        plant: Plant | None = None,
+        radar: RadarConfig | None = None,
+        backend: Literal["auto", "compiled", "casadi"] = "auto",
+    ) -> None:
+        self.n_boats = n_boats
+        self.observation_kind = observation
+        self.single_observation_space = observation_space(observation, radar)
+        self.radar = radar or RadarConfig()
+        self.base = Scenario(area_radius_m=1e9)
+        self.inner = PoleAvoidanceBatch(
+            n_boats, observation="positional", action=action, scenario=self.base, plant=plant,
+            backend=backend,
+        )  # fmt: skip
+        self._radar_noise = BoatNoise(n_boats)
+        self._r_pole = self.base.pole_radius_m
+        self._half_beam = self.inner.plant.vessel.half_beam_m
+        self._set_scene(list(range(n_boats)), [])
+        self._n_dec = np.zeros(n_boats, dtype=np.int64)
+        self._min_d = np.full(n_boats, np.inf)
+        self._t_goal = np.full(n_boats, np.inf)
+
+    def _set_scene(self, boats: Sequence[int], episodes: Sequence[OpenWaterEpisode]) -> None:
+        """Pack the episodes' obstacles and vessels into padded per-boat arrays."""
+        n = self.n_boats
+        if not episodes:
+            self.centres, self.radii = np.zeros((n, 0, 2)), np.zeros((n, 0))
+            self.static_ok = np.zeros((n, 0), dtype=bool)
+            self.v_p0, self.v_course = np.zeros((n, 0, 2)), np.zeros((n, 0))
+            self.v_speed, self.v_turn, self.v_radius = (np.zeros((n, 0)) for _ in range(3))
+            self.vessel_ok = np.zeros((n, 0), dtype=bool)
+            self.goal_ne, self.area_ne = np.zeros((n, 2)), np.zeros((n, 2))
+            self.area_radius, self.time_limit = np.full(n, np.inf), np.full(n, np.inf)
+            zeros = np.zeros(n)
+            self.degradation = RadarDegradation(zeros, zeros, zeros, zeros)
+            return
+        k = max(max((len(e.obstacles) for e in episodes), default=0), self.centres.shape[1])
+        m = max(max((len(e.vessels) for e in episodes), default=0), self.v_p0.shape[1])
+        self.centres, self.radii = _pad(self.centres, k), _pad(self.radii, k)
+        self.static_ok = _pad(self.static_ok, k)
+        self.v_p0, self.v_course = _pad(self.v_p0, m), _pad(self.v_course, m)
+        self.v_speed, self.v_turn = _pad(self.v_speed, m), _pad(self.v_turn, m)
+        self.v_radius, self.vessel_ok = _pad(self.v_radius, m), _pad(self.vessel_ok, m)
+        q = self.degradation
+        cl, sp, mi, no = (a.copy() for a in (q.clutter_probability, q.speckle,
+                                             q.missed_probability, q.noise_amplitude))  # fmt: skip
+        for i, e in zip(boats, episodes, strict=True):
+            obs = np.array(e.obstacles, dtype=float).reshape(-1, 3)
+            self.static_ok[i] = False
+            self.static_ok[i, : len(obs)] = True
+            self.centres[i, : len(obs)], self.radii[i, : len(obs)] = obs[:, :2], obs[:, 2]
+            self.vessel_ok[i] = False
+            self.vessel_ok[i, : len(e.vessels)] = True
+            for j, v in enumerate(e.vessels):
+                self.v_p0[i, j] = (v.x0_n, v.y0_e)
+                self.v_course[i, j], self.v_speed[i, j] = v.course_rad, v.speed_mps
+                self.v_turn[i, j], self.v_radius[i, j] = v.turn_rate_radps, v.radius_m
+            self.goal_ne[i], self.area_ne[i] = e.goal_ne, e.anchor_ne
+            self.area_radius[i], self.time_limit[i] = e.area_radius_m, e.time_limit_s
+            cl[i], sp[i] = e.radar.clutter_probability, e.radar.speckle
+            mi[i], no[i] = e.radar.missed_probability, e.radar.noise_amplitude
+        self.degradation = RadarDegradation(cl, sp, mi, no)
+
+    def reset(self, boats: NDArray[np.intp] | None, episodes: Sequence[OpenWaterEpisode]) -> Any:
+        """Start ``episodes`` on ``boats`` (None: all); returns their first observation."""
+        idx = np.arange(self.n_boats) if boats is None else np.asarray(boats, dtype=np.intp)
+        if len(episodes) != idx.size:
+            raise ValueError(f"need one episode per reset boat ({idx.size}), got {len(episodes)}")
+        inner = self.inner
+        # the starts are EpisodeSpecs relative to per-episode anchors: the inner scenario's poles
+        poles = list(inner.scenario.poles_ne)
+        poles += [(0.0, 0.0)] * max(0, self.n_boats - len(poles))
+        for i, e in zip(idx.tolist(), episodes, strict=True):
+            poles[i] = e.anchor_ne
+        limit = max(float(self.time_limit[np.isfinite(self.time_limit)].max(initial=0.0)),
+                    max(e.time_limit_s for e in episodes))  # fmt: skip
+        inner.scenario = replace(inner.scenario, poles_ne=tuple(poles), time_limit_s=limit)
+        specs = [
+            replace(e.start, pole_index=i) for i, e in zip(idx.tolist(), episodes, strict=True)
+        ]
+        inner.reset(idx, specs, [e.disturbance for e in episodes])
+        inner.pole_ne[idx] = 1e9  # the inner single-pole flags are not used
+        self._set_scene(idx.tolist(), episodes)
+        inner.goal_ne[idx] = self.goal_ne[idx]
+        self._radar_noise.seed(idx, [e.radar_seed for e in episodes])
+        pos = inner.state.x[idx, 0:2]
+        self._n_dec[idx] = 0
+        d0, _ = self._distances(pos[:, None, :], np.zeros((idx.size, 1)), idx)
+        self._min_d[idx] = d0.min(axis=(1, 2), initial=np.inf)
+        self._t_goal[idx] = np.inf
+        return self._observe(idx)
+
+    def _discs(
+        self, t_s: FloatArray, idx: Any = slice(None)
+    ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+        """Every disc of boats ``idx`` at episode times ``t_s`` (n, T): centres (n, J, T, 2),
+        radii (n, J), velocities (n, J, T, 2), valid (n, J); statics first, then vessels."""
+        c, r, ok = self.centres[idx], self.radii[idx], self.static_ok[idx]
+        n, k, steps = c.shape[0], c.shape[1], t_s.shape[1]
+        pos, vel = vessel_motion(
+            self.v_p0[idx][:, :, None, :], self.v_course[idx][:, :, None],
+            self.v_speed[idx][:, :, None], self.v_turn[idx][:, :, None], t_s[:, None, :],
+        )  # fmt: skip
+        centres = np.concatenate([np.broadcast_to(c[:, :, None, :], (n, k, steps, 2)), pos], axis=1)
+        velocity = np.concatenate([np.zeros((n, k, steps, 2)), vel], axis=1)
+        radii = np.concatenate([r, self.v_radius[idx]], axis=1)
+        return centres, radii, velocity, np.concatenate([ok, self.vessel_ok[idx]], axis=1)
+
+    def _distances(
+        self, pos: FloatArray, t_s: FloatArray, idx: Any = slice(None)
+    ) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Pole-equivalent distance (n, J, T) and collision flags from positions (n, T, 2)."""
+        centres, radii, _, ok = self._discs(t_s, idx)
+        h = np.hypot(pos[:, None, :, 0] - centres[..., 0], pos[:, None, :, 1] - centres[..., 1])
+        d = np.where(ok[..., None], h + (self._r_pole - radii)[..., None], np.inf)
+        hit = ok[..., None] & (h < (radii + self._half_beam)[..., None])
+        return d, hit
+
+    def _observe(self, idx: NDArray[np.intp] | None = None) -> Any:
+        sl: Any = slice(None) if idx is None else idx
+        pos, psi = self.inner.estimate
+        pos, psi = pos[sl], psi[sl]
+        vel = self.inner.estimated_velocity[sl]
+        t = (self._n_dec[sl] * self.base.decision_period_s).astype(float)[:, None]
+        centres, radii, velocity, ok = self._discs(t, sl)
+        centres, velocity = centres[:, :, 0], velocity[:, :, 0]
+        goal = self.goal_ne[sl]
+        kind = self.observation_kind
+        if kind == "scene":
+            return scene_observation(pos, psi, vel, goal, centres, radii, velocity, ok)
+        if kind == "positional":
+            r, b = relative_polar(pos, psi, centres)
+            r_eq = np.where(ok, r + (self._r_pole - radii), np.inf)
+            j = np.argmin(r_eq, axis=1) if r_eq.shape[1] else np.zeros(len(pos), dtype=np.intp)
+            rows = np.arange(len(pos))
+            none = ~np.isfinite(r_eq[rows, j]) if r_eq.shape[1] else np.ones(len(pos), dtype=bool)
+            r_g, b_g = relative_polar(pos, psi, goal)
+            out = np.empty((len(pos), 4), dtype=np.float32)
+            out[:, 0] = np.where(none, NO_OBSTACLE_RANGE_M, r_eq[rows, j] if r.shape[1] else 0.0)
+            out[:, 1] = np.where(none, -math.pi, b[rows, j] if r.shape[1] else 0.0)
+            out[:, 2], out[:, 3] = r_g, b_g
+            return out
+        r, b = relative_polar(pos, psi, centres)
+        noise = self._radar_noise
+        q = self.degradation
+        degr = RadarDegradation(
+            q.clutter_probability[sl], q.speckle[sl], q.missed_probability[sl],
+            q.noise_amplitude[sl],
+        )  # fmt: skip
+        served = np.arange(self.n_boats)[sl]
+        image = render_scene(r, b, radii, ok, self.radar, degr, _Rows(noise, served))
+        if kind == "radar":
+            return image
+        r_g, b_g = relative_polar(pos, psi, goal)
+        return {"radar": image, "goal": GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], -1))}
+
+    def step(self, actions: Any) -> OpenWaterStep:
+        """One decision step of every boat (module docstring)."""
+        res = self.inner.step(actions)
+        sc = self.base
+        T = sc.steps_per_decision
+        traj = res.trajectory
+        t = (self._n_dec[:, None] * T + np.arange(1, T + 1)) * sc.dt_s  # (N, T) episode time
+        d, hit_j = self._distances(traj[:, :, 0:2], t)
+        d_min_t = d.min(axis=1, initial=np.inf)  # (N, T)
+        hit = hit_j.any(axis=1)
+        dx, dy = traj[:, :, 0] - self.goal_ne[:, 0:1], traj[:, :, 1] - self.goal_ne[:, 1:2]
+        in_goal = within_radius(dx, dy, sc.goal_radius_m)
+        collision, reached = hit.any(axis=1), in_goal.any(axis=1)
+        terminated = reached | collision
+        end = np.where(terminated, np.argmax(hit | in_goal, axis=1), T - 1)
+        upto = np.where(np.arange(T) > end[:, None], np.inf, d_min_t)
+        self._min_d = np.minimum(self._min_d, upto.min(axis=1))
+        first = (self._n_dec * T + np.argmax(in_goal, axis=1) + 1) * sc.dt_s
+        self._t_goal = np.where(reached & np.isinf(self._t_goal), first, self._t_goal)
+        self._n_dec += 1
+        rows = np.arange(self.n_boats)
+        end_pos = traj[rows, end, 0:2]
+        out_of_area = np.hypot(*(end_pos - self.area_ne).T) > self.area_radius
+        time_limit = self._n_dec * sc.decision_period_s >= self.time_limit - 1e-9
+        return OpenWaterStep(
+            observation=self._observe(),
+            terminated=terminated,
+            truncated=(time_limit | out_of_area) & ~terminated,
+            heading_change_rad=res.heading_change_rad,
+            min_distance_m=self._min_d.copy(),
+            distance_to_goal_m=np.hypot(dx[rows, end], dy[rows, end]),
+            reached_goal=reached,
+            collision=collision,
+            out_of_area=out_of_area,
+            time_limit=time_limit,
+            is_success=reached & ~collision & (self._min_d >= sc.safety_distance_m),
+            time_to_goal_s=self._t_goal.copy(),
+            trajectory=traj,
+            end_step=end + 1,
+        )
+
+
+class _Rows:
+    """The radar noise streams of the boats ``served`` (a subset when only some are observed)."""
+
+    def __init__(self, noise: BoatNoise, served: NDArray[np.intp]) -> None:
+        self._noise, self._served = noise, served
+
+    def for_boats(self, boats: NDArray[np.intp] | None) -> BoatNoise:
+        return self._noise.for_boats(self._served if boats is None else self._served[boats])
+
+    def random(self, size: tuple[int, ...]) -> FloatArray:
+        return self._noise.random(size)
+
+
+def _pad(a: NDArray[Any], width: int) -> NDArray[Any]:
+    """``a`` (N, k, ...) padded with zeros / False along axis 1 to ``width``."""
+    if a.shape[1] >= width:
+        return a
+    pad = np.zeros((a.shape[0], width - a.shape[1], *a.shape[2:]), dtype=a.dtype)
+    return np.concatenate([a, pad], axis=1)
