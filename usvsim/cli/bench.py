@@ -16,6 +16,8 @@ INTERRUPTED = 130  # exit status after Ctrl-C / SIGTERM
 def run_bench_command(args: BenchArgs) -> int:
     """The ``usvsim bench`` command (module docstring); 130 after Ctrl-C (results so far kept)."""
     check_writable_dir(args.out, "--out")  # before the evaluation, not after it
+    if args.suite == "stress":
+        return _run_stress_command(args)
     result = run_bench(args)
     files = write_results(result, Path(args.out), plots=not args.no_plots)
     if args.json:
@@ -29,6 +31,26 @@ def run_bench_command(args: BenchArgs) -> int:
         )
     if result.interrupted:
         kept = f"{len(result.rows)} sets written to {args.out}/" if result.rows else "nothing"
+        print(f"usvsim bench: interrupted; {kept}", file=sys.stderr, flush=True)
+        return INTERRUPTED
+    return 0
+
+
+def _run_stress_command(args: BenchArgs) -> int:
+    """``usvsim bench --suite stress`` (:mod:`usvsim.evaluation.stress`)."""
+    from usvsim.evaluation.stress import run_stress_args, stress_json, write_stress
+
+    result = run_stress_args(args)
+    files = write_stress(result, Path(args.out), plots=not args.no_plots)
+    if args.json:
+        print(stress_json(result, [str(f) for f in files]))
+    else:
+        print(f"usvsim bench — stress suite, {result.episodes_per_set} episodes per set")
+        print(format_table(result.rows))
+        written = ", ".join(f.name for f in files)
+        print(f"ran in {result.wall_s:.1f} s; results in {args.out}/ ({written})")
+    if result.interrupted:
+        kept = f"{len(result.rows)} rows written to {args.out}/" if result.rows else "nothing"
         print(f"usvsim bench: interrupted; {kept}", file=sys.stderr, flush=True)
         return INTERRUPTED
     return 0

@@ -18,6 +18,8 @@ path                        mean path length (m), successful episodes
 
 ``--scenario waypoints`` runs the waypoint courses of :mod:`usvsim.task.waypoints` instead (15
 validation and ``--heldout`` held-out courses; t_goal is then the time to the last waypoint).
+``--suite stress`` runs the stress suite instead (:mod:`usvsim.evaluation.stress`, its own table).
+Why this module is long: the bench's options, rows, table formats and path plots belong together.
 
 Results go to ``--out`` (default ``usvsim-results/bench/``), written as one unit
 (:func:`usvsim.common.fileio.staged_dir`: a killed or failing bench leaves the previous results
@@ -60,6 +62,7 @@ __all__ = [
     "BenchRow",
     "ScenarioKind",
     "format_table",
+    "loadable_helmsmen",
     "plot_pole_paths",
     "plot_waypoint_paths",
     "run_bench",
@@ -86,6 +89,9 @@ class BenchArgs:
     json: bool = False  # print JSON only (stdout)
     no_plots: bool = False  # skip the path plots
     no_likeness: bool = False  # skip the expert-likeness columns (validation, pole scenario)
+    suite: Literal["study", "stress"] = "study"  # stress: usvsim.evaluation.stress (named sets)
+    sets: str = ""  # --suite stress: comma-separated stress sets; empty: all
+    stress_episodes: int = field(default=100, metadata=bounds(ge=1, le=10_000))  # per stress set
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
@@ -191,7 +197,7 @@ def _episode_sets(scenario: ScenarioKind, heldout: int) -> dict[str, Sequence[An
     return {"validation": validation_courses(), "held-out": heldout_courses(n=heldout)}
 
 
-def _loadable(
+def loadable_helmsmen(
     factories: dict[str, Any], explicit: bool, warn: Any
 ) -> tuple[dict[str, Any], tuple[str, ...]]:
     """The factories whose helmsman can be built; the others skipped ("name: why") unless the
@@ -232,7 +238,9 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
 
     check_bounds(args)
     args.check()
-    factories, skipped = _loadable(select_helmsmen(args.names()), bool(args.names()), _stderr)
+    factories, skipped = loadable_helmsmen(
+        select_helmsmen(args.names()), bool(args.names()), _stderr
+    )
     if not factories:
         raise UserError("no helmsman to compare: " + "; ".join(skipped))
     sets = _episode_sets(args.scenario, args.heldout)

@@ -119,8 +119,9 @@ def evaluate_waypoints(
         near = np.argmin(np.hypot(*np.moveaxis(poles - pos[:, None], -1, 0)), axis=1)
         sim.pole_ne[:], sim.goal_ne[:] = poles[rows, near], way[rows, target]
         return build_observation(
-            observation, pos, psi, sim.pole_ne, sim.goal_ne, sc.pole_radius_m, sim.radar
-        )
+            observation, pos, psi, sim.pole_ne, sim.goal_ne, sc.pole_radius_m, sim.radar,
+            velocity_ne=sim.estimated_velocity,
+        )  # fmt: skip
 
     sim.reset(None, specs)
     helmsman.reset(n)

@@ -8,6 +8,8 @@ name                         helmsman
 ``random``                   :class:`usvsim.helm.protocol.RandomHelmsman` (sanity check)
 ``los``                      :class:`baselines.los.LOSHelmsman`, LOS to the goal
 ``los-avoid``                :class:`baselines.avoid.AvoidHelmsman`, LOS + collision cone
+``vo``                       :class:`baselines.velocity_obstacle.VOHelmsman`, LOS + velocity
+                             obstacles with COLREG (Kuwata et al. 2014), ``scene`` observation
 ``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``
 a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
 ===========================  ===================================================================
@@ -64,6 +66,12 @@ def _los_avoid() -> Helmsman:
     return AvoidHelmsman()
 
 
+def _vo() -> Helmsman:
+    from baselines.velocity_obstacle import VOHelmsman
+
+    return VOHelmsman()
+
+
 def load_checkpoint_helmsman(path: str | Path) -> Helmsman:
     """The policy of a checkpoint file as a helmsman; ``ValueError`` if it cannot be read."""
     from learning.experiments.checkpoint import CheckpointError, load_helmsman
@@ -81,7 +89,7 @@ def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFact
     in it is one entry named by its stem. A trained policy named like a baseline raises
     ``ValueError`` rather than hiding it.
     """
-    helmsmen: dict[str, HelmsmanFactory] = {"los": _los, "los-avoid": _los_avoid}
+    helmsmen: dict[str, HelmsmanFactory] = {"los": _los, "los-avoid": _los_avoid, "vo": _vo}
     folder = MODELS_DIR if models_dir is None else models_dir
     for path in sorted(folder.glob("*.pt")) if folder.is_dir() else []:
         if path.stem in helmsmen or path.stem in SANITY_HELMSMEN:

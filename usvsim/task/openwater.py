@@ -7,7 +7,7 @@ Geometry (NED, angles clockwise from north), drawn per episode by :func:`draw_op
     start             S = A + d (cos β, sin β)         d ~ U[start range], β ~ U[0, 2π)
     reference line    u = (cos χ, sin χ), χ = β + π    the direction S → A
     goal              G = S + D (cos(χ + γ), sin(χ + γ)) + L n,   n = (−sin χ, cos χ)
-                      D ~ U[goal range], γ ~ U[goal bearing range], L ~ U[goal lateral range]
+                      D ~ U[goal range], γ ~ U[goal bearing range], L = ±U[goal lateral range]
     start heading     ψ0 = χ + δ,  δ ~ U[heading offset range]
 
 Static obstacles are discs (centre, radius): a pole (1 m) up to an islet tens of metres across.
@@ -126,7 +126,7 @@ class OpenWaterScenario:
     start_distance_range_m: Range = (50.0, 100.0)  # m, d; study
     goal_distance_range_m: Range = (220.0, 220.0)  # m, D; study
     goal_bearing_range_rad: Range = (0.0, 0.0)  # rad, γ; study: on the line
-    goal_lateral_range_m: Range = (0.0, 0.0)  # m, L; study: on the line
+    goal_lateral_range_m: Range = (0.0, 0.0)  # m, |L| (either side); study: on the line
     heading_offset_range_rad: Range = (0.0, 0.0)  # rad, δ; study: at the pole
     primary_obstacle: bool = True  # the study's pole at A
     primary_radius_range_m: Range = (1.0, 1.0)  # m; study pole 1 m (issue 3)
@@ -148,7 +148,8 @@ class OpenWaterScenario:
     meet_fraction_range: Range = (0.3, 0.7)  # -, t_c as a fraction of D / U
     miss_distance_range_m: Range = (-8.0, 8.0)  # m, signed miss distance at t_c
     current_speed_range_mps: Range = (0.0, 0.0)  # m/s
-    current_direction_range_rad: Range = (-math.pi, math.pi)  # rad, relative to χ_g (0: following)
+    # rad, relative to χ_g (0: following, π: head), mirrored to either side at random
+    current_direction_range_rad: Range = (-math.pi, math.pi)
     speed_range_mps: Range = (3.0, 3.0)  # m/s, cruise speed reference; study 3
     gnss_noise_scale_range: Range = (1.0, 1.0)
     gnss_outlier_probability_range: Range = (0.0, 0.0)
@@ -245,6 +246,7 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
     beta = float(rng.uniform(0.0, 2.0 * math.pi))
     delta = _u(rng, sc.heading_offset_range_rad)
     noise_seed, radar_seed, dist_seed = (int(x) for x in rng.integers(2**63, size=3))
+    goal_side, current_side = np.where(rng.random(2) < 0.5, -1.0, 1.0)  # mirror images
     chi = beta + math.pi
     s = d * np.array([math.cos(beta), math.sin(beta)])
     gamma, big_d, lateral = (
@@ -252,7 +254,7 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
         _u(rng, sc.goal_lateral_range_m),
     )  # fmt: skip
     g = s + big_d * np.array([math.cos(chi + gamma), math.sin(chi + gamma)])
-    g = g + lateral * np.array([-math.sin(chi), math.cos(chi)])
+    g = g + goal_side * lateral * np.array([-math.sin(chi), math.cos(chi)])
     speed = _u(rng, sc.speed_range_mps)
     primary_r = _u(rng, sc.primary_radius_range_m)
     obstacles: list[tuple[float, float, float]] = [(0.0, 0.0, primary_r)]
@@ -265,7 +267,7 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
     n_v = int(rng.integers(sc.n_vessels_range[0], sc.n_vessels_range[1] + 1))
     vessels = tuple(_vessel(rng, sc, s, chi_g, speed, length) for _ in range(n_v))
     current = _u(rng, sc.current_speed_range_mps)
-    current_dir = float(ssa(chi_g + _u(rng, sc.current_direction_range_rad)))
+    current_dir = float(ssa(chi_g + current_side * _u(rng, sc.current_direction_range_rad)))
     gnss_scale = _u(rng, sc.gnss_noise_scale_range)
     outlier = _u(rng, sc.gnss_outlier_probability_range)
     time_limit = max(150.0, sc.time_factor * length / speed)

@@ -23,9 +23,11 @@ from usvsim.helm.registry import available_helmsmen, make_helmsman
 
 def test_registry_lists_the_baselines(tmp_path: Path) -> None:
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo"]
     h = helmsmen["los-avoid"]()
     assert (h.observation, h.action) == ("positional", "gaussian")  # type: ignore[attr-defined]
+    vo = helmsmen["vo"]()
+    assert (vo.observation, vo.action) == ("scene", "gaussian")  # type: ignore[attr-defined]
 
 
 def test_make_helmsman_knows_every_kind_of_name(tmp_path: Path) -> None:
@@ -55,7 +57,7 @@ def test_registry_loads_models_with_the_checkpoint_module(
     fake.CheckpointError = ValueError  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "learning.experiments.checkpoint", fake)
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "trpo-positional"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo", "trpo-positional"]
     assert helmsmen["trpo-positional"]() == "helmsman" and loaded == [
         tmp_path / "trpo-positional.pt"
     ]
@@ -71,6 +73,9 @@ def test_bench_args_follow_the_cli_conventions() -> None:
         "json",
         "no_plots",
         "no_likeness",
+        "suite",
+        "sets",
+        "stress_episodes",
     }
     assert all(comments.values())
     parser = argparse.ArgumentParser()
