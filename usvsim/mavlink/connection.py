@@ -10,7 +10,15 @@ from pathlib import Path
 
 from usvsim.common.errors import UserError
 
-__all__ = ["URL_SCHEMES", "HeartbeatTimeoutError", "LinkError", "check_url", "load_signing_key"]
+__all__ = [
+    "URL_SCHEMES",
+    "HeartbeatTimeoutError",
+    "LinkError",
+    "LinkLostError",
+    "VehicleError",
+    "check_url",
+    "load_signing_key",
+]
 
 
 class LinkError(UserError, ConnectionError):
@@ -19,6 +27,14 @@ class LinkError(UserError, ConnectionError):
 
 class HeartbeatTimeoutError(LinkError, TimeoutError):
     """No vehicle heartbeat within the deadline."""
+
+
+class LinkLostError(LinkError):
+    """An open link that went away: the TCP peer closed (EOF) or reset the connection."""
+
+
+class VehicleError(LinkError, RuntimeError):
+    """The vehicle refused what the session needs (GUIDED, arming within the deadline)."""
 
 
 URL_SCHEMES = ("tcp", "tcpin", "udp", "udpin", "udpout")

@@ -1,5 +1,9 @@
 """The one module that imports pymavlink: a narrow, typed MAVLink 2 link for both ends.
 
+Why this module is long: it is the one pymavlink adapter (the architecture allows no second),
+so the decoder of every message type the project reads and the typed sender of every one it
+writes, for both the companion side and the vehicle side, live here; each is a few lines.
+
 Both the companion-computer side (:mod:`usvsim.mavlink.bridge`) and the vehicle side
 (:mod:`usvsim.mavlink.sitl`) talk through :class:`MavlinkLink`: incoming packets are decoded into
 the small frozen dataclasses of :mod:`usvsim.mavlink.messages` (:class:`Received` wrapping
@@ -19,6 +23,11 @@ Protocol choices (ArduPilot Rover, boat frame; checked against ``Rover/GCS_Mavli
   must stream them (5-10 Hz).
 * MAVLink 2 always (the v2 parser also reads v1 packets); optional signing with a 32-byte key.
 
+Link loss: on TCP a closed or reset peer raises :class:`LinkLostError` from :meth:`MavlinkLink.poll`
+or a send, once, instead of pymavlink's "EOF on TCP socket" printed on every read (which made a
+busy loop of any wait); :meth:`MavlinkLink.reconnect` opens the same URL again (one attempt, a
+refused connection is a :class:`LinkError`), keeping the tlog and the signing key.
+
 Connection errors are :class:`usvsim.mavlink.connection.LinkError` (a
 :class:`usvsim.common.errors.UserError`) with one line naming the URL and what is allowed
 (:func:`usvsim.mavlink.connection.check_url`) or what failed (refused, unknown host, no
@@ -30,7 +39,11 @@ per packet an 8-byte big-endian wall-clock time in µs, then the raw packet, bot
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import math
+import select
+import socket
 import struct
 import time
 from collections.abc import Callable
@@ -44,6 +57,7 @@ from usvsim.mavlink import messages as msgs
 from usvsim.mavlink.connection import (
     HeartbeatTimeoutError,
     LinkError,
+    LinkLostError,
     check_url,
     load_signing_key,
 )
@@ -51,6 +65,7 @@ from usvsim.mavlink.connection import (
 __all__ = [
     "HeartbeatTimeoutError",
     "LinkError",
+    "LinkLostError",
     "MavlinkLink",
     "check_url",
     "load_signing_key",
@@ -58,6 +73,7 @@ __all__ = [
     "read_tlog",
 ]
 
+_MAV_PARAM_TYPE_REAL32 = mav2.MAV_PARAM_TYPE_REAL32
 _UNSIGNED_OK = frozenset({mav2.MAVLINK_MSG_ID_RADIO_STATUS})  # as ArduPilot accepts
 
 
@@ -88,12 +104,66 @@ def _decode(m: Any) -> msgs.Message | None:
             m.time_usec, m.fix_type, m.lat * 1e-7, m.lon * 1e-7, m.satellites_visible
         )
     if kind == "SYS_STATUS":
-        return msgs.SysStatus(m.voltage_battery / 1000.0)
+        return msgs.SysStatus(
+            m.voltage_battery / 1000.0,
+            m.onboard_control_sensors_present,
+            m.onboard_control_sensors_enabled,
+            m.onboard_control_sensors_health,
+        )
+    if kind == "EKF_STATUS_REPORT":
+        return msgs.EkfStatus(m.flags)
     if kind == "STATUSTEXT":
-        text = m.text if isinstance(m.text, str) else bytes(m.text).decode("ascii", "replace")
-        return msgs.StatusText(m.severity, text.rstrip("\x00"))
+        return msgs.StatusText(m.severity, _text(m.text))
     if kind == "COMMAND_ACK":
-        return msgs.CommandAck(m.command, m.result)
+        return msgs.CommandAck(m.command, m.result, m.target_system, m.target_component)
+    return _decode_protocol(kind, m)
+
+
+def _text(raw: Any) -> str:
+    text = raw if isinstance(raw, str) else bytes(raw).decode("ascii", "replace")
+    return text.rstrip("\x00")
+
+
+def _decode_protocol(kind: str, m: Any) -> msgs.Message | None:
+    """The parameter, mission, version, command and setpoint messages (see :func:`_decode`)."""
+    if kind == "PARAM_VALUE":
+        return msgs.ParamValue(_text(m.param_id), m.param_value, m.param_index, m.param_count)
+    if kind == "PARAM_REQUEST_LIST":
+        return msgs.ParamRequestList(m.target_system)
+    if kind == "PARAM_REQUEST_READ":
+        return msgs.ParamRequestRead(m.target_system, _text(m.param_id), m.param_index)
+    if kind == "PARAM_SET":
+        return msgs.ParamSet(m.target_system, _text(m.param_id), m.param_value)
+    mtype = getattr(m, "mission_type", 0)
+    if kind == "MISSION_COUNT":
+        return msgs.MissionCount(m.target_system, m.count, mtype)
+    if kind == "MISSION_REQUEST_LIST":
+        return msgs.MissionRequestList(m.target_system, mtype)
+    if kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
+        return msgs.MissionRequest(m.target_system, m.seq, kind.endswith("_INT"), mtype)
+    if kind in ("MISSION_ITEM_INT", "MISSION_ITEM"):
+        scale = 1e-7 if kind.endswith("_INT") else 1.0
+        return msgs.MissionItem(
+            m.target_system,
+            m.seq,
+            m.command,
+            m.x * scale,
+            m.y * scale,
+            m.z,
+            m.frame,
+            (m.param1, m.param2, m.param3, m.param4),
+            m.current,
+            m.autocontinue,
+            mtype,
+        )
+    if kind == "MISSION_ACK":
+        return msgs.MissionAck(m.target_system, m.type, mtype)
+    if kind == "MISSION_CLEAR_ALL":
+        return msgs.MissionClearAll(m.target_system, mtype)
+    if kind == "MISSION_CURRENT":
+        return msgs.MissionCurrent(m.seq)
+    if kind == "AUTOPILOT_VERSION":
+        return msgs.AutopilotVersion(m.capabilities, m.flight_sw_version)
     if kind == "COMMAND_LONG":
         p = (m.param1, m.param2, m.param3, m.param4, m.param5, m.param6, m.param7)
         return msgs.CommandLong(m.target_system, m.target_component, m.command, p)
@@ -177,35 +247,65 @@ class MavlinkLink:
         self.component_id = component_id
         self._clock = clock
         check_url(url)
+        self._signing_key = signing_key
+        if signing_key is not None and len(signing_key) != 32:
+            raise ValueError("signing key must be 32 bytes")
+        self._tlog: IO[bytes] | None = None
+        if tlog_path is not None:
+            self._tlog = open(tlog_path, "wb")
+        self.lost: str | None = None  # why the link was lost (TCP peer closed/reset), else None
+        try:
+            self._open()
+        except LinkError:
+            if self._tlog is not None:
+                self._tlog.close()
+            raise
+        self.bad_packets = 0
+        self.packets_in = 0
+        self._boot = time.monotonic()
+
+    def _open(self) -> None:
+        """Open the pymavlink connection for :attr:`url` (MAVLink 2, signing, tlog callback)."""
         try:
             self._conn = mavutil.mavlink_connection(
-                url, source_system=system_id, source_component=component_id, retries=0
+                self.url,
+                source_system=self.system_id,
+                source_component=self.component_id,
+                retries=0,
             )
         except OSError as err:
-            raise LinkError(f"cannot open MAVLink link {url}: {err.strerror or err}") from None
-        mav = mav2.MAVLink(self._conn, srcSystem=system_id, srcComponent=component_id)
+            raise LinkError(f"cannot open MAVLink link {self.url}: {err.strerror or err}") from None
+        mav = mav2.MAVLink(self._conn, srcSystem=self.system_id, srcComponent=self.component_id)
         mav.robust_parsing = True  # malformed bytes become BAD_DATA, never an exception
         # Force MAVLink 2 (pymavlink picks v1 unless an environment variable says otherwise).
         self._conn.mav = mav
         self._conn.first_byte = False
         self._conn.WIRE_PROTOCOL_VERSION = "2.0"
         self._mav = mav
-        self._tlog: IO[bytes] | None = None
-        if tlog_path is not None:
-            self._tlog = open(tlog_path, "wb")
+        if isinstance(self._conn, (mavutil.mavtcp, mavutil.mavtcpin)):
+            self._conn.write = self._tcp_write  # errors become LinkLostError, never a print
+        if self._tlog is not None:
             mav.set_send_callback(self._record_out)
-        if signing_key is not None:
-            if len(signing_key) != 32:
-                raise ValueError("signing key must be 32 bytes")
+        if self._signing_key is not None:
             self._conn.setup_signing(
-                signing_key,
+                self._signing_key,
                 sign_outgoing=True,
                 allow_unsigned_callback=self._allow_unsigned,
                 link_id=0,
             )
-        self.bad_packets = 0
-        self.packets_in = 0
-        self._boot = time.monotonic()
+        self.lost = None
+
+    def reconnect(self) -> None:
+        """Close the connection and open :attr:`url` again (one attempt; tlog kept).
+
+        Raises
+        ------
+        LinkError
+            If the peer refuses or cannot be reached.
+        """
+        with contextlib.suppress(OSError):
+            self._conn.close()
+        self._open()
 
     # --- housekeeping ----------------------------------------------------------------------
 
@@ -233,7 +333,8 @@ class MavlinkLink:
 
     def close(self) -> None:
         """Close the socket and the tlog."""
-        self._conn.close()
+        with contextlib.suppress(OSError):
+            self._conn.close()
         if self._tlog is not None:
             self._tlog.close()
             self._tlog = None
@@ -254,7 +355,11 @@ class MavlinkLink:
         dropped too.
         """
         out: list[msgs.Received] = []
-        if timeout_s > 0:
+        if self.lost is not None:
+            raise LinkLostError(f"MAVLink link {self.url} lost: {self.lost}")
+        if self._tcp_socket() is not None:
+            self._check_tcp(timeout_s)
+        elif timeout_s > 0:
             self._conn.select(timeout_s)
         for m in self._read(max_packets):
             if m.get_type() == "BAD_DATA":
@@ -266,6 +371,50 @@ class MavlinkLink:
             if typed is not None:
                 out.append(msgs.Received(m.get_srcSystem(), m.get_srcComponent(), typed))
         return out
+
+    def _tcp_socket(self) -> socket.socket | None:
+        """The connected TCP socket (``tcp:``, or ``tcpin:`` once a client is in), else None."""
+        if isinstance(self._conn, (mavutil.mavtcp, mavutil.mavtcpin)):
+            return self._conn.port  # type: ignore[no-any-return]
+        return None
+
+    def _lose(self, why: str) -> LinkLostError:
+        self.lost = why
+        if isinstance(self._conn, mavutil.mavtcpin):  # listen again for the next client
+            with contextlib.suppress(OSError):
+                self._conn.port.close()
+            self._conn.port = None
+            self._conn.fd = self._conn.listen.fileno()
+            self.lost = None
+        return LinkLostError(f"MAVLink link {self.url} lost: {why}")
+
+    def _check_tcp(self, timeout_s: float) -> None:
+        """Wait up to ``timeout_s`` for data; a readable socket with nothing to read is EOF."""
+        sock = self._tcp_socket()
+        assert sock is not None
+        try:
+            readable, _, _ = select.select([sock], [], [], max(timeout_s, 0.0))
+            if readable and sock.recv(1, socket.MSG_PEEK) == b"":
+                raise self._lose("the peer closed the connection (EOF)")
+        except (ConnectionResetError, BrokenPipeError) as err:
+            raise self._lose(f"connection reset by the peer ({err.strerror})") from None
+        except BlockingIOError:
+            return
+        except OSError as err:
+            if err.errno in (errno.EBADF, errno.ENOTCONN):
+                raise self._lose(f"socket closed ({err.strerror})") from None
+            raise
+
+    def _tcp_write(self, buf: bytes) -> None:
+        sock = self._tcp_socket()
+        if sock is None:
+            return  # tcpin: no client yet
+        try:
+            sock.sendall(buf)
+        except (ConnectionResetError, BrokenPipeError) as err:
+            raise self._lose(f"connection reset by the peer ({err.strerror})") from None
+        except BlockingIOError:
+            return  # send buffer full: drop, as a radio would
 
     def _read(self, max_packets: int) -> list[Any]:
         """Raw pymavlink messages available now.
@@ -413,6 +562,27 @@ class MavlinkLink:
         p = [*params, *([0.0] * (7 - len(params)))]
         self._mav.command_long_send(target_system, target_component, int(command), 0, *p)
 
+    def request_param(self, target_system: int, name: str, target_component: int = 1) -> None:
+        """PARAM_REQUEST_READ by name (answered by PARAM_VALUE)."""
+        self._mav.param_request_read_send(
+            target_system, target_component, name.encode("ascii")[:16], -1
+        )
+
+    def request_param_list(self, target_system: int, target_component: int = 1) -> None:
+        self._mav.param_request_list_send(target_system, target_component)
+
+    def set_param(
+        self, target_system: int, name: str, value: float, target_component: int = 1
+    ) -> None:
+        """PARAM_SET (answered by PARAM_VALUE with the value now in force)."""
+        self._mav.param_set_send(
+            target_system,
+            target_component,
+            name.encode("ascii")[:16],
+            float(value),
+            _MAV_PARAM_TYPE_REAL32,
+        )
+
     def send_raw(self, data: bytes) -> None:
         """Write raw bytes (tests: malformed input)."""
         self._conn.write(data)
@@ -482,7 +652,67 @@ class MavlinkLink:
         )
 
     def send_sys_status(self, s: msgs.SysStatus) -> None:
-        self._mav.sys_status_send(0, 0, 0, 0, round(s.voltage_v * 1000.0), -1, -1, 0, 0, 0, 0, 0, 0)
+        self._mav.sys_status_send(
+            s.present, s.enabled, s.health, 0, round(s.voltage_v * 1000.0), -1, -1, 0, 0, 0, 0, 0, 0
+        )
+
+    def send_ekf_status(self, e: msgs.EkfStatus) -> None:
+        """EKF_STATUS_REPORT with the flags and small variances (a healthy solution)."""
+        self._mav.ekf_status_report_send(int(e.flags), 0.1, 0.1, 0.1, 0.1, 0.0)
+
+    def send_autopilot_version(self, v: msgs.AutopilotVersion) -> None:
+        self._mav.autopilot_version_send(
+            v.capabilities, v.flight_sw_version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, 0
+        )
+
+    def send_param_value(self, p: msgs.ParamValue) -> None:
+        self._mav.param_value_send(
+            p.name.encode("ascii")[:16], float(p.value), _MAV_PARAM_TYPE_REAL32, p.count, p.index
+        )
+
+    def send_mission_count(self, target_system: int, count: int, mission_type: int = 0) -> None:
+        self._mav.mission_count_send(target_system, 0, count, mission_type)
+
+    def send_mission_request(
+        self, target_system: int, seq: int, mission_type: int = 0, target_component: int = 0
+    ) -> None:
+        """MISSION_REQUEST_INT for item ``seq`` (the vehicle's side of an upload)."""
+        self._mav.mission_request_int_send(target_system, target_component, seq, mission_type)
+
+    def send_mission_item(self, item: msgs.MissionItem, target_system: int, as_int: bool) -> None:
+        """MISSION_ITEM_INT (``as_int``), else the older MISSION_ITEM with float lat/lon."""
+        common = (item.frame, item.command, item.current, item.autocontinue, *item.params)
+        if as_int:
+            self._mav.mission_item_int_send(
+                target_system,
+                0,
+                item.seq,
+                *common,
+                round(item.lat_deg * 1e7),
+                round(item.lon_deg * 1e7),
+                item.alt_m,
+                item.mission_type,
+            )
+        else:
+            self._mav.mission_item_send(
+                target_system,
+                0,
+                item.seq,
+                *common,
+                item.lat_deg,
+                item.lon_deg,
+                item.alt_m,
+                item.mission_type,
+            )
+
+    def send_mission_ack(self, target_system: int, result: int, mission_type: int = 0) -> None:
+        self._mav.mission_ack_send(target_system, 0, result, mission_type)
+
+    def send_mission_current(self, seq: int) -> None:
+        self._mav.mission_current_send(seq)
+
+    def send_mission_item_reached(self, seq: int) -> None:
+        self._mav.mission_item_reached_send(seq)
 
     def send_statustext(self, severity: int, text: str) -> None:
         self._mav.statustext_send(severity, text[:50].encode("ascii", "replace"))

@@ -15,9 +15,15 @@ from dataclasses import dataclass
 
 __all__ = [
     "ATTITUDE_MASK_YAW_THRUST",
+    "EKF",
+    "EKF_NEEDED_FOR_ARMING",
     "MAV_AUTOPILOT_ARDUPILOTMEGA",
     "MAV_AUTOPILOT_INVALID",
+    "MAV_CMD_NAV_WAYPOINT",
+    "MAV_FRAME_GLOBAL_RELATIVE_ALT_INT",
     "MAV_FRAME_LOCAL_NED",
+    "MAV_MISSION_ACCEPTED",
+    "MAV_MISSION_ERROR",
     "MAV_MODE_FLAG_CUSTOM_MODE_ENABLED",
     "MAV_MODE_FLAG_GUIDED_ENABLED",
     "MAV_MODE_FLAG_SAFETY_ARMED",
@@ -25,6 +31,8 @@ __all__ = [
     "MAV_RESULT_DENIED",
     "MAV_RESULT_FAILED",
     "MAV_RESULT_UNSUPPORTED",
+    "MAV_SEVERITY_INFO",
+    "MAV_SEVERITY_WARNING",
     "MAV_STATE_ACTIVE",
     "MAV_STATE_STANDBY",
     "MAV_TYPE_GCS",
@@ -32,13 +40,26 @@ __all__ = [
     "MAV_TYPE_SURFACE_BOAT",
     "TYPE_MASK_VELOCITY_YAW",
     "Attitude",
+    "AutopilotVersion",
     "CommandAck",
     "CommandLong",
+    "EkfStatus",
     "GlobalPosition",
     "GpsRaw",
     "Heartbeat",
     "MavCommand",
     "Message",
+    "MissionAck",
+    "MissionClearAll",
+    "MissionCount",
+    "MissionCurrent",
+    "MissionItem",
+    "MissionRequest",
+    "MissionRequestList",
+    "ParamRequestList",
+    "ParamRequestRead",
+    "ParamSet",
+    "ParamValue",
     "Received",
     "RoverMode",
     "SetAttitudeTarget",
@@ -46,6 +67,7 @@ __all__ = [
     "SetPositionTarget",
     "StatusText",
     "SysStatus",
+    "SysStatusSensor",
     "VfrHud",
 ]
 
@@ -76,6 +98,44 @@ MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 MAV_MODE_FLAG_GUIDED_ENABLED = 8
 MAV_MODE_FLAG_SAFETY_ARMED = 128
 MAV_FRAME_LOCAL_NED = 1
+MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = 6
+MAV_SEVERITY_WARNING = 4
+MAV_SEVERITY_INFO = 6
+MAV_CMD_NAV_WAYPOINT = 16  # a mission item's command, not a COMMAND_LONG
+MAV_MISSION_ACCEPTED = 0
+MAV_MISSION_ERROR = 1
+MAV_MISSION_TYPE_MISSION = 0
+
+
+class SysStatusSensor(enum.IntFlag):
+    """MAV_SYS_STATUS_SENSOR bits of SYS_STATUS ``onboard_control_sensors_*`` (common.xml)."""
+
+    GYRO = 0x01
+    ACCEL = 0x02
+    MAG = 0x04
+    GPS = 0x20
+    MOTOR_OUTPUTS = 0x8000
+    GEOFENCE = 0x100000
+    AHRS = 0x200000
+    PREARM_CHECK = 0x10000000
+
+
+class EKF(enum.IntFlag):
+    """EKF_STATUS_FLAGS of EKF_STATUS_REPORT (ardupilotmega.xml)."""
+
+    ATTITUDE = 1
+    VELOCITY_HORIZ = 2
+    VELOCITY_VERT = 4
+    POS_HORIZ_REL = 8
+    POS_HORIZ_ABS = 16
+    POS_VERT_ABS = 32
+    PRED_POS_HORIZ_REL = 256
+    PRED_POS_HORIZ_ABS = 512
+
+
+# what a boat needs before it may arm in GUIDED: attitude, horizontal velocity and an absolute
+# horizontal position (Rover refuses to arm without a position estimate)
+EKF_NEEDED_FOR_ARMING = EKF.ATTITUDE | EKF.VELOCITY_HORIZ | EKF.POS_HORIZ_ABS
 
 
 class RoverMode(enum.IntEnum):
@@ -101,6 +161,8 @@ class MavCommand(enum.IntEnum):
     DO_SET_MODE = 176
     COMPONENT_ARM_DISARM = 400
     SET_MESSAGE_INTERVAL = 511
+    REQUEST_MESSAGE = 512
+    REQUEST_AUTOPILOT_CAPABILITIES = 520
     SET_MODE_MESSAGE = 11  # the SET_MODE message id: ArduPilot acks SET_MODE with it
 
 
@@ -164,7 +226,30 @@ class GpsRaw:
 
 @dataclass(frozen=True)
 class SysStatus:
+    """SYS_STATUS: battery voltage and the MAV_SYS_STATUS_SENSOR bit sets."""
+
     voltage_v: float
+    present: int = 0
+    enabled: int = 0
+    health: int = 0
+
+    @property
+    def prearm_ok(self) -> bool | None:
+        """The pre-arm bit's health; ``None`` when the vehicle does not report it."""
+        if not self.present & SysStatusSensor.PREARM_CHECK:
+            return None
+        return bool(self.health & SysStatusSensor.PREARM_CHECK)
+
+
+@dataclass(frozen=True)
+class EkfStatus:
+    """EKF_STATUS_REPORT: the estimator's solution flags (:class:`EKF`)."""
+
+    flags: int
+
+    @property
+    def ready_to_arm(self) -> bool:
+        return self.flags & EKF_NEEDED_FOR_ARMING == EKF_NEEDED_FOR_ARMING
 
 
 @dataclass(frozen=True)
@@ -177,6 +262,105 @@ class StatusText:
 class CommandAck:
     command: int
     result: int
+    target_system: int = 0
+    target_component: int = 0
+
+
+@dataclass(frozen=True)
+class AutopilotVersion:
+    """AUTOPILOT_VERSION: capability bits and the firmware version (``0xMMmmpptt``)."""
+
+    capabilities: int
+    flight_sw_version: int
+
+
+@dataclass(frozen=True)
+class ParamValue:
+    """PARAM_VALUE: one parameter (name ≤ 16 characters, value as float32)."""
+
+    name: str
+    value: float
+    index: int
+    count: int
+
+
+@dataclass(frozen=True)
+class ParamRequestList:
+    target_system: int
+
+
+@dataclass(frozen=True)
+class ParamRequestRead:
+    """PARAM_REQUEST_READ: by ``name``, or by ``index`` when it is >= 0."""
+
+    target_system: int
+    name: str
+    index: int
+
+
+@dataclass(frozen=True)
+class ParamSet:
+    target_system: int
+    name: str
+    value: float
+
+
+@dataclass(frozen=True)
+class MissionCount:
+    target_system: int
+    count: int
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionRequestList:
+    target_system: int
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionRequest:
+    """MISSION_REQUEST_INT (``is_int``) or the older MISSION_REQUEST for item ``seq``."""
+
+    target_system: int
+    seq: int
+    is_int: bool = True
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionItem:
+    """MISSION_ITEM_INT (or MISSION_ITEM): one mission item; position in deg and m."""
+
+    target_system: int
+    seq: int
+    command: int
+    lat_deg: float
+    lon_deg: float
+    alt_m: float = 0.0
+    frame: int = MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+    params: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    current: int = 0
+    autocontinue: int = 1
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionAck:
+    target_system: int
+    result: int
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionClearAll:
+    target_system: int
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionCurrent:
+    seq: int
 
 
 @dataclass(frozen=True)
@@ -242,12 +426,25 @@ Message = (
     | VfrHud
     | GpsRaw
     | SysStatus
+    | EkfStatus
     | StatusText
     | CommandAck
     | CommandLong
     | SetMode
     | SetPositionTarget
     | SetAttitudeTarget
+    | AutopilotVersion
+    | ParamValue
+    | ParamRequestList
+    | ParamRequestRead
+    | ParamSet
+    | MissionCount
+    | MissionRequestList
+    | MissionRequest
+    | MissionItem
+    | MissionAck
+    | MissionClearAll
+    | MissionCurrent
 )
 
 

@@ -77,7 +77,7 @@ def sitl_running(**kw: Any) -> Iterator[RoverSitl]:
         lat=ORIGIN.lat_deg,
         lon=ORIGIN.lon_deg,
         speed_mps=3.0,
-        **{"speedup": SPEEDUP, **kw},
+        **{"speedup": SPEEDUP, "ekf_delay_s": 0.0, **kw},
     )
     sitl = RoverSitl(args, start_eta=start, noise_seed=SPEC.noise_seed)
     with sitl.serving_in_background(60.0):

@@ -60,13 +60,28 @@ def test_message_constants_equal_pymavlinks(name: str) -> None:
 
 def test_mav_commands_equal_pymavlinks() -> None:
     ours = [int(c) for c in MavCommand]
-    assert ours == [176, 400, 511, 11]
+    assert ours == [176, 400, 511, 512, 520, 11]
     assert ours == [
         mav2.MAV_CMD_DO_SET_MODE,
         mav2.MAV_CMD_COMPONENT_ARM_DISARM,
         mav2.MAV_CMD_SET_MESSAGE_INTERVAL,
+        mav2.MAV_CMD_REQUEST_MESSAGE,
+        mav2.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES,
         mav2.MAVLINK_MSG_ID_SET_MODE,
     ]
+
+
+def test_sensor_and_ekf_bits_equal_pymavlinks() -> None:
+    from usvsim.mavlink.messages import EKF, SysStatusSensor
+
+    names = {"GYRO": "3D_GYRO", "ACCEL": "3D_ACCEL", "MAG": "3D_MAG"}
+    for bit in SysStatusSensor:
+        assert bit.name is not None
+        plain = bit.name in ("PREARM_CHECK", "GEOFENCE", "AHRS")
+        full = "MAV_SYS_STATUS_" + ("" if plain else "SENSOR_")
+        assert int(bit) == getattr(mav2, full + names.get(bit.name, bit.name))
+    for flag in EKF:
+        assert int(flag) == getattr(mav2, f"EKF_{flag.name}")
 
 
 def test_heading_setpoint_is_forward_speed_with_absolute_yaw(pair) -> None:

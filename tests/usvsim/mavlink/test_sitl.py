@@ -32,7 +32,9 @@ def running(args: SitlArgs) -> Iterator[RoverSitl]:
 
 
 def sitl_args(**kw: object) -> SitlArgs:
-    return SitlArgs(listen="udpin:127.0.0.1:0", speedup=SPEEDUP, **kw)  # type: ignore[arg-type]
+    """Loopback, fast, and (unless a test asks for it) no EKF start-up delay."""
+    kw = {"ekf_delay_s": 0.0, "speedup": SPEEDUP, **kw}
+    return SitlArgs(listen="udpin:127.0.0.1:0", **kw)  # type: ignore[arg-type]
 
 
 @pytest.fixture
@@ -79,7 +81,7 @@ def test_mode_arm_and_interval_are_acknowledged(sitl: RoverSitl, gcs: MavlinkLin
     gcs.send_set_mode_message(1, RoverMode.LOITER)
     gcs.arm(1)
     gcs.request_message_interval(1, "GLOBAL_POSITION_INT", 10.0)
-    gcs.set_mode(1, RoverMode.AUTO)  # not in the subset: denied
+    gcs.set_mode(1, RoverMode.ACRO)  # not in the subset: denied
     got = until(gcs, lambda g: len(acks(g)) >= 5)
     assert acks(got) == [(176, 0), (11, 0), (400, 0), (511, 0), (176, 2)]
     assert sitl.mode == RoverMode.LOITER and sitl.armed
@@ -142,10 +144,11 @@ def test_guided_timeout_stops_and_holds_position(sitl: RoverSitl, gcs: MavlinkLi
     t = np.array(sitl.record.times_s)
     speed = np.hypot(states[:, 3], states[:, 4])
     after = t > t_out + 1.0
-    # motors off (thrust decays with its 0.3 s lag) and the boat coasts down, never speeds up
+    # no forward thrust (the reversing bucket brakes, as Rover's ATC_BRAKE), never speeds up
+    # beyond a brake's overshoot astern, and comes to rest
     assert np.all(states[after, 6] < 0.01 * 24000.0)
-    assert np.all(np.diff(speed[after]) <= 1e-9)
-    assert speed[-1] < 0.5 * speed[np.searchsorted(t, t_out)]
+    assert np.all(np.diff(speed[after]) <= 0.01)
+    assert speed[-1] < 0.1 * speed[np.searchsorted(t, t_out)]
 
 
 def test_foreign_target_and_malformed_packets_are_ignored(
@@ -180,3 +183,82 @@ def test_signing_on_rejects_unsigned_commands(tmp_path: Path) -> None:
         finally:
             unsigned.close()
             signed.close()
+
+
+def test_arming_is_refused_with_a_reason_until_the_ekf_is_ready() -> None:
+    """As real ArduPilot: the pre-arm bit comes first (half the delay), arming only with the EKF."""
+    from usvsim.mavlink.messages import EkfStatus, SysStatus
+
+    with running(sitl_args(ekf_delay_s=8.0)) as sitl:
+        gcs = MavlinkLink(f"udpout:127.0.0.1:{sitl.link.local_port}")
+        try:
+            gcs.wait_heartbeat(5.0)
+            gcs.arm(1)
+            early = until(gcs, lambda g: len(acks(g)) >= 1)
+            t_refused = sitl.time_ms / 1000.0
+            assert acks(early) == [(400, 4)] and not sitl.armed  # MAV_RESULT_FAILED
+            texts = [r.message.text for r in early if isinstance(r.message, StatusText)]
+            assert any(t.startswith("PreArm:") for t in texts)
+            late = until(gcs, lambda g: sitl.time_ms > 8_500)
+            status = [(sitl_t, r.message) for sitl_t, r in enumerate(late)]
+            sys = [m for _, m in status if isinstance(m, SysStatus)]
+            ekf = [m for _, m in status if isinstance(m, EkfStatus)]
+            assert any(s.prearm_ok for s in sys) and any(not e.ready_to_arm for e in ekf)
+            assert ekf[-1].ready_to_arm and sys[-1].prearm_ok
+            gcs.arm(1)
+            got = until(gcs, lambda g: len(acks(g)) >= 1)
+            assert acks(got) == [(400, 0)] and sitl.armed and t_refused < 8.0
+        finally:
+            gcs.close()
+
+
+def test_ack_is_addressed_to_the_sender_and_version_is_answered(
+    sitl: RoverSitl, gcs: MavlinkLink
+) -> None:
+    from usvsim.mavlink.messages import AutopilotVersion, MavCommand
+
+    gcs._command(1, 1, MavCommand.REQUEST_MESSAGE, 148.0)  # AUTOPILOT_VERSION
+    got = until(
+        gcs,
+        lambda g: any(isinstance(r.message, AutopilotVersion) for r in g) and len(acks(g)) >= 1,
+    )
+    ack = next(r.message for r in got if isinstance(r.message, CommandAck))
+    assert (ack.command, ack.result, ack.target_system, ack.target_component) == (512, 0, 255, 190)
+    version = next(r.message for r in got if isinstance(r.message, AutopilotVersion))
+    assert version.flight_sw_version >> 16 == (4 << 8) | 7  # 4.7
+    assert version.capabilities & 4  # MISSION_INT
+
+
+def test_sys_status_reports_sensors_and_no_geofence(gcs: MavlinkLink) -> None:
+    from usvsim.mavlink.messages import SysStatus, SysStatusSensor
+
+    got = until(gcs, lambda g: any(isinstance(r.message, SysStatus) for r in g))
+    s = next(r.message for r in got if isinstance(r.message, SysStatus))
+    assert s.present & SysStatusSensor.GPS and s.present & SysStatusSensor.AHRS
+    assert s.present == s.enabled == s.health  # ekf_delay_s = 0: everything healthy
+    assert not s.present & SysStatusSensor.GEOFENCE
+    assert s.prearm_ok
+
+
+def test_rtl_brings_the_boat_home_and_holds_there() -> None:
+    args = sitl_args(heading_deg=90.0, speed_mps=3.0, speedup=100.0, wp_radius_m=5.0)
+    with running(args) as sitl:
+        gcs = MavlinkLink(f"udpout:127.0.0.1:{sitl.link.local_port}")
+        try:
+            gcs.wait_heartbeat(5.0)
+            gcs.set_mode(1, RoverMode.GUIDED)
+            gcs.arm(1)
+            until(gcs, lambda g: len(acks(g)) >= 2)
+            t_out = sitl.time_ms + 20_000
+            until(gcs, lambda g: sitl.time_ms > t_out, each=lambda: gcs.send_heading(1, 1.6, 3.0))
+            away = float(np.hypot(*sitl.state.x[0, 0:2]))
+            gcs.set_mode(1, RoverMode.RTL)
+            until(gcs, lambda g: len(acks(g)) >= 1)
+            t_end = sitl.time_ms + 120_000
+            until(gcs, lambda g: sitl.time_ms > t_end, timeout_s=10.0)
+        finally:
+            gcs.close()
+    states = np.array(sitl.record.states)
+    assert away > 50.0
+    home_dist = np.hypot(states[-300:, 0], states[-300:, 1])  # the last 30 s
+    assert home_dist.max() < 10.0  # WP_RADIUS 5 m, then it coasts to rest and holds
