@@ -144,4 +144,6 @@ def run_perf(args: PerfArgs) -> int:
     env = result.get("env", {})
     for key, value in env.get("decision_steps_per_s", {}).items():
         print(f"env {key}: {value:,} decision steps/s")
+    for key, value in result.get("open_water", {}).get("decision_steps_per_s", {}).items():
+        print(f"open-water {key}: {value:,} decision steps/s")
     return 0

@@ -18,7 +18,14 @@ from usvsim.task.observations import ObservationKind
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 from usvsim.vessel.plant import Plant
 
-__all__ = ["env_throughput", "measure_plant", "per_boat_loop_rate", "run_perf"]
+__all__ = [
+    "env_throughput",
+    "measure_plant",
+    "open_water_figures",
+    "open_water_throughput",
+    "per_boat_loop_rate",
+    "run_perf",
+]
 
 
 def _timed_rate(work: Callable[[], int], seconds: float) -> float:
@@ -92,7 +99,53 @@ def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
     }
     if env:
         result["env"] = _env_figures(seconds)
+        result["open_water"] = open_water_figures(seconds)
     return result
+
+
+def open_water_figures(seconds: float) -> dict[str, Any]:
+    """The open-water batch at N = 256: the study's one pole, and a busy scene (6 static
+    discs, 3 vessels per boat), positional and radar (issue 16)."""
+    figures: dict[str, Any] = {}
+    for obs in ("positional", "radar+goal", "scene"):
+        for label, statics, vessels in (("1 pole", 0, 0), ("6 obstacles + 3 vessels", 5, 3)):
+            if obs == "scene" and statics == 0:
+                continue
+            rate = open_water_throughput(obs, 256, statics, vessels, seconds)
+            figures[f"{obs} N=256, {label}"] = round(rate)
+    return {"decision_steps_per_s": figures}
+
+
+def open_water_throughput(
+    observation: ObservationKind, n_boats: int, n_extra: int, n_vessels: int, seconds: float = 2.0
+) -> float:
+    """Decision steps per second of :class:`usvsim.task.openwater_batch.OpenWaterBatch` with
+    the study's pole plus ``n_extra`` static discs and ``n_vessels`` vessels per boat (random
+    Gaussian actions; boats keep going after their episode ends, as the cost per step is the
+    same)."""
+    from dataclasses import replace
+
+    from usvsim.task.openwater import OpenWaterScenario, draw_open_water
+    from usvsim.task.openwater_batch import OpenWaterBatch
+
+    sc = replace(
+        OpenWaterScenario(),
+        n_extra_range=(n_extra, n_extra),
+        islet_probability=0.5,
+        n_vessels_range=(n_vessels, n_vessels),
+    )
+    sim = OpenWaterBatch(n_boats, observation=observation)
+    sim.reset(None, draw_open_water(sc, 0, n_boats))
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1.0, 1.0, (64, n_boats, 1)).astype(np.float32)
+    for k in range(3):
+        sim.step(actions[k])
+    steps = 0
+    start = time.perf_counter()
+    while (elapsed := time.perf_counter() - start) < seconds or steps == 0:
+        sim.step(actions[steps % 64])
+        steps += 1
+    return n_boats * steps / elapsed
 
 
 def _env_figures(seconds: float) -> dict[str, Any]:
