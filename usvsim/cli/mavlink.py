@@ -103,8 +103,10 @@ def _kinds(args: BridgeArgs, helmsman: object) -> BridgeArgs:
 
 
 def run_bridge(args: BridgeArgs) -> int:
-    """``usvsim bridge``: exit 0 when the goal is reached, 1 on a failsafe, 130 on Ctrl-C
-    (HOLD commanded first); 2 on a user error (module docstring)."""
+    """``usvsim bridge``: exit 0 when the goal is reached, 1 on a failsafe, 3 when the final
+    mode command (the ``--failsafe`` mode) was never acknowledged, 130 on Ctrl-C (the failsafe
+    mode commanded first); 2 on a user error, a vehicle that cannot be reached, refuses GUIDED
+    or does not arm in time (module docstring)."""
     if not args.mission:
         raise UserError("--mission FILE is required (JSON or YAML: poles and goal as lat/lon)")
     check_url(args.connect)
@@ -115,12 +117,17 @@ def run_bridge(args: BridgeArgs) -> int:
     try:
         result = bridge.run()
     except KeyboardInterrupt:
-        print("usvsim bridge: interrupted, HOLD commanded", flush=True)
+        fs = bridge.result.failsafe
+        state = "acknowledged" if fs is not None and fs.acknowledged else "NOT acknowledged"
+        print(f"usvsim bridge: interrupted, {args.failsafe.upper()} commanded ({state})")
         return 130
     med, p99 = result.latency_summary()
+    fs = result.failsafe
+    ack = "unknown" if fs is None else ("acknowledged" if fs.acknowledged else "NOT acknowledged")
     print(
-        f"usvsim bridge: {result.reason}; {result.decisions} decisions; latency median "
-        f"{1e3 * med:.2f} ms, p99 {1e3 * p99:.2f} ms; log {args.log_csv}",
+        f"usvsim bridge: {result.reason}; {args.failsafe.upper()} {ack}; {result.decisions} "
+        f"decisions; latency median {1e3 * med:.2f} ms, p99 {1e3 * p99:.2f} ms; "
+        f"log {args.log_csv}",
         flush=True,
     )
-    return 0 if result.reason == "goal reached" else 1
+    return result.exit_status

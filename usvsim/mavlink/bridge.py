@@ -15,12 +15,26 @@ GUIDED, arm only with ``--arm``; then on every telemetry tick:
    acknowledges none), and a GCS HEARTBEAT every vehicle second.
 
 Timing follows the vehicle clock (``time_boot_ms``), so a faster-than-real-time SITL gets the
-same 2 s decisions. Safety: the bridge commands HOLD and stops streaming when telemetry is older
-than ``stale_s`` (see :meth:`Bridge.telemetry_age_s`), when the helmsman raises or returns an
-invalid action (NaN, out of range), when the goal is reached, and on Ctrl-C (HOLD, then exit).
+same 2 s decisions. ``--arm`` waits for the vehicle to be ready and retries refusals with the
+vehicle's reasons (:func:`usvsim.mavlink.safety.arm_when_ready`); ``--attitude-target`` reads
+WP_SPEED from the vehicle (PARAM_REQUEST_READ) unless ``--wp-speed-mps`` is given.
+
+Safety: the bridge stops streaming and commands the ``--failsafe`` mode (LOITER by default:
+a boat in HOLD drifts; see :mod:`usvsim.mavlink.safety` for the actions against ArduPilot's
+FS_ACTION) when telemetry is older than ``stale_s`` of vehicle time *and* ``stale_wall_min_s``
+of wall clock (see :meth:`Bridge.telemetry_age_s`), when the link is lost (TCP EOF, reset), when
+the helmsman raises or returns an invalid action (NaN, out of range), at ``max_duration_s``,
+when the goal is reached, and on Ctrl-C (then exit). The command is repeated until the vehicle
+acknowledges it or ``failsafe_deadline_s`` has passed (a lost link is reconnected at most
+``reconnect_attempts`` times meanwhile); an unacknowledged failsafe is reported loudly: a line
+on stderr, an ``unacknowledged`` CSV row and exit status 3 (:attr:`BridgeResult.exit_status`).
 Every decision and failsafe goes to a CSV log; the link is recorded as a tlog.
 
 Shapes inside: one boat, arrays of shape (1, ...), as the simulator's batched builders expect.
+
+Why this module is long: one session's whole sequence (connect, the vehicle-clock loop, the
+decision, the stop) reads top to bottom here; the readiness, arming and failsafe-delivery
+machinery is already its own module (:mod:`usvsim.mavlink.safety`).
 """
 
 from __future__ import annotations
@@ -28,6 +42,7 @@ from __future__ import annotations
 import csv
 import math
 import statistics
+import sys
 import time
 from collections import deque
 from collections.abc import Callable
@@ -41,18 +56,27 @@ from usvsim.common.angles import ssa
 from usvsim.common.options import bounds
 from usvsim.helm.protocol import Helmsman
 from usvsim.helm.registry import helmsman_kinds
+from usvsim.mavlink.connection import LinkLostError, VehicleError
 from usvsim.mavlink.link import MavlinkLink, load_signing_key
 from usvsim.mavlink.messages import (
     MAV_RESULT_ACCEPTED,
     Attitude,
-    CommandAck,
     GlobalPosition,
     Heartbeat,
     MavCommand,
+    ParamValue,
     Received,
     RoverMode,
 )
 from usvsim.mavlink.mission import Mission
+from usvsim.mavlink.safety import (
+    FAILSAFE_MODES,
+    Delivery,
+    VehicleWatch,
+    arm_when_ready,
+    deliver_mode,
+    wait_ack,
+)
 from usvsim.nav.geo import ned_from_geodetic
 from usvsim.nav.telemetry import TelemetryEstimator
 from usvsim.task.batch import ActionKind, heading_change_rad
@@ -85,14 +109,21 @@ class BridgeArgs:
     helmsman: str = "straight"  # any name of usvsim.helm.registry, or a checkpoint path
     observation: ObservationKind | Literal["auto"] = "auto"  # auto: the helmsman's (positional)
     action: ActionKind | Literal["auto"] = "auto"  # auto: the helmsman's (else gaussian)
-    arm: bool = False  # arm the vehicle (otherwise it must be armed already)
+    arm: bool = False  # arm the vehicle when it is ready (otherwise it must be armed already)
+    arm_timeout_s: float = field(default=120.0, metadata=bounds(gt=0, le=3600))  # wall s
+    arm_retry_s: float = field(default=2.0, metadata=bounds(gt=0, le=60))  # wall s between tries
+    failsafe: Literal["loiter", "hold", "rtl"] = "loiter"  # mode when the bridge stops steering
+    failsafe_deadline_s: float = field(default=10.0, metadata=bounds(gt=0, le=600))  # wall s
+    failsafe_repeat_s: float = field(default=0.5, metadata=bounds(gt=0, le=10))  # re-send, s
+    reconnect_attempts: int = field(default=3, metadata=bounds(ge=0, le=20))  # after link loss
     attitude_target: bool = False  # command SET_ATTITUDE_TARGET instead of position target
-    wp_speed_mps: float = field(default=3.0, metadata=bounds(gt=0, le=30))  # WP_SPEED, m/s
+    wp_speed_mps: float = field(default=0.0, metadata=bounds(ge=0, le=30))  # 0: vehicle's WP_SPEED
     decision_period_s: float = field(default=2.0, metadata=bounds(ge=0.1, le=60))  # vehicle s
     max_heading_change_deg: float = field(default=30.0, metadata=bounds(gt=0, le=180))  # deg
     setpoint_rate_hz: float = field(default=10.0, metadata=bounds(ge=0.5, le=100))  # re-send, Hz
     telemetry_rate_hz: float = field(default=10.0, metadata=bounds(ge=0.5, le=100))  # Hz
-    stale_s: float = field(default=1.5, metadata=bounds(gt=0, le=60))  # older telemetry: HOLD, s
+    stale_s: float = field(default=1.5, metadata=bounds(gt=0, le=60))  # vehicle s: failsafe
+    stale_wall_min_s: float = field(default=0.3, metadata=bounds(gt=0, le=60))  # ... and wall s
     heartbeat_timeout_s: float = field(default=30.0, metadata=bounds(gt=0, le=3600))  # wall s
     command_timeout_s: float = field(default=3.0, metadata=bounds(gt=0, le=600))  # COMMAND_ACK, s
     max_duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # HOLD after; 0: no limit
@@ -113,7 +144,20 @@ class BridgeResult:
     latencies_s: list[float] = field(default_factory=list)  # telemetry in -> setpoint out
     telemetry_ticks: int = 0
     telemetry_wall_s: float = 0.0
-    hold_acknowledged: bool = False
+    failsafe: Delivery | None = None  # the final mode command and whether it was acknowledged
+    arm_attempts: int = 0
+    wp_speed_mps: float = math.nan  # the WP_SPEED used for --attitude-target
+
+    @property
+    def failsafe_acknowledged(self) -> bool:
+        return self.failsafe is not None and self.failsafe.acknowledged
+
+    @property
+    def exit_status(self) -> int:
+        """0 goal reached (mode acknowledged), 1 another stop, acknowledged, 3 unacknowledged."""
+        if not self.failsafe_acknowledged:
+            return 3
+        return 0 if self.reason == "goal reached" else 1
 
     def latency_summary(self) -> tuple[float, float]:
         """Median and 99th percentile of the decision latency (s)."""
@@ -124,7 +168,7 @@ class BridgeResult:
 
 
 class FailsafeError(Exception):
-    """Internal: a condition that ends the run with HOLD (the message says which)."""
+    """Internal: a condition that ends the run with the failsafe mode (the message says which)."""
 
 
 class Bridge:
@@ -169,6 +213,8 @@ class Bridge:
         self.radar = RadarConfig()
         self._rng = np.random.default_rng(0)  # radar speckle for radar observations
         self.target = args.target_system
+        self.watch = VehicleWatch(self.target)
+        self.wp_speed_mps = args.wp_speed_mps
         self.result = BridgeResult()
         self._attitude: Attitude | None = None
         self._last_rx_wall: float | None = None
@@ -205,27 +251,32 @@ class Bridge:
         """Only the target vehicle's autopilot counts; other systems are ignored."""
         return r.src_system == self.target and r.src_component == 1
 
-    def _wait_ack(self, command: int, timeout_s: float | None = None) -> bool:
-        wait = self.args.command_timeout_s if timeout_s is None else timeout_s
-        deadline = time.monotonic() + wait
-        while time.monotonic() < deadline:
-            for r in self.link.poll(0.05):
-                if (
-                    self._accept(r)
-                    and isinstance(r.message, CommandAck)
-                    and r.message.command == command
-                ):
-                    return r.message.result == MAV_RESULT_ACCEPTED
-        return False
+    def _say(self, text: str) -> None:
+        print(f"usvsim bridge: {text}", flush=True)
+        self._write("info", text)
+
+    def _read_param(self, name: str, timeout_s: float) -> float | None:
+        """A parameter's value (PARAM_REQUEST_READ → PARAM_VALUE), None if unanswered."""
+        self.link.request_param(self.target, name)
+        deadline = time.monotonic() + timeout_s
+        while (left := deadline - time.monotonic()) > 0:
+            for r in self.link.poll(min(left, 0.05)):
+                self.watch.update(r)
+                if self._accept(r) and isinstance(r.message, ParamValue):
+                    if r.message.name == name:
+                        return float(r.message.value)
+        return None
 
     def connect(self) -> None:
-        """Heartbeat, type check, telemetry rates, GUIDED, arming.
+        """Heartbeat, type check, telemetry rates, WP_SPEED, GUIDED, arming when ready.
 
         Raises
         ------
-        RuntimeError
-            If the vehicle is not a boat/rover or refuses GUIDED or arming.
-        TimeoutError
+        VehicleError
+            (a :class:`RuntimeError` and a one-line user error) If the vehicle is not a
+            boat/rover, refuses GUIDED, or does not arm within ``arm_timeout_s`` (its mode is
+            then set back to what it was).
+        HeartbeatTimeoutError
             If no heartbeat arrives within ``heartbeat_timeout_s``.
         """
         want = self.args.target_system
@@ -243,22 +294,53 @@ class Bridge:
         hb = first.message
         assert isinstance(hb, Heartbeat)
         if not hb.is_boat_or_rover:
-            raise RuntimeError(
+            raise VehicleError(
                 f"vehicle {first.src_system} is MAV_TYPE {hb.type}, not a surface "
                 "boat (11) or ground rover (10)"
             )
         self.target = first.src_system
+        self.watch = VehicleWatch(self.target)
         self._write("info", f"vehicle {self.target} type {hb.type} mode {hb.custom_mode}")
-        for name in ("GLOBAL_POSITION_INT", "ATTITUDE"):
-            self.link.request_message_interval(self.target, name, self.args.telemetry_rate_hz)
-            self._wait_ack(MavCommand.SET_MESSAGE_INTERVAL)
+        timeout = self.args.command_timeout_s
+        streams = (
+            ("GLOBAL_POSITION_INT", self.args.telemetry_rate_hz),
+            ("ATTITUDE", self.args.telemetry_rate_hz),
+            ("SYS_STATUS", 1.0),
+            ("EKF_STATUS_REPORT", 1.0),
+        )
+        for name, rate in streams:  # a vehicle that refuses one still works; readiness knows
+            self.link.request_message_interval(self.target, name, rate)
+            ack = wait_ack(self.link, self.watch, MavCommand.SET_MESSAGE_INTERVAL, timeout)
+            if name == "EKF_STATUS_REPORT":
+                self.watch.ekf_expected = ack is not None and ack.result == MAV_RESULT_ACCEPTED
+        if self.args.attitude_target and self.wp_speed_mps <= 0:
+            value = self._read_param("WP_SPEED", timeout)
+            if value is None or not value > 0:
+                raise VehicleError(
+                    f"vehicle {self.target} did not report WP_SPEED within {timeout:g} s "
+                    "(--attitude-target scales thrust by it); give --wp-speed-mps"
+                )
+            self.wp_speed_mps = value
+            self._say(f"WP_SPEED {value:g} m/s (read from the vehicle)")
+        self.result.wp_speed_mps = self.wp_speed_mps
         self.link.set_mode(self.target, RoverMode.GUIDED)
-        if not self._wait_ack(MavCommand.DO_SET_MODE):
-            raise RuntimeError("vehicle refused GUIDED mode")
+        ack = wait_ack(self.link, self.watch, MavCommand.DO_SET_MODE, timeout)
+        if ack is None or ack.result != MAV_RESULT_ACCEPTED:
+            raise VehicleError(f"vehicle {self.target} refused GUIDED mode")
         if self.args.arm:
-            self.link.arm(self.target)
-            if not self._wait_ack(MavCommand.COMPONENT_ARM_DISARM):
-                raise RuntimeError("vehicle refused to arm")
+            try:
+                self.result.arm_attempts = arm_when_ready(
+                    self.link,
+                    self.watch,
+                    self.args.arm_timeout_s,
+                    self.args.arm_retry_s,
+                    timeout,
+                    self._say,
+                )
+            except VehicleError:
+                self.link.set_mode(self.target, RoverMode(hb.custom_mode))  # as it was
+                wait_ack(self.link, self.watch, MavCommand.DO_SET_MODE, timeout)
+                raise
         self._write("info", "GUIDED" + (", armed" if self.args.arm else ""))
 
     # --- the loop --------------------------------------------------------------------------
@@ -273,6 +355,19 @@ class Bridge:
         if self._last_rx_wall is None:
             return 0.0
         return (now_wall - self._last_rx_wall) * max(self.clock_rate, 1.0)
+
+    def telemetry_stale(self, now_wall: float) -> bool:
+        """Older than ``stale_s`` of vehicle time and ``stale_wall_min_s`` of wall clock.
+
+        The wall-clock floor keeps a fast SITL (30×: 1.5 vehicle s = 50 ms) from calling a
+        thread-scheduling hiccup a telemetry loss.
+        """
+        if self._last_rx_wall is None:
+            return False
+        wall_age = now_wall - self._last_rx_wall
+        return self.telemetry_age_s(now_wall) > self.args.stale_s and (
+            wall_age > self.args.stale_wall_min_s
+        )
 
     def _on_telemetry(self, r: Received, rx_wall: float) -> None:
         msg = r.message
@@ -371,43 +466,71 @@ class Bridge:
             return
         psi_ref, speed = self._setpoint
         if self.args.attitude_target:
-            thrust = min(1.0, speed / self.args.wp_speed_mps)
+            thrust = min(1.0, speed / self.wp_speed_mps)  # Rover: speed = thrust · WP_SPEED
             self.link.send_attitude_target(self.target, psi_ref, thrust)
         else:
             self.link.send_heading(self.target, psi_ref, speed)
 
-    def hold(self, reason: str) -> None:
-        """Command HOLD (re-sent up to 3 times until acknowledged) and stop streaming."""
+    def stop(self, reason: str) -> None:
+        """Stop streaming and command the failsafe mode until acknowledged (module docstring)."""
         self._setpoint = None
-        for _ in range(3):
-            self.link.set_mode(self.target, RoverMode.HOLD)
-            if self._wait_ack(MavCommand.DO_SET_MODE, timeout_s=0.5):
-                self.result.hold_acknowledged = True
-                break
+        mode = FAILSAFE_MODES[self.args.failsafe]
         self.result.reason = reason
         self._write("done" if reason == "goal reached" else "failsafe", reason)
+        if reason != "goal reached":
+            self._say(f"failsafe: {reason}; commanding {mode.name}")
+        delivery = deliver_mode(
+            self.link,
+            self.watch,
+            mode,
+            self.args.failsafe_deadline_s,
+            self.args.failsafe_repeat_s,
+            self.args.reconnect_attempts,
+            self._say,
+        )
+        self.result.failsafe = delivery
+        detail = (
+            f"{mode.name} {delivery.how} after {delivery.elapsed_s:.2f} s, "
+            f"{delivery.commands} command(s)"
+        )
+        if delivery.acknowledged:
+            self._write("ack", detail)
+            return
+        self._write("unacknowledged", detail)
+        print(
+            f"usvsim bridge: FAILSAFE NOT ACKNOWLEDGED: {mode.name} commanded "
+            f"{delivery.commands} time(s) over {delivery.elapsed_s:.1f} s, {delivery.how}; "
+            "the vehicle may still follow its last setpoint (Rover drops a GUIDED target "
+            "after ~3 s)",
+            file=sys.stderr,
+            flush=True,
+        )
 
     def loop(self, max_wall_s: float = math.inf) -> BridgeResult:
-        """Run until a failsafe, the goal, Ctrl-C, or ``max_wall_s``; always ends in HOLD."""
+        """Run until a failsafe, the goal, Ctrl-C, or ``max_wall_s``; always ends in
+        :meth:`stop` (the failsafe mode commanded until acknowledged or its deadline)."""
         start = self._clock()
         try:
             while True:
                 now = self._clock()
                 if now - start > max_wall_s:
                     raise FailsafeError("wall-clock limit")
-                if self.telemetry_age_s(now) > self.args.stale_s:
+                if self.telemetry_stale(now):
                     raise FailsafeError(
                         f"stale telemetry ({self.telemetry_age_s(now):.2f} s vehicle clock)"
                     )
                 if self._last_rx_wall is None and now - start > self.args.heartbeat_timeout_s:
                     raise FailsafeError("no telemetry")
                 for r in self.link.poll(0.01):
+                    self.watch.update(r)
                     if self._accept(r):
                         self._on_telemetry(r, self._clock())
-        except FailsafeError as stop:
-            self.hold(str(stop))
+        except FailsafeError as failure:
+            self.stop(str(failure))
+        except LinkLostError as err:
+            self.stop(f"link lost ({err})")
         except KeyboardInterrupt:
-            self.hold("interrupted (Ctrl-C)")
+            self.stop("interrupted (Ctrl-C)")
             raise
         finally:
             self.result.telemetry_wall_s = self._clock() - start

@@ -85,14 +85,14 @@ def sitl_running(**kw: Any) -> Iterator[RoverSitl]:
 
 
 def bridge_args(sitl: RoverSitl, tmp_path: Path, **kw: Any) -> BridgeArgs:
-    return BridgeArgs(
-        connect=f"udpout:127.0.0.1:{sitl.link.local_port}",
-        arm=True,
-        log_csv=str(tmp_path / "decisions.csv"),
-        tlog=str(tmp_path / "link.tlog"),
-        heartbeat_timeout_s=5.0,
-        **kw,
-    )
+    defaults: dict[str, Any] = {
+        "connect": f"udpout:127.0.0.1:{sitl.link.local_port}",
+        "arm": True,
+        "log_csv": str(tmp_path / "decisions.csv"),
+        "tlog": str(tmp_path / "link.tlog"),
+        "heartbeat_timeout_s": 5.0,
+    }
+    return BridgeArgs(**{**defaults, **kw})
 
 
 def in_process_path(helmsman: AvoidingHelmsman) -> np.ndarray:
@@ -120,7 +120,7 @@ def test_end_to_end_path_matches_in_process_simulation(tmp_path: Path) -> None:
         bridge = Bridge(bridge_args(sitl, tmp_path), mission, AvoidingHelmsman())
         result = bridge.run(max_wall_s=30.0)
     assert result.reason == "goal reached"
-    assert modes_after(sitl, RoverMode.HOLD)  # HOLD commanded at the goal
+    assert modes_after(sitl, RoverMode.LOITER)  # the failsafe mode (default LOITER) at the goal
     reference = in_process_path(AvoidingHelmsman())
     states = np.array(sitl.record.states)
     steps = np.array(sitl.record.plant_steps)
@@ -141,7 +141,8 @@ def test_end_to_end_path_matches_in_process_simulation(tmp_path: Path) -> None:
     assert p99 < 0.05 and rate > 0.8 * SPEEDUP * 10.0
     rows = list(csv.DictReader((tmp_path / "decisions.csv").open()))
     assert sum(r["event"] == "decision" for r in rows) == result.decisions
-    assert rows[-1]["event"] == "done" and rows[-1]["detail"] == "goal reached"
+    assert rows[-2]["event"] == "done" and rows[-2]["detail"] == "goal reached"
+    assert rows[-1]["event"] == "ack" and rows[-1]["detail"].startswith("LOITER ACK after")
     assert (tmp_path / "link.tlog").stat().st_size > 10_000
 
 
@@ -165,9 +166,9 @@ def test_telemetry_loss_commands_hold_within_two_vehicle_seconds(tmp_path: Path)
     mission, _ = episode_mission()
     with sitl_running(mute_telemetry_after_s=6.0, speedup=5.0) as sitl:
         result = Bridge(bridge_args(sitl, tmp_path), mission, AvoidingHelmsman()).run(20.0)
-    assert result.reason.startswith("stale telemetry") and result.hold_acknowledged
-    t_hold = modes_after(sitl, RoverMode.HOLD)[0]
-    # vehicle clock: stale limit 1.5 s (less the clock-rate estimate's error), HOLD within 2 s
+    assert result.reason.startswith("stale telemetry") and result.failsafe_acknowledged
+    t_hold = modes_after(sitl, RoverMode.LOITER)[0]
+    # vehicle clock: stale limit 1.5 s (less the clock-rate estimate's error), LOITER in 2 s
     assert 1.0 <= t_hold - 6.0 <= 2.0
 
 
@@ -179,7 +180,7 @@ def test_helmsman_failure_commands_hold(tmp_path: Path, failure: str, reason: st
     with sitl_running() as sitl:
         result = Bridge(bridge_args(sitl, tmp_path), mission, FailingHelmsman(failure)).run(20.0)
     assert result.reason.startswith(reason)
-    assert result.hold_acknowledged and sitl.mode == RoverMode.HOLD
+    assert result.failsafe_acknowledged and sitl.mode == RoverMode.LOITER
     assert result.decisions == 2
 
 
@@ -188,7 +189,7 @@ def test_ctrl_c_commands_hold_then_exits(tmp_path: Path) -> None:
     with sitl_running() as sitl:
         with pytest.raises(KeyboardInterrupt):
             Bridge(bridge_args(sitl, tmp_path), mission, FailingHelmsman("interrupt")).run(20.0)
-        assert sitl.mode == RoverMode.HOLD
+        assert sitl.mode == RoverMode.LOITER
 
 
 def test_foreign_systems_and_garbage_are_ignored(tmp_path: Path) -> None:
@@ -238,7 +239,7 @@ def test_signed_endpoint_refuses_an_unsigned_bridge(tmp_path: Path) -> None:
     with sitl_running(signing_key=str(key)) as sitl:
         args = bridge_args(sitl, tmp_path, signing_key=str(key), max_duration_s=4.0)
         result = Bridge(args, mission, AvoidingHelmsman()).run(max_wall_s=10.0)
-    assert result.reason == "max duration" and sitl.mode == RoverMode.HOLD
+    assert result.reason == "max duration" and sitl.mode == RoverMode.LOITER
 
 
 def test_estimator_tracks_a_straight_run() -> None:
