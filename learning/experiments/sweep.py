@@ -287,6 +287,7 @@ def _init_ray(spec: SweepSpec, where: SweepRun) -> None:
     if where.max_concurrent:
         cpus = min(cpus, where.max_concurrent * spec.threads) or spec.threads
     ray.init(
+        address="local",  # a Ray of its own, even where another runs or a stale one is recorded
         num_cpus=max(cpus, spec.threads),
         include_dashboard=False,
         log_to_driver=False,

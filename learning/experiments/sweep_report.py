@@ -8,7 +8,7 @@ Per arm (a setup with one set of hyperparameter overrides; its trials differ onl
   with 25 % cut at each end, Agarwal et al. §4.3) of the held-out success rate of each seed's
   ``best.pt``, with a 95 % stratified-bootstrap percentile interval (rliable, 10 000 resamples);
 * performance profiles: the fraction of runs with held-out success above τ (Agarwal et al.
-  §4.2, ``performance_profile.png``);
+  §4.2, ``performance_profile.png``), with 95 % bootstrap intervals (2 000 resamples, seeded);
 * the probability of improvement P(X > Y) between every two arms (the Mann–Whitney statistic,
   Agarwal et al. §4.4) with its bootstrap interval;
 * sample-efficiency curves: validation success vs env steps and vs wall-clock, the mean over
@@ -45,10 +45,12 @@ from usvsim.common.fileio import atomic_savefig, atomic_write_text, json_safe
 
 __all__ = [
     "TrialRecord",
+    "bootstrap_intervals",
     "choose_shipped",
     "iqm",
     "load_trials",
     "probability_of_improvement",
+    "score_distribution",
     "write_report",
 ]
 
@@ -57,6 +59,7 @@ __all__ = [
 BOOTSTRAP_REPS = 10_000  # for the IQM and P(X > Y) intervals
 CURVE_REPS = 2_000  # per point of the sample-efficiency curves
 CURVE_POINTS = 60
+PROFILE_REPS = 2_000  # performance-profile intervals (rliable's default)
 
 
 @dataclass(frozen=True)
@@ -120,6 +123,14 @@ def probability_of_improvement(x: np.ndarray, y: np.ndarray) -> float:
     return float((np.sum(diff > 0) + 0.5 * np.sum(diff == 0)) / diff.size)
 
 
+def score_distribution(scores: np.ndarray, taus: np.ndarray) -> np.ndarray:
+    """The performance profile: the fraction of runs with a score above each τ (Agarwal et al.
+    2021 §4.2); rliable's ``score_distributions`` in one array operation instead of one call
+    per τ (the bootstrap calls it once per resample)."""
+    x = np.asarray(scores, dtype=float).reshape(-1, 1)
+    return np.mean(x > np.asarray(taus, dtype=float)[None, :], axis=0)
+
+
 def choose_shipped(trials: Sequence[TrialRecord], rule: str) -> TrialRecord | None:
     """The trial that ships under ``rule``, using validation only.
 
@@ -138,17 +149,27 @@ def choose_shipped(trials: Sequence[TrialRecord], rule: str) -> TrialRecord | No
     return ranked[(len(ranked) - 1) // 2]
 
 
-def _bootstrap(
+def bootstrap_intervals(
     score_dict: dict[str, Any], func: Any, reps: int = BOOTSTRAP_REPS
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """rliable's stratified-bootstrap point estimates and 95 % percentile intervals (seeded)."""
+    """rliable's stratified-bootstrap point estimates and 95 % percentile intervals, seeded.
+
+    rliable's ``StratifiedBootstrap.update_indices`` draws from NumPy's *global* generator (its
+    ``random_state`` only reaches arch), so the global state is seeded here and put back after:
+    the same sweep gives the same intervals every time.
+    """
     from rliable import library as rly
 
-    with warnings.catch_warnings():  # arch 7 deprecates the RandomState rliable passes
-        warnings.simplefilter("ignore", FutureWarning)
-        return rly.get_interval_estimates(
-            score_dict, func, reps=reps, random_state=np.random.RandomState(0)
-        )
+    saved = np.random.get_state()  # noqa: NPY002 (rliable draws from the global generator)
+    np.random.seed(0)  # noqa: NPY002
+    try:
+        with warnings.catch_warnings():  # arch 7 deprecates the RandomState rliable passes
+            warnings.simplefilter("ignore", FutureWarning)
+            return rly.get_interval_estimates(
+                score_dict, func, reps=reps, random_state=np.random.RandomState(0)
+            )
+    finally:
+        np.random.set_state(saved)  # noqa: NPY002
 
 
 def _study(setup: str) -> dict[str, Any]:
@@ -185,7 +206,9 @@ def _arm_rows(
         for a, ts in arms.items()
     }
     scores = {a: s for a, s in scores.items() if len(s)}
-    points, cis = _bootstrap(scores, lambda x: np.array([iqm(x[:, 0])])) if scores else ({}, {})
+    points, cis = (
+        bootstrap_intervals(scores, lambda x: np.array([iqm(x[:, 0])])) if scores else ({}, {})
+    )
     rows = []
     shipped_models: dict[str, float] = {}  # held-out success of usvsim's model, per setup
     for arm, ts in arms.items():
@@ -263,7 +286,7 @@ def _improvement(trials: Sequence[TrialRecord]) -> list[dict[str, Any]]:
     }
     if not pairs:
         return []
-    points, cis = _bootstrap(pairs, probability_of_improvement)
+    points, cis = bootstrap_intervals(pairs, probability_of_improvement)
     return [
         {"pair": p, "probability": float(points[p]), "ci95": [float(c) for c in cis[p].ravel()]}
         for p in pairs
@@ -281,7 +304,7 @@ def _curves(trials: Sequence[TrialRecord], x_key: str) -> dict[str, dict[str, li
         x_max = max(t.curve[-1][x_key] for t in ts)
         grid = np.linspace(0.0, x_max, CURVE_POINTS)
         runs = np.array([_step_curve(t.curve, x_key, grid) for t in ts])
-        points, cis = _bootstrap({arm: runs}, lambda s: np.mean(s, axis=0), CURVE_REPS)
+        points, cis = bootstrap_intervals({arm: runs}, lambda s: np.mean(s, axis=0), CURVE_REPS)
         out[arm] = {
             "x": grid.tolist(),
             "mean": points[arm].tolist(),
@@ -303,14 +326,15 @@ def _plots(root: Path, rows: list[dict[str, Any]], trials: Sequence[TrialRecord]
 
     use_file_backend_if_headless()
     import matplotlib.pyplot as plt
-    from rliable import library as rly
     from rliable import plot_utils
 
     files = []
     scores = {r["arm"]: np.array(r["heldout_success"])[:, None] for r in rows if r["seeds"]}
     if scores:
         taus = np.linspace(0.0, 1.0, 101)
-        profiles, profile_cis = rly.create_performance_profile(scores, taus)
+        profiles, profile_cis = bootstrap_intervals(
+            scores, lambda x: score_distribution(x, taus), PROFILE_REPS
+        )
         fig, ax = plt.subplots(figsize=(7, 4))
         plot_utils.plot_performance_profiles(
             profiles,
