@@ -4,10 +4,11 @@ degraded sensors. The study's pole task is one member (:func:`from_pole_episodes
 Geometry (NED, angles clockwise from north), drawn per episode by :func:`draw_open_water`::
 
     primary obstacle  A = (0, 0)                       the study's pole (if ``primary_obstacle``)
-    start             S = A + d (cos β, sin β)         d ~ U[start range], β ~ U[0, 2π)
+    start             S = A + (d + R_A − 1 m)(cos β, sin β)   d ~ U[start range], β ~ U[0, 2π)
     reference line    u = (cos χ, sin χ), χ = β + π    the direction S → A
     goal              G = S + D (cos(χ + γ), sin(χ + γ)) + L n,   n = (−sin χ, cos χ)
                       D ~ U[goal range], γ ~ U[goal bearing range], L = ±U[goal lateral range]
+                      (γ and D drawn again while G lies within clearance_m of A's edge)
     start heading     ψ0 = χ + δ,  δ ~ U[heading offset range]
 
 Static obstacles are discs (centre, radius): a pole (1 m) up to an islet tens of metres across.
@@ -61,6 +62,7 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 ENCOUNTERS = ("head-on", "crossing", "overtaking")
+_R_POLE = 1.0  # m, the study's pole radius: distances are pole-equivalent (module docstring)
 Range = tuple[float, float]
 
 
@@ -248,15 +250,20 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
     noise_seed, radar_seed, dist_seed = (int(x) for x in rng.integers(2**63, size=3))
     goal_side, current_side = np.where(rng.random(2) < 0.5, -1.0, 1.0)  # mirror images
     chi = beta + math.pi
-    s = d * np.array([math.cos(beta), math.sin(beta)])
     gamma, big_d, lateral = (
         _u(rng, sc.goal_bearing_range_rad), _u(rng, sc.goal_distance_range_m),
         _u(rng, sc.goal_lateral_range_m),
     )  # fmt: skip
-    g = s + big_d * np.array([math.cos(chi + gamma), math.sin(chi + gamma)])
-    g = g + goal_side * lateral * np.array([-math.sin(chi), math.cos(chi)])
     speed = _u(rng, sc.speed_range_mps)
     primary_r = _u(rng, sc.primary_radius_range_m)
+    d += primary_r - _R_POLE  # d is the pole-equivalent distance: from the edge, + 1 m
+    s = d * np.array([math.cos(beta), math.sin(beta)])
+    for _attempt in range(100):  # a goal must lie clear of the primary obstacle
+        g = s + big_d * np.array([math.cos(chi + gamma), math.sin(chi + gamma)])
+        g = g + goal_side * lateral * np.array([-math.sin(chi), math.cos(chi)])
+        if float(np.hypot(*g)) - primary_r >= sc.clearance_m or not sc.primary_obstacle:
+            break
+        gamma, big_d = _u(rng, sc.goal_bearing_range_rad), _u(rng, sc.goal_distance_range_m)
     obstacles: list[tuple[float, float, float]] = [(0.0, 0.0, primary_r)]
     n_extra = int(rng.integers(sc.n_extra_range[0], sc.n_extra_range[1] + 1))
     _place_extras(rng, sc, s, g, obstacles, n_extra)

@@ -97,7 +97,11 @@ CHECKS = {
         and _all((math.dist(e.obstacles[0][:2], e.obstacles[1][:2]) for e in eps), 15, 30)
     ),
     "several-obstacles": lambda eps: all(4 <= len(e.obstacles) <= 7 for e in eps),
-    "extended-obstacles": lambda eps: _all((o[2] for e in eps for o in e.obstacles), 8, 25),
+    "extended-obstacles": lambda eps: (
+        _all((o[2] for e in eps for o in e.obstacles), 8, 25)
+        # the start is 50-100 m from the islet's edge, + 1 m: as far as the study's from its pole
+        and _all((e.start.start_distance_m - e.obstacles[0][2] + 1.0 for e in eps), 50, 100)
+    ),
     "moving-vessels": lambda eps: (
         all(not e.obstacles and 1 <= len(e.vessels) <= 3 for e in eps)
         and {v.encounter for e in eps for v in e.vessels} == {"head-on", "crossing", "overtaking"}

@@ -67,6 +67,13 @@ def test_same_seed_same_episodes():
     assert draw_open_water(BUSY, 5, 20)[7] == draw_open_water(BUSY, 5, 8)[7]
 
 
+def test_goal_keeps_clear_of_the_primary_obstacle():
+    sc = replace(BUSY, goal_bearing_range_rad=(-math.pi, math.pi), goal_distance_range_m=(60, 300))
+    for e in draw_open_water(sc, 9, 200):
+        x, y, r = e.obstacles[0]
+        assert math.hypot(e.goal_ne[0] - x, e.goal_ne[1] - y) - r >= sc.clearance_m
+
+
 def test_extra_obstacles_keep_clear_of_start_goal_and_each_other():
     for e in draw_open_water(BUSY, 1, 60):
         obs = np.array(e.obstacles)
