@@ -5,9 +5,12 @@ They satisfy the :class:`usvsim.helm.protocol.Helmsman` protocol.
 :mod:`baselines.los` — ``los``: line-of-sight guidance from the start to the goal (it hits the
 pole, as the reference study expects of a helmsman that does not look out).
 :mod:`baselines.avoid` — ``los-avoid``: the same plus a collision-cone avoidance layer.
+:mod:`baselines.velocity_obstacle` — ``vo``: LOS to the goal with velocity obstacles and COLREG
+(Kuwata et al. 2014), for many and moving obstacles.
 
-Both read only the positional observation (``observation = "positional"``) and give gaussian
-actions (``action = "gaussian"``): Δψ clipped to ±30° every 2 s.
+``los`` and ``los-avoid`` read only the positional observation (``observation = "positional"``),
+``vo`` the k-nearest ``scene`` observation; all give gaussian actions (``action = "gaussian"``):
+Δψ clipped to ±30° every 2 s.
 """
 
 from baselines.avoid import AvoidHelmsman, CollisionCone, cone_heading_change
@@ -18,6 +21,7 @@ from baselines.los import (
     heading_change_to_action,
     landmark_pose,
 )
+from baselines.velocity_obstacle import VOConfig, VOHelmsman, vo_course
 
 __all__ = [
     "DEFAULT_LOS_CONFIG",
@@ -25,7 +29,10 @@ __all__ = [
     "CollisionCone",
     "LOSHelmsman",
     "LandmarkPose",
+    "VOConfig",
+    "VOHelmsman",
     "cone_heading_change",
     "heading_change_to_action",
     "landmark_pose",
+    "vo_course",
 ]
