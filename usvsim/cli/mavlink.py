@@ -14,10 +14,12 @@ import socket
 import time
 
 from usvsim.common.errors import UserError
+from usvsim.common.fileio import atomic_write_text, check_writable_file
 from usvsim.helm.registry import make_helmsman
 from usvsim.mavlink.bridge import Bridge, BridgeArgs
 from usvsim.mavlink.connection import check_url
 from usvsim.mavlink.mission import load_mission
+from usvsim.mavlink.rover_params import shipped_parameter_file
 from usvsim.mavlink.sitl import RoverSitl, SitlArgs
 from usvsim.mavlink.sitl_physics import JsonPhysics, SitlPhysicsArgs, serve
 from usvsim.task.batch import parse_action_kind
@@ -51,11 +53,22 @@ def run_sitl(args: SitlArgs) -> int:
 
 
 def run_sitl_physics(args: SitlPhysicsArgs) -> int:
-    """``usvsim sitl-physics``: bind, then serve ArduPilot SITL until Ctrl-C."""
+    """``usvsim sitl-physics``: bind, then serve ArduPilot SITL until Ctrl-C; with
+    ``--write-params FILE`` write the vessel's Rover parameter file and exit."""
     try:
         vessel = get_vessel(args.vessel)
     except ValueError as err:
         raise UserError(f"--vessel: {err}") from None
+    if args.write_params:
+        check_writable_file(args.write_params, "--write-params")
+        atomic_write_text(args.write_params, shipped_parameter_file(vessel.name))
+        print(
+            f"usvsim sitl-physics: Rover parameters for {vessel.name} written to "
+            f"{args.write_params}; start ArduPilot with: sim_vehicle.py -v Rover -f motorboat "
+            f"--model JSON:{args.bind} --add-param-file={args.write_params}",
+            flush=True,
+        )
+        return 0
     physics = JsonPhysics(vessel, math.radians(args.heading_deg), args.mapping())
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:

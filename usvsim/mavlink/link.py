@@ -375,7 +375,7 @@ class MavlinkLink:
     def _tcp_socket(self) -> socket.socket | None:
         """The connected TCP socket (``tcp:``, or ``tcpin:`` once a client is in), else None."""
         if isinstance(self._conn, (mavutil.mavtcp, mavutil.mavtcpin)):
-            return self._conn.port  # type: ignore[no-any-return]
+            return self._conn.port
         return None
 
     def _lose(self, why: str) -> LinkLostError:

@@ -68,7 +68,7 @@ import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -313,7 +313,8 @@ class RoverSitl:
     def _param_changed(self, name: str, value: float) -> None:
         if name in ATC_FIELDS:
             field_name, scale = ATC_FIELDS[name]
-            self.autopilot = replace(self.autopilot, **{field_name: value * scale})
+            changes: dict[str, Any] = {field_name: value * scale}
+            self.autopilot = replace(self.autopilot, **changes)
             if self.autopilot.kind == "rover":  # the rover cascade runs on these gains
                 self.plant = Plant(self.plant.vessel, self.autopilot, current=self.plant.current)
 

@@ -97,6 +97,7 @@ class SitlPhysicsArgs:
     throttle_pwm_trim: int = field(default=1500, metadata=bounds(ge=500, le=2500))  # µs, none
     throttle_pwm_max: int = field(default=2000, metadata=bounds(ge=500, le=2500))  # µs, full
     duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # physics s; 0: until Ctrl-C
+    write_params: str = ""  # write the vessel's Rover .parm file here and exit ('' = serve)
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""

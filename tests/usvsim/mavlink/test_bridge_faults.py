@@ -108,7 +108,7 @@ def test_arming_before_ready_waits_or_retries_then_arms(
     assert result.reason == "max duration" and sitl.armed
     if ekf_report:
         assert result.arm_attempts == 1
-        assert "waiting for the vehicle: " in out and "EKF has no absolute position" in out
+        assert "waiting for the vehicle: " in out and "(EKF_STATUS_REPORT)" in out
     else:
         assert result.arm_attempts >= 2
         assert f"arming refused (attempt 1): {NOT_READY_TEXT}; retrying in 0.2 s" in out
