@@ -231,13 +231,20 @@ def _plain_lists(d: dict[str, Any]) -> dict[str, Any]:
 
 
 @pytest.mark.parametrize("name", ["rl-gaussian-radar", "il-categorical-radar"])
-def test_shipped_flat_setup_params_read_as_the_composed_setup(name: str) -> None:
+def test_flat_setup_params_of_older_checkpoints_read_as_the_composed_setup(name: str) -> None:
+    import json
+
     from learning.experiments.il_setups import IL_SETUPS
     from learning.experiments.setups import SETUPS, setup_from_params, setup_params
 
-    ckpt = load_checkpoint(Path("usvsim/models") / f"{name}.pt")
-    assert "algorithm_config" not in ckpt.setup_params  # written before setups held configs
+    # setup_params as the models shipped until 2026-12 (commit eb82cea) stored them: flat,
+    # written before setups held their algorithm's config
+    flat = json.loads((Path(__file__).parent / "data" / "flat_setup_params.json").read_text())
+    params = flat[name]
+    assert "algorithm_config" not in params
     base = {**SETUPS, **IL_SETUPS}[name]
+    assert setup_from_params(base, params) == base
+    ckpt = load_checkpoint(Path("usvsim/models") / f"{name}.pt")
     assert ckpt.algorithm == "trpo"
     assert setup_from_params(base, ckpt.setup_params) == base
     assert setup_from_params(base, setup_params(base)) == base
