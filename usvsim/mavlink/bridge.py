@@ -322,6 +322,11 @@ class Bridge:
                 )
             self.wp_speed_mps = value
             self._say(f"WP_SPEED {value:g} m/s (read from the vehicle)")
+        if self.args.attitude_target and self.mission.cruise_speed_mps > self.wp_speed_mps:
+            self._say(
+                f"the mission's {self.mission.cruise_speed_mps:g} m/s exceeds WP_SPEED "
+                f"{self.wp_speed_mps:g} m/s: thrust 1 gives WP_SPEED"
+            )
         self.result.wp_speed_mps = self.wp_speed_mps
         self.link.set_mode(self.target, RoverMode.GUIDED)
         ack = wait_ack(self.link, self.watch, MavCommand.DO_SET_MODE, timeout)

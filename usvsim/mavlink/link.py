@@ -331,6 +331,16 @@ class MavlinkLink:
     def _record_out(self, msg: Any) -> None:
         self._record(msg.get_msgbuf())
 
+    def drop_client(self) -> bool:
+        """``tcpin:`` only: close the connected client and listen for the next (fault tests).
+
+        Returns False when no client is connected (or the link is not ``tcpin:``).
+        """
+        if not isinstance(self._conn, mavutil.mavtcpin) or self._conn.port is None:
+            return False
+        self._lose("dropped by this end")
+        return True
+
     def close(self) -> None:
         """Close the socket and the tlog."""
         with contextlib.suppress(OSError):

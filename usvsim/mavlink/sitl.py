@@ -49,8 +49,10 @@ time, paced at ``speedup`` × wall-clock time. Everything runs in one thread.
 
 Fault injection (tests): ``freeze_at_s`` stops the whole vehicle for ``freeze_for_s`` wall
 seconds (no physics, no reading, no telemetry: a stopped process; what arrives meanwhile is
-read after it resumes), ``drop_link_at_s`` closes the link and ends the vehicle (a crash: the
-TCP peer sees EOF, then refused connections), ``mute_telemetry_after_s`` stops telemetry only.
+read after it resumes), ``drop_client_at_s`` closes the TCP client's connection and listens
+for the next (a radio or router glitch), ``drop_link_at_s`` closes the link and ends the
+vehicle (a crash: the TCP peer sees EOF, then refused connections), ``mute_telemetry_after_s``
+stops telemetry only.
 An ocean current (``current_mps`` towards ``current_dir_deg``) makes HOLD drift (LOITER in a
 current: see :mod:`usvsim.mavlink.rover_modes`).
 
@@ -195,6 +197,7 @@ class SitlArgs:
     freeze_at_s: float = field(default=0.0, metadata=bounds(ge=0))  # faults: stop at sim s; 0 never
     freeze_for_s: float = field(default=3.0, metadata=bounds(gt=0, le=600))  # ... for wall s
     drop_link_at_s: float = field(default=0.0, metadata=bounds(ge=0))  # faults: crash at sim s
+    drop_client_at_s: float = field(default=0.0, metadata=bounds(ge=0))  # faults: tcpin, sim s
 
     def __post_init__(self) -> None:
         # the ranges above (usvsim.common.options), for library callers too
@@ -227,6 +230,7 @@ class SitlRecord:
     targets: list[tuple[float, float, float]] = field(default_factory=list)  # t, ψ, U
     frozen_wall_s: tuple[float, float] | None = None  # (monotonic start, duration) of a freeze
     dropped_at_s: float | None = None  # sim time the link was dropped
+    client_dropped_at_s: float | None = None  # sim time the TCP client was cut off
 
 
 class RoverSitl:
@@ -637,6 +641,10 @@ class RoverSitl:
                 self.record.dropped_at_s = self.time_ms / 1000.0
                 self.link.close()
                 return
+            cut = self.args.drop_client_at_s
+            if cut > 0 and self.record.client_dropped_at_s is None and self.time_ms >= cut * 1e3:
+                if self.link.drop_client():
+                    self.record.client_dropped_at_s = self.time_ms / 1000.0
             freeze = self.args.freeze_at_s
             if freeze > 0 and not frozen_once and self.time_ms >= freeze * 1000.0:
                 frozen_once = True

@@ -39,9 +39,14 @@ def run_bridge(sitl: Any, tmp_path: Path, max_wall_s: float = 30.0, **kw: Any) -
     return bridge, bridge.run(max_wall_s=max_wall_s)
 
 
-def test_frozen_vehicle_acknowledges_the_failsafe_after_it_resumes(tmp_path: Path) -> None:
-    with sitl_running(freeze_at_s=6.0, freeze_for_s=3.0) as sitl:
-        _, result = run_bridge(sitl, tmp_path)
+@pytest.mark.parametrize("transport", ["udp", "tcp"])
+def test_frozen_vehicle_acknowledges_the_failsafe_after_it_resumes(
+    tmp_path: Path, transport: str
+) -> None:
+    listen = "udpin:127.0.0.1:0" if transport == "udp" else "tcpin:127.0.0.1:0"
+    with sitl_running(freeze_at_s=6.0, freeze_for_s=3.0, listen=listen) as sitl:
+        connect = {"tcp": {"connect": f"tcp:127.0.0.1:{sitl.link.local_port}"}, "udp": {}}
+        _, result = run_bridge(sitl, tmp_path, **connect[transport])
         assert sitl.record.frozen_wall_s is not None
     assert result.reason.startswith("stale telemetry")
     fs = result.failsafe
@@ -52,7 +57,10 @@ def test_frozen_vehicle_acknowledges_the_failsafe_after_it_resumes(tmp_path: Pat
     kinds = [r["event"] for r in rows]
     assert kinds[-1] == "ack" and kinds.index("failsafe") < len(kinds) - 1
     assert result.exit_status == 1
-    print(f"\nfreeze 3 s: LOITER acknowledged after {fs.elapsed_s:.2f} s, {fs.commands} commands")
+    print(
+        f"\nfreeze 3 s ({transport}): LOITER acknowledged after {fs.elapsed_s:.2f} s, "
+        f"{fs.commands} commands"
+    )
 
 
 def test_unacknowledged_failsafe_is_reported_loudly(tmp_path: Path, capfd: Any) -> None:
@@ -93,6 +101,19 @@ def test_peer_closing_is_a_failsafe_with_bounded_reconnects(tmp_path: Path, capf
     rows = [r["event"] for r in events(tmp_path)]
     assert "failsafe" in rows and rows[-1] == "unacknowledged"
     print(f"\npeer closed: {wall:.2f} s wall, bridge thread CPU {cpu:.2f} s")
+
+
+def test_cut_connection_is_reconnected_and_the_failsafe_acknowledged(tmp_path: Path) -> None:
+    with sitl_running(listen="tcpin:127.0.0.1:0", drop_client_at_s=6.0) as sitl:
+        connect = f"tcp:127.0.0.1:{sitl.link.local_port}"
+        _, result = run_bridge(sitl, tmp_path, connect=connect)
+    assert sitl.record.client_dropped_at_s is not None
+    assert result.reason.startswith("link lost") and result.failsafe_acknowledged
+    assert sitl.mode == RoverMode.LOITER and result.exit_status == 1
+    details = [r["detail"] for r in events(tmp_path)]
+    assert "reconnected (attempt 1)" in details
+    elapsed = result.failsafe.elapsed_s
+    print(f"\nconnection cut: reconnected, LOITER acknowledged after {elapsed:.2f} s")
 
 
 @pytest.mark.parametrize("ekf_report", [False, True])
