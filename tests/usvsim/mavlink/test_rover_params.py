@@ -33,7 +33,12 @@ CONTROL_DT_S = 0.1  # the cascade's step (the plant's 10 Hz autopilot)
 
 @pytest.mark.parametrize("name", list(VESSELS))
 def test_shipped_files_are_what_the_derivation_gives(name: str) -> None:
-    assert shipped_parameter_file(name) == parameter_file(derive_rover_tuning(name))
+    """Regenerate with parameter_file(derive_rover_tuning(name)) when the model changes."""
+    shipped = read_parameter_file(shipped_parameter_file(name))
+    derived = read_parameter_file(parameter_file(derive_rover_tuning(name)))
+    assert shipped.keys() == derived.keys()
+    for key, value in derived.items():  # the last printed digit may differ between platforms
+        assert shipped[key] == pytest.approx(value, rel=2e-3, abs=1e-3), key
 
 
 def config_from_file(values: dict[str, float]) -> AutopilotConfig:
