@@ -17,6 +17,10 @@ Both use the same surge-speed PI controller with drag feed-forward:
 
 Controller state c (5 entries, per boat): ``pid``: [ψ_d, r_d, a_d, ∫ψ̃ dt, ∫ũ dt];
 ``rover``: [0, r_des, 0, rate-I term, ∫ũ dt]. Command: [ψ_ref (rad), U_ref (m/s)].
+
+Why this module is long: both autopilots share one config, one controller state layout, the
+speed loop and the thrust allocation; the design (gains) and the CasADi control law of each must
+change together, so they stay in one file.
 """
 
 from __future__ import annotations
