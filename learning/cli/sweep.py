@@ -11,9 +11,11 @@ from __future__ import annotations
 import dataclasses
 import json
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
+
+from usvsim.common.options import bounds
 
 __all__ = ["SweepArgs", "run", "spec_of"]
 
@@ -50,17 +52,31 @@ class SweepArgs:
     grid: str = ""  # FIELD=V1,V2;FIELD=... every combination, e.g. max_kl=0.01,0.02
     random: str = ""  # FIELD=DIST;... e.g. max_kl=loguniform:0.005:0.05 (search random/optuna)
     search: Literal["grid", "random", "optuna"] = "grid"  # optuna: TPE on validation only
-    samples: int = 1  # random: draws per setup x seed x grid point; optuna: trials
-    search_seed: int = 0  # seeds the random draws and Optuna's sampler
-    iterations: int = 0  # iteration budget per trial; 0: the setup's
-    validate_every: int = 0  # 0: the setup's
-    stop_after: int = 3  # stop a trial after this many consecutive 15/15; 0: never
-    n_envs: int = 0  # boats per batch; 0: the setup's
-    time_budget_s: float = 0.0  # wall-clock limit per trial, s; 0: none
-    threads: int = 1  # torch threads = CPUs per trial
-    heldout: int = 200  # held-out episodes per best.pt (for the report only)
+    samples: int = field(  # random: draws per setup x seed x grid point; optuna: trials
+        default=1, metadata=bounds(ge=1, le=100_000)
+    )
+    search_seed: int = field(  # seeds the random draws and Optuna's sampler
+        default=0, metadata=bounds(ge=0, lt=2**32)
+    )
+    iterations: int = field(default=0, metadata=bounds(ge=0))  # budget per trial; 0: the setup's
+    validate_every: int = field(default=0, metadata=bounds(ge=0))  # 0: the setup's
+    stop_after: int = field(  # stop a trial after this many consecutive 15/15; 0: never
+        default=3, metadata=bounds(ge=0)
+    )
+    n_envs: int = field(  # boats per batch; 0: the setup's
+        default=0, metadata=bounds(ge=1, le=65_536, zero_ok=True)
+    )
+    time_budget_s: float = field(  # wall-clock limit per trial, s; 0: none
+        default=0.0, metadata=bounds(ge=0)
+    )
+    threads: int = field(default=1, metadata=bounds(ge=1, le=1024))  # torch threads = CPUs/trial
+    heldout: int = field(  # held-out episodes per best.pt (for the report only)
+        default=200, metadata=bounds(ge=1, le=100_000)
+    )
     ship_rule: str = "median-validation"  # which seed ships: median-validation or seed:K
-    max_concurrent: int = 0  # trials at once; 0: one per CPU (threads CPUs each)
+    max_concurrent: int = field(  # trials at once; 0: one per CPU (threads CPUs each)
+        default=0, metadata=bounds(ge=0, le=100_000)
+    )
     address: str = ""  # an existing Ray cluster, e.g. ray://head:10001; "": local Ray
     out: str = ""  # sweep folder; default usvsim-results/sweep/<name>
     report_only: bool = False  # only (re)write the report from the trials run so far
@@ -139,9 +155,9 @@ def run(args: SweepArgs) -> int:
     """Run ``usvsim sweep`` (module docstring)."""
     from learning.experiments.sweep import SweepRun, run_sweep
     from learning.experiments.sweep_report import write_report
+    from usvsim.common.options import check_bounds
 
-    if args.max_concurrent < 0:
-        raise _fail("--max-concurrent must be >= 0")
+    check_bounds(args)  # the ranges of the fields (usvsim.cli checked them already)
     spec = spec_of(args)
     root = Path(args.out or f"usvsim-results/sweep/{spec.name}")
     if args.report_only:

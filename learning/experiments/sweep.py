@@ -31,17 +31,20 @@ shipped-model rule see validation only. Re-running the same sweep continues it
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
 import itertools
 import json
 import math
 import os
+import signal
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 from learning.experiments.il_setups import ILSetup
@@ -364,7 +367,8 @@ def run_sweep(spec: SweepSpec, where: SweepRun) -> list[dict[str, Any]]:
         atomic_write_text(stored, json.dumps(spec.to_json(), indent=2) + "\n")
     _init_ray(spec, where)
     t0 = time.time()
-    results = _tuner(spec, where).fit()
+    with _sigterm_as_ctrl_c():
+        results = _tuner(spec, where).fit()
     trials = []
     for result in results:
         config = result.config or {}
@@ -395,6 +399,26 @@ def run_sweep(spec: SweepSpec, where: SweepRun) -> list[dict[str, Any]]:
     sessions.append({"start": t0, "wall_s": time.time() - t0, "finished_trials": finished})
     atomic_write_text(sessions_path, json.dumps(sessions, indent=2) + "\n")
     return trials
+
+
+@contextlib.contextmanager
+def _sigterm_as_ctrl_c() -> Iterator[None]:
+    """SIGTERM stops the sweep as Ctrl-C does: Tune's own graceful stop (its state saved, the
+    trials ended at their last report, ``trials.json`` written). Outside the main thread (where
+    Tune catches no signal either) nothing changes."""
+
+    def forward(signum: int, frame: FrameType | None) -> None:
+        signal.raise_signal(signal.SIGINT)  # Tune's SIGINT handler, installed during fit()
+
+    try:
+        previous = signal.signal(signal.SIGTERM, forward)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def expected_trials(spec: SweepSpec) -> int:

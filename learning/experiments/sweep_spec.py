@@ -11,11 +11,12 @@ import dataclasses
 import hashlib
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from learning.experiments.il_setups import IL_SETUPS, ILSetup, get_il_setup
 from learning.experiments.setups import SETUPS, RLSetup, get_setup
+from usvsim.common.options import bounds, check_bounds
 
 __all__ = [
     "SETUP_GROUPS",
@@ -102,18 +103,25 @@ class SweepSpec:
     grid: tuple[tuple[str, tuple[Any, ...]], ...] = ()  # (field, values): every combination
     random: tuple[tuple[str, Distribution], ...] = ()  # (field, distribution): drawn per trial
     search: SearchKind = "grid"  # grid; random (Tune's variant generator); optuna (TPE)
-    samples: int = 1  # random: draws per setup × seed × grid point; optuna: trials
-    search_seed: int = 0  # seeds the random draws and the TPE sampler
-    iterations: int = 0  # iteration budget per trial; 0: the setup's
-    validate_every: int = 0  # 0: the setup's
-    stop_after: int = 3  # early stop after this many consecutive 15/15 (0: never)
-    n_envs: int = 0  # boats per batch; 0: the setup's
-    time_budget_s: float = 0.0  # per trial, s; 0: none
-    threads: int = 1  # torch threads (= CPUs) per trial
-    heldout: int = 200  # held-out episodes per best.pt (report only)
+    # the ranges are those of `usvsim sweep`'s options (learning.cli.sweep.SweepArgs), checked
+    # here too for a --config file
+    samples: int = field(default=1, metadata=bounds(ge=1, le=100_000))  # random: per point
+    search_seed: int = field(default=0, metadata=bounds(ge=0, lt=2**32))  # draws and TPE
+    iterations: int = field(default=0, metadata=bounds(ge=0))  # budget per trial; 0: setup's
+    validate_every: int = field(default=0, metadata=bounds(ge=0))  # 0: the setup's
+    stop_after: int = field(default=3, metadata=bounds(ge=0))  # after N 15/15 in a row; 0: never
+    n_envs: int = field(default=0, metadata=bounds(ge=1, le=65_536, zero_ok=True))  # 0: setup's
+    time_budget_s: float = field(default=0.0, metadata=bounds(ge=0))  # per trial, s; 0: none
+    threads: int = field(default=1, metadata=bounds(ge=1, le=1024))  # torch threads per trial
+    heldout: int = field(default=200, metadata=bounds(ge=1, le=100_000))  # report only
     ship_rule: str = "median-validation"  # or "seed:K" (sweep_report.choose_shipped)
 
     def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):  # a --config file may hold anything
+            value, kind = getattr(self, f.name), {"int": int, "float": (int, float)}.get(f.type)
+            if kind is not None and (isinstance(value, bool) or not isinstance(value, kind)):
+                raise ValueError(f"sweep field {f.name} must be a number ({f.type}), not {value!r}")
+        check_bounds(self)  # a UserError (a ValueError) naming the option and its range
         if not self.name or "/" in self.name or self.name.startswith("."):
             raise ValueError(f"sweep name {self.name!r}: a folder name is needed")
         if not self.setups or not self.seeds:
@@ -137,8 +145,6 @@ class SweepSpec:
             raise ValueError("--search optuna needs --random distributions and no --grid")
         if self.search == "optuna" and (len(self.setups) > 1 or len(self.seeds) > 1):
             raise ValueError("--search optuna tunes one setup on one seed (then sweep the seeds)")
-        if self.samples < 1 or self.threads < 1 or self.heldout < 1:
-            raise ValueError("samples, threads and heldout must be >= 1")
         if self.ship_rule != "median-validation" and not self.ship_rule.startswith("seed:"):
             raise ValueError(f"ship rule {self.ship_rule!r}; allowed: median-validation, seed:K")
 

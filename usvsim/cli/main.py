@@ -28,16 +28,14 @@ instead of the one line.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import importlib
-import signal
 import sys
-from collections.abc import Callable, Iterator, Sequence
-from types import FrameType
+from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
 from usvsim.cli.args import USAGE_ERROR, OneLineParser, add_dataclass_arguments, check_options
 from usvsim.common.errors import UserError
+from usvsim.common.interrupt import interrupt_signals
 
 INTERRUPTED = 130  # exit status after Ctrl-C or SIGTERM (128 + SIGINT, the shell's convention)
 
@@ -136,24 +134,6 @@ def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
-    raise KeyboardInterrupt(f"signal {signum}")
-
-
-@contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM raises ``KeyboardInterrupt`` as Ctrl-C does, so both end a command the same way."""
-    try:
-        previous = signal.signal(signal.SIGTERM, _raise_interrupt)
-    except ValueError:  # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def _one_line(err: BaseException) -> str:
     if isinstance(err, OSError) and err.strerror:
         where = err.filename if err.filename is not None else ""
@@ -178,7 +158,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         cls, run = _command(ns.command)
         options = cls(**values)
         check_options(options)
-        with _sigterm_as_interrupt():
+        with interrupt_signals():  # SIGTERM as Ctrl-C; neither lost in a C extension
             return run(options)
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr, flush=True)

@@ -25,20 +25,36 @@ class DemoArgs:
     out: str = "usvsim-results/plant"  # folder for the PNG plots
 
 
+# the highest --speed of usvsim manoeuvre as a multiple of a vessel's cruise speed: every hull's
+# trials stay finite up to 5x (measured; cybership2's model diverges at 40x)
+MAX_SPEED_OVER_CRUISE = 5.0
+
+
 @dataclass(frozen=True)
 class ManoeuvreArgs:
     """Standard manoeuvring trials (turning circle, zig-zags, stopping) against IMO MSC.137(76)."""
 
     vessel: str = "all"  # vessel preset, or all
-    speed: float = field(default=0.0, metadata=bounds(gt=0.0, zero_ok=True))  # m/s; 0: cruise
+    speed: float = field(  # approach speed, m/s; 0: each vessel's cruise speed
+        default=0.0, metadata=bounds(gt=0.0, le=20.0, zero_ok=True)
+    )
     out: str = "usvsim-results/manoeuvre"  # folder for the table (Markdown) and the PNG plots
 
     def check(self) -> None:
-        from usvsim.vessel.vessels import vessel_names
+        from usvsim.vessel.vessels import VESSELS, get_vessel, vessel_names
 
         if self.vessel != "all" and self.vessel not in vessel_names():
             known = ", ".join(["all", *vessel_names()])
             raise UserError(f"--vessel must be one of {known}, not {self.vessel!r}")
+        chosen = VESSELS.values() if self.vessel == "all" else [get_vessel(self.vessel)]
+        for v in chosen:  # the hull models hold near their cruise speed; far above it they blow up
+            top = MAX_SPEED_OVER_CRUISE * v.cruise_speed_mps
+            if self.speed > top:
+                raise UserError(
+                    f"--speed must be <= {top:g} m/s for {v.name} ({MAX_SPEED_OVER_CRUISE:g} x its "
+                    f"cruise speed {v.cruise_speed_mps:g} m/s), got {self.speed:g}; "
+                    "choose one --vessel or a lower --speed"
+                )
 
 
 @dataclass(frozen=True)
@@ -101,23 +117,28 @@ def run_manoeuvre(args: ManoeuvreArgs) -> int:
     import matplotlib.pyplot as plt
     from tqdm import tqdm
 
-    from usvsim.common.fileio import atomic_savefig, atomic_write_text
-    from usvsim.evaluation.manoeuvre import run_trials, trials_table
+    from usvsim.common.fileio import check_writable_dir, staged_dir
+    from usvsim.common.interrupt import check_interrupt
+    from usvsim.evaluation import manoeuvre
     from usvsim.evaluation.plant_plots import manoeuvre_figure
     from usvsim.vessel.vessels import VESSELS, get_vessel
 
     args.check()
     names = sorted(VESSELS) if args.vessel == "all" else [get_vessel(args.vessel).name]
     out = Path(args.out)
+    check_writable_dir(args.out, "--out")  # before the trials, not after them
     reports = []
     for name in tqdm(names, desc="trials", unit="vessel", file=sys.stderr):
-        report = run_trials(VESSELS[name], args.speed or None)
-        fig = manoeuvre_figure(report)
-        atomic_savefig(fig, out / f"manoeuvre_{name}.png", dpi=110)
-        plt.close(fig)
-        reports.append(report)
-    table = trials_table(reports)
-    atomic_write_text(out / "manoeuvre.md", table + "\n")
+        check_interrupt()  # Ctrl-C / SIGTERM even if a CasADi call swallowed it
+        reports.append(manoeuvre.run_trials(VESSELS[name], args.speed or None))
+    table = manoeuvre.trials_table(reports)
+    # one unit (Ctrl-C, SIGTERM or a crash leaves the previous table and plots as they were)
+    with staged_dir(out, "manoeuvre") as staging:
+        for report in reports:
+            fig = manoeuvre_figure(report)
+            fig.savefig(staging / f"manoeuvre_{report.vessel}.png", dpi=110)
+            plt.close(fig)
+        (staging / "manoeuvre.md").write_text(table + "\n")
     print(table)
     print(f"written to {out}/: manoeuvre.md, " + ", ".join(f"manoeuvre_{n}.png" for n in names))
     return 0

@@ -43,6 +43,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
+from usvsim.common.interrupt import check_interrupt
 from usvsim.nav.compiled import export_nav_state
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
@@ -366,6 +367,7 @@ class PoleAvoidanceBatch:
         """One decision step of every boat (see the module docstring)."""
         if not self._ready.all():
             raise RuntimeError("reset every boat before step()")
+        check_interrupt()  # a Ctrl-C that a C extension swallowed ends the work here
         sc = self.scenario
         dpsi = heading_change_rad(
             self.action_kind, actions, self.n_boats, sc.max_heading_change_rad

@@ -285,6 +285,32 @@ def test_sweep_interrupted_resumed_and_report_matches_the_logs(
 
 @pytest.mark.slow
 @pytest.mark.timeout(180)
+def test_sigterm_stops_the_sweep_as_ctrl_c_does(
+    tmp_path: Path, start_sweep: Callable[[Path], subprocess.Popen[str]]
+) -> None:
+    pytest.importorskip("ray.tune")  # the sweep extra
+    out = tmp_path / "sweep"
+    proc = start_sweep(out)
+    latest = [out / "runs" / f"rl-categorical-positional-seed{s}" / "latest.pt" for s in (0, 1)]
+    deadline = time.monotonic() + 120
+    while not any(p.exists() for p in latest) and proc.poll() is None:
+        assert time.monotonic() < deadline, "no trial wrote latest.pt within 120 s"
+        time.sleep(0.2)
+    assert proc.poll() is None, proc.communicate()[0]
+    proc.terminate()  # SIGTERM to the driver only, as `kill PID` or a batch system sends it
+    text, _ = proc.communicate(timeout=90)
+    assert proc.returncode == 130, text
+    assert "Stop signal received" in text  # Tune's graceful stop, not a KeyboardInterrupt
+    assert "run the same command to continue" in text
+    trials = json.loads((out / "trials.json").read_text())
+    assert [t["status"] for t in trials] == ["not run", "not run"]
+    assert len(json.loads((out / "sessions.json").read_text())) == 1
+    json.loads((out / "report.json").read_text())  # whole
+    assert not [p for p in out.rglob("*") if p.name.startswith(".") and p.suffix == ".tmp"]
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(180)
 def test_a_crashed_trial_is_reported_not_dropped(tmp_path: Path) -> None:
     pytest.importorskip("ray.tune")  # the sweep extra
     out = tmp_path / "crash"
@@ -394,3 +420,24 @@ def test_bootstrap_intervals_are_reproducible_and_leave_numpy_alone() -> None:
     assert np.array_equal(first, again)  # seeded: was different on every call before
     after = np.random.get_state()  # noqa: NPY002
     assert all(np.array_equal(a, b) for a, b in zip(state[1:], after[1:], strict=True))
+
+
+def test_config_file_values_are_range_checked_as_the_flags(tmp_path: Path) -> None:
+    import dataclasses
+
+    from learning.cli.sweep import SweepArgs, spec_of
+    from usvsim.common.options import BOUNDS_KEY
+
+    config = tmp_path / "s.json"
+    for bad, message in (
+        ({"iterations": -1}, "--iterations must be >= 0, got -1"),
+        ({"heldout": 0}, "--heldout must be >= 1 and <= 100000, got 0"),
+        ({"samples": "2"}, "sweep field samples must be a number"),
+    ):
+        config.write_text(json.dumps({"setups": ["rl-categorical-positional"], **bad}))
+        with pytest.raises(SystemExit, match=f"^usvsim sweep: {message}"):
+            spec_of(SweepArgs(config=str(config)))
+    flags = {f.name: f.metadata.get(BOUNDS_KEY) for f in dataclasses.fields(SweepArgs)}
+    for f in dataclasses.fields(SweepSpec):  # one range per option, whichever way it is given
+        if BOUNDS_KEY in f.metadata:
+            assert flags[f.name] == f.metadata[BOUNDS_KEY], f.name
