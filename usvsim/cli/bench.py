@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
 from usvsim.common.fileio import check_writable_dir
 from usvsim.evaluation.bench import BenchArgs, format_table, run_bench, to_json, write_results
+from usvsim.evaluation.bench_sweep import load_sweep, with_sweep_columns
 
 __all__ = ["run_bench_command"]
 
@@ -20,11 +22,16 @@ def run_bench_command(args: BenchArgs) -> int:
         return _run_stress_command(args)
     result = run_bench(args)
     files = write_results(result, Path(args.out), plots=not args.no_plots)
+    sweep = load_sweep(args.sweep) if args.sweep else None
     if args.json:
-        print(to_json(result, [str(f) for f in files]))
+        text = to_json(result, [str(f) for f in files])
+        if sweep is not None:  # the sweep's across-seed figures under "sweep"
+            text = json.dumps({**json.loads(text), "sweep": sweep.to_json()}, indent=2)
+        print(text)
     else:
         print(f"usvsim bench — scenario {args.scenario}")
-        print(format_table(result.rows))
+        table = format_table(result.rows)
+        print(table if sweep is None else with_sweep_columns(table, result.rows, sweep))
         print(
             f"evaluated in {result.wall_s:.1f} s; results in {args.out}/ "
             f"({', '.join(f.name for f in files[:2])}, {max(len(files) - 2, 0)} path plots)"

@@ -92,11 +92,18 @@ class BenchArgs:
     suite: Literal["study", "stress"] = "study"  # stress: usvsim.evaluation.stress (named sets)
     sets: str = ""  # --suite stress: comma-separated stress sets; empty: all
     stress_episodes: int = field(default=100, metadata=bounds(ge=1, le=10_000))  # per stress set
+    sweep: str = ""  # a usvsim sweep folder: its across-seed held-out IQM beside shipped models
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
         if self.scenario not in SCENARIOS:
             raise UserError(f"--scenario must be one of {SCENARIOS}, not {self.scenario!r}")
+        if self.sweep:  # a folder that is not a sweep: one line before anything runs
+            from usvsim.evaluation.bench_sweep import load_sweep
+
+            if self.suite != "study" or self.scenario != "pole":
+                raise UserError("--sweep goes with the pole scenario's study suite (its held-out)")
+            load_sweep(self.sweep)
 
     def names(self) -> list[str]:
         """The ``--helmsmen`` list, blanks dropped (duplicates kept: the registry drops them)."""

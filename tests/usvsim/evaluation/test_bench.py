@@ -76,6 +76,7 @@ def test_bench_args_follow_the_cli_conventions() -> None:
         "suite",
         "sets",
         "stress_episodes",
+        "sweep",
     }
     assert all(comments.values())
     parser = argparse.ArgumentParser()
