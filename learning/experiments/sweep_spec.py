@@ -118,7 +118,9 @@ class SweepSpec:
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):  # a --config file may hold anything
-            value, kind = getattr(self, f.name), {"int": int, "float": (int, float)}.get(f.type)
+            value = getattr(self, f.name)
+            kinds: dict[str, tuple[type, ...]] = {"int": (int,), "float": (int, float)}
+            kind = kinds.get(str(f.type))
             if kind is not None and (isinstance(value, bool) or not isinstance(value, kind)):
                 raise ValueError(f"sweep field {f.name} must be a number ({f.type}), not {value!r}")
         check_bounds(self)  # a UserError (a ValueError) naming the option and its range
