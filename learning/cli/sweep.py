@@ -2,8 +2,9 @@
 statistics (:mod:`learning.experiments.sweep`, :mod:`learning.experiments.sweep_report`).
 
 This module is the command line only: options, the sweep's definition from flags or a JSON file,
-messages and exit codes (0: every trial finished; 1: a trial crashed; 130: interrupted, run the
-same command again to continue).
+messages and exit codes (0: every trial finished; 1: a trial crashed; 130: interrupted by
+Ctrl-C or SIGTERM, run the same command again to continue). Every numeric option has a range
+(``bounds`` metadata, checked before anything runs; the same ranges hold for a ``--config`` file).
 """
 
 from __future__ import annotations

@@ -26,7 +26,9 @@ training when ``summary.json`` says the run ended, then evaluates ``best.pt`` on
 episodes (:func:`usvsim.evaluation.episodes.heldout_episodes`) into ``heldout.json``. The
 held-out result is *not* reported to Tune: the search objective (:data:`OBJECTIVE`) and the
 shipped-model rule see validation only. Re-running the same sweep continues it
-(:func:`ray.tune.Tuner.restore`, crashed trials retried from their ``latest.pt``).
+(:func:`ray.tune.Tuner.restore`, crashed trials retried from their ``latest.pt``). Ctrl-C and
+SIGTERM stop it through Tune's own graceful stop. A local sweep (no ``address``) always starts a
+Ray of its own (``ray.init(address="local")``), whatever other Ray runs on the machine.
 """
 
 from __future__ import annotations
