@@ -136,16 +136,7 @@ def open_water_throughput(
     )
     sim = OpenWaterBatch(n_boats, observation=observation)
     sim.reset(None, draw_open_water(sc, 0, n_boats))
-    rng = np.random.default_rng(0)
-    actions = rng.uniform(-1.0, 1.0, (64, n_boats, 1)).astype(np.float32)
-    for k in range(3):
-        sim.step(actions[k])
-    steps = 0
-    start = time.perf_counter()
-    while (elapsed := time.perf_counter() - start) < seconds or steps == 0:
-        sim.step(actions[steps % 64])
-        steps += 1
-    return n_boats * steps / elapsed
+    return _decision_rate(sim.step, n_boats, seconds)
 
 
 def _env_figures(seconds: float) -> dict[str, Any]:
@@ -167,13 +158,19 @@ def env_throughput(observation: ObservationKind, n_envs: int, seconds: float = 2
     """
     env = PoleAvoidanceVectorEnv(n_envs, observation=observation, action="gaussian")
     env.reset(seed=0)
+    return _decision_rate(env.step, n_envs, seconds)
+
+
+def _decision_rate(step: Callable[[Any], Any], n_boats: int, seconds: float) -> float:
+    """``n_boats × steps / time`` of ``step`` fed uniformly random Gaussian actions for about
+    ``seconds``, after 3 warm-up steps."""
     rng = np.random.default_rng(0)
-    actions = rng.uniform(-1.0, 1.0, (64, n_envs, 1)).astype(np.float32)
+    actions = rng.uniform(-1.0, 1.0, (64, n_boats, 1)).astype(np.float32)
     for k in range(3):
-        env.step(actions[k])
+        step(actions[k])
     steps = 0
     start = time.perf_counter()
     while (elapsed := time.perf_counter() - start) < seconds or steps == 0:
-        env.step(actions[steps % 64])
+        step(actions[steps % 64])
         steps += 1
-    return n_envs * steps / elapsed
+    return n_boats * steps / elapsed
