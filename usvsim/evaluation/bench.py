@@ -98,6 +98,8 @@ class BenchArgs:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
         if self.scenario not in SCENARIOS:
             raise UserError(f"--scenario must be one of {SCENARIOS}, not {self.scenario!r}")
+        if self.sets and self.suite != "stress":
+            raise UserError("--sets needs --suite stress (the study's bench has no named sets)")
         if self.sweep:  # a folder that is not a sweep: one line before anything runs
             from usvsim.evaluation.bench_sweep import load_sweep
 

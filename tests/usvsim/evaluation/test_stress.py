@@ -156,6 +156,8 @@ def test_same_seed_gives_identical_rows():
 def test_unknown_set_is_an_error():
     with pytest.raises(UserError, match="unknown stress set 'tow-obstacles'"):
         select_sets(["tow-obstacles"])
+    with pytest.raises(UserError, match="--sets needs --suite stress"):
+        BenchArgs(sets="everything").check()
 
 
 def test_stress_command_writes_table_heatmap_and_json(tmp_path: Path, capsys):
