@@ -25,7 +25,7 @@ def plant():
     return Plant()
 
 
-@pytest.mark.parametrize("observation", ["positional", "radar", "radar+goal"])
+@pytest.mark.parametrize("observation", ["positional", "radar", "radar+goal", "scene"])
 @pytest.mark.parametrize("action", ["gaussian", "categorical"])
 def test_check_env_passes(observation, action):
     env = gym.make(usvsim.ENV_ID, observation=observation, action=action)
