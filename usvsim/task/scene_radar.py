@@ -5,6 +5,9 @@ The image geometry is the study's (:class:`usvsim.task.radar.RadarConfig`: 50 ra
 unchanged) lights a disc's polar bounding box; here a pixel is lit where its polar cell meets the
 disc itself, so an islet near the boat has its true, curved outline.
 
+Discs no larger than the study's pole (1 m) are drawn as the study draws it, as their polar
+bounding box, so a study episode gives the pole task's image pixel for pixel; larger ones:
+
 Exact extent of a disc (centre at range ρ, bearing φ, radius R) in one column, bearings
 [b0, b1): a ray at bearing θ, Δ = θ − φ, crosses the disc over ranges
 ``ρ cos Δ ∓ sqrt(R² − ρ² sin² Δ)`` (where ``ρ |sin Δ| ≤ R``); both ends move away from each other
@@ -65,12 +68,15 @@ def render_scene(
     cfg: RadarConfig | None = None,
     degradation: RadarDegradation | None = None,
     noise: UniformSource | None = None,
+    box_radius_m: float = 1.0,
 ) -> NDArray[np.uint8]:
     """Radar images (N, 1, rows, cols) uint8 of N boats, each seeing J discs.
 
     ``range_m``, ``bearing_rad`` (relative to heading), ``radius_m``, ``valid`` all (N, J);
     J ≤ :data:`MAX_DISCS`. ``noise`` serves the degraded boats' draws (``for_boats`` protocol of
     :class:`usvsim.task.scenario.BoatNoise`) and is needed only when some boat is degraded.
+    Discs no larger than ``box_radius_m`` (the study's 1 m pole) are drawn as the study draws its
+    pole, as their polar box (:func:`usvsim.task.radar.render_radar`, the same pixels).
     """
     cfg = cfg or RadarConfig()
     rho = np.asarray(range_m, dtype=float)
@@ -96,7 +102,9 @@ def render_scene(
     b_lo, b_hi = b_edges[:-1], b_edges[1:].copy()
     b_hi[-1] = np.nextafter(b_hi[-1], np.inf)
     inside = rho < r
-    half = np.where(inside, math.pi, np.arcsin(np.minimum(r / np.maximum(rho, 1e-12), 1.0)))
+    box = r <= box_radius_m  # the study's pole: its polar box
+    half = np.arcsin(np.minimum(r / np.maximum(rho, 1e-12), 1.0))
+    half = np.where(inside & ~box, math.pi, half)
     lo_b, hi_b = (phi - half)[..., None], (phi + half)[..., None]
     cols = (b_hi > lo_b) & (b_lo <= hi_b)  # (N, J, cols)
     for shift in (-2.0 * math.pi, 2.0 * math.pi):  # a disc whose bearing span wraps past ±π
@@ -109,6 +117,8 @@ def render_scene(
     chord = np.sqrt(np.maximum(r_c**2 - across**2, 0.0))
     near = np.where(inside[boat, disc], 0.0, along - chord)
     far = along + chord
+    in_box = box[boat, disc]
+    near, far = np.where(in_box, rho_c - r_c, near), np.where(in_box, rho_c + r_c, far)
     # rows k_lo..k_hi marked +1 / -1 in a difference array laid out (boat, column, range) and
     # summed along range: no (N, J, rows, cols) array
     dr = cfg.max_range_m / cfg.n_rows

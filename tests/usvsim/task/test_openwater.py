@@ -49,6 +49,19 @@ def test_the_study_is_a_member_of_the_family():
     assert [r.path_length_m for r in study] == [r.path_length_m for r in member]
 
 
+def test_study_member_sees_the_pole_tasks_radar_image():
+    specs = list(heldout_episodes(n=16))
+    pole = PoleAvoidanceBatch(16, observation="radar+goal")
+    water = OpenWaterBatch(16, observation="radar+goal")
+    a, b = pole.reset(None, specs), water.reset(None, list(from_pole_episodes(specs)))
+    for _ in range(12):  # into the pole's near field (the boats run straight at it)
+        np.testing.assert_array_equal(a["radar"], b["radar"])
+        np.testing.assert_array_equal(a["goal"], b["goal"])
+        act = np.zeros((16, 1), dtype=np.float32)
+        a, b = pole.step(act).observation, water.step(act).observation
+    assert (a["radar"][:, 0, :3] > 0).any()  # some pole within 12 m
+
+
 def test_default_parameters_draw_the_studys_geometry():
     for e in draw_open_water(OpenWaterScenario(), 3, 50):
         s, g = e.start_ne, np.asarray(e.goal_ne)
