@@ -231,6 +231,7 @@ class SitlRecord:
     frozen_wall_s: tuple[float, float] | None = None  # (monotonic start, duration) of a freeze
     dropped_at_s: float | None = None  # sim time the link was dropped
     client_dropped_at_s: float | None = None  # sim time the TCP client was cut off
+    position_reports: int = 0  # GLOBAL_POSITION_INT messages sent
 
 
 class RoverSitl:
@@ -572,6 +573,7 @@ class RoverSitl:
         if "ATTITUDE" in names:
             self.link.send_attitude(Attitude(t, 0.0, 0.0, psi, rate))
         if "GLOBAL_POSITION_INT" in names:
+            self.record.position_reports += 1
             lat, lon = geodetic_from_ned(pos[0], pos[1], self.origin)
             self.link.send_global_position(
                 GlobalPosition(t, float(lat), float(lon), float(vel[0]), float(vel[1]), psi)
@@ -606,10 +608,14 @@ class RoverSitl:
         return SysStatus(12.6, int(_SENSORS), int(_SENSORS), int(health))
 
     @contextlib.contextmanager
-    def serving_in_background(self, max_wall_s: float = 60.0) -> Iterator[RoverSitl]:
+    def serving_in_background(
+        self, max_wall_s: float = 60.0, lockstep_s: float = 0.0
+    ) -> Iterator[RoverSitl]:
         """Run :meth:`serve` in a daemon thread for the ``with`` block, then stop and close."""
         stop = threading.Event()
-        thread = threading.Thread(target=self.serve, args=(stop, max_wall_s), daemon=True)
+        thread = threading.Thread(
+            target=self.serve, args=(stop, max_wall_s, lockstep_s), daemon=True
+        )
         thread.start()
         try:
             yield self
@@ -618,12 +624,22 @@ class RoverSitl:
             thread.join(5.0)
             self.link.close()
 
-    def serve(self, should_stop: object = None, max_wall_s: float = math.inf) -> None:
+    def serve(
+        self, should_stop: object = None, max_wall_s: float = math.inf, lockstep_s: float = 0.0
+    ) -> None:
         """Run the loop (incoming → step → telemetry), paced at ``speedup``.
 
         ``should_stop``: an object with ``is_set()`` (a :class:`threading.Event`) checked every
         step; the loop also ends after ``duration_s`` simulated or ``max_wall_s`` wall seconds,
         and at ``drop_link_at_s`` (the link is closed: a crashed vehicle).
+
+        ``lockstep_s`` > 0 (tests; not a CLI option): lockstep with a GCS that answers every
+        GLOBAL_POSITION_INT with one GUIDED target, as the bridge does at its default rates.
+        In GUIDED and armed (and until a guided timeout), the vehicle takes no step after a
+        GLOBAL_POSITION_INT until a new target has arrived, the mode or arming has changed, or
+        ``lockstep_s`` wall seconds have passed (a GCS that stopped answering). Each decision
+        then acts from the plant step after the telemetry it was made on, whatever the load
+        of the machine; paced, a decision lands ``latency · speedup`` of vehicle time later.
         """
         start = time.monotonic()
         t0_ms = self.time_ms
@@ -656,4 +672,19 @@ class RoverSitl:
                 self.handle_incoming(left)
             self.handle_incoming(0.0)
             self.step()
+            sent = self.record.position_reports
             self.send_telemetry()
+            if lockstep_s > 0 and self.record.position_reports > sent:
+                self._await_answer(lockstep_s)
+
+    def _await_answer(self, limit_s: float) -> None:
+        """Lockstep (:meth:`serve`): wait for the target that answers the last position."""
+        if self.mode != RoverMode.GUIDED or not self.armed or self.guided.timed_out:
+            return
+        n_targets = len(self.record.targets)
+        deadline = time.monotonic() + limit_s
+        while len(self.record.targets) == n_targets and self.mode == RoverMode.GUIDED:
+            left = deadline - time.monotonic()
+            if left <= 0 or not self.armed:
+                return
+            self.handle_incoming(min(left, 0.05))

@@ -3,9 +3,21 @@ real time.
 
 End to end: a helmsman drives the endpoint past the pole to the goal and the true path matches
 the in-process simulation of the same episode (same EpisodeSpec, same sensor-noise stream in
-the endpoint) within PATH_TOLERANCE_M at every common 0.1 s plant step. The remaining
-difference comes from the bridge's own Kalman filter running on the telemetry (the simulator's
-runs on the raw sensors) and from quantised telemetry.
+the endpoint) within PATH_TOLERANCE_M at every common 0.1 s plant step. The endpoint runs in
+lockstep with the bridge (``RoverSitl.serve(lockstep_s=...)``): each decision acts from the
+plant step after the telemetry it was made on, as in the simulator, and the path is the same
+on an idle and on a loaded machine. Paced instead, a decision lands ``latency · speedup`` of
+vehicle time late (a 40 ms scheduling delay at 25x: 1 s, ten plant steps), which is what made
+the path wander with the machine's load.
+
+The remaining difference (1.69 m at most, every run; the decision timing is exact) is not
+noise: the endpoint's navigation estimate equals the simulator's to ~1 cm while their actions
+agree, but the bridge runs the simulator's Kalman filter a second time, on the endpoint's
+*estimate* (position fused as if it were a 1.5 m GNSS fix, no velocity aiding; the simulator's
+filter runs on the raw sensors), plus quantised telemetry. That second filter lags by
+0.6-0.9 m in the avoidance turn, and the test helmsman's 35 m / 50° switch turns that into
+different actions there (e.g. -0.92 instead of -0.76 at decision 13), hence up to 1.7 m of path
+that then converges again towards the goal.
 """
 
 import csv
@@ -30,7 +42,8 @@ from usvsim.task.batch import PoleAvoidanceBatch
 from usvsim.task.scenario import EpisodeSpec, Scenario, episode_geometry
 
 SPEEDUP = 25.0
-PATH_TOLERANCE_M = 2.0  # measured max deviation ~0.9 m (25x and 60x speedup)
+PATH_TOLERANCE_M = 2.0  # measured 1.69 m on the default hull (usv105), every run, any load
+LOCKSTEP_S = 2.0  # wall s the endpoint waits for the bridge's answer (only a liveness bound)
 ORIGIN = GeoOrigin(63.43, 10.39)
 SPEC = EpisodeSpec(pole_index=0, start_distance_m=80.0, start_bearing_rad=1.0, noise_seed=7)
 
@@ -72,6 +85,7 @@ def episode_mission() -> tuple[Mission, np.ndarray]:
 @contextmanager
 def sitl_running(**kw: Any) -> Iterator[RoverSitl]:
     _, start = episode_mission()
+    lockstep_s = kw.pop("lockstep_s", 0.0)
     args = SitlArgs(
         listen=kw.pop("listen", "udpin:127.0.0.1:0"),
         lat=ORIGIN.lat_deg,
@@ -80,7 +94,7 @@ def sitl_running(**kw: Any) -> Iterator[RoverSitl]:
         **{"speedup": SPEEDUP, "ekf_delay_s": 0.0, **kw},
     )
     sitl = RoverSitl(args, start_eta=start, noise_seed=SPEC.noise_seed)
-    with sitl.serving_in_background(60.0):
+    with sitl.serving_in_background(60.0, lockstep_s):
         yield sitl
 
 
@@ -116,7 +130,7 @@ def modes_after(sitl: RoverSitl, mode: RoverMode) -> list[float]:
 
 def test_end_to_end_path_matches_in_process_simulation(tmp_path: Path) -> None:
     mission, _ = episode_mission()
-    with sitl_running(wait_for_target=True) as sitl:
+    with sitl_running(wait_for_target=True, lockstep_s=LOCKSTEP_S) as sitl:
         bridge = Bridge(bridge_args(sitl, tmp_path), mission, AvoidingHelmsman())
         result = bridge.run(max_wall_s=30.0)
     assert result.reason == "goal reached"
@@ -124,6 +138,19 @@ def test_end_to_end_path_matches_in_process_simulation(tmp_path: Path) -> None:
     reference = in_process_path(AvoidingHelmsman())
     states = np.array(sitl.record.states)
     steps = np.array(sitl.record.plant_steps)
+    rows = list(csv.DictReader((tmp_path / "decisions.csv").open()))
+    # lockstep: decision k, made on the telemetry of plant step 20 k, steers from step 20 k + 1
+    decided = [r for r in rows if r["event"] == "decision"]
+    t_decisions = np.array([float(r["vehicle_s"]) for r in decided])
+    times = np.round(np.array(sitl.record.times_s), 3)
+    at = np.searchsorted(times, t_decisions)
+    np.testing.assert_array_equal(times[at], t_decisions)
+    np.testing.assert_array_equal(steps[at], 20 * np.arange(len(decided)))
+    targets = np.array(sitl.record.targets)
+    first = np.searchsorted(np.round(targets[:, 0], 3), t_decisions)  # before the next step
+    np.testing.assert_array_equal(np.round(targets[first, 0], 3), t_decisions)
+    psi_ref = np.array([float(r["psi_ref_deg"]) for r in decided])
+    np.testing.assert_allclose(np.degrees(targets[first, 1]), psi_ref, atol=1e-3)
     # until the goal-reached stop: then LOITER brakes, the simulator's episode has ended
     t_stop = modes_after(sitl, RoverMode.LOITER)[0]
     moved = (steps > 0) & (np.array(sitl.record.times_s) <= t_stop)
@@ -134,15 +161,10 @@ def test_end_to_end_path_matches_in_process_simulation(tmp_path: Path) -> None:
     assert dev.max() < PATH_TOLERANCE_M
     pole = np.asarray(Scenario().poles_ne[0])
     assert np.hypot(*(states[moved, 0:2] - pole).T).min() > 10.0  # passed the pole safely
-    # latency and throughput (reported in the closing note)
+    # latency (reported in the closing note); the throughput of a paced endpoint: below
     med, p99 = result.latency_summary()
-    rate = result.telemetry_ticks / result.telemetry_wall_s
-    print(
-        f"\nlatency median {1e3 * med:.2f} ms, p99 {1e3 * p99:.2f} ms; "
-        f"{rate:.0f} telemetry ticks/s (x2 messages); {result.decisions} decisions"
-    )
-    assert p99 < 0.05 and rate > 0.8 * SPEEDUP * 10.0
-    rows = list(csv.DictReader((tmp_path / "decisions.csv").open()))
+    print(f"\nlatency median {1e3 * med:.2f} ms, p99 {1e3 * p99:.2f} ms")
+    assert p99 < 0.05
     assert sum(r["event"] == "decision" for r in rows) == result.decisions
     assert rows[-2]["event"] == "done" and rows[-2]["detail"] == "goal reached"
     assert rows[-1]["event"] == "ack" and rows[-1]["detail"].startswith("LOITER ACK after")
@@ -161,6 +183,11 @@ def test_decisions_follow_the_vehicle_clock(tmp_path: Path) -> None:
     assert result.reason == "max duration"
     np.testing.assert_allclose(np.diff(t), 2.0, atol=1e-9)  # 2 s of vehicle time, at 25x
     assert bridge.clock_rate == pytest.approx(SPEEDUP, rel=0.2)
+    # throughput: the bridge keeps up with a paced endpoint (in lockstep, as in the end-to-end
+    # test, the endpoint waits for each answer, so the rate there is the round trip's)
+    rate = result.telemetry_ticks / result.telemetry_wall_s
+    print(f"\n{rate:.0f} telemetry ticks/s (x2 messages); {result.decisions} decisions")
+    assert rate > 0.8 * SPEEDUP * 10.0
 
 
 def test_telemetry_loss_commands_hold_within_two_vehicle_seconds(tmp_path: Path) -> None:

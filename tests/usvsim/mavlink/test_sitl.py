@@ -1,4 +1,8 @@
-"""The Rover-like MAVLink endpoint (usvsim.mavlink.sitl) on loopback, faster than real time."""
+"""The Rover-like MAVLink endpoint (usvsim.mavlink.sitl) on loopback, faster than real time.
+
+A test whose result hangs on when the GCS's messages arrive in vehicle time (the guided
+timeout) steps the vehicle itself (:func:`advance`) instead of serving it in a thread.
+"""
 
 import math
 import time
@@ -121,27 +125,72 @@ def test_guided_heading_and_speed_are_tracked(sitl: RoverSitl, gcs: MavlinkLink)
     assert x[3] == pytest.approx(3.0, abs=0.1)
 
 
-def test_guided_timeout_stops_and_holds_position(sitl: RoverSitl, gcs: MavlinkLink) -> None:
-    gcs.set_mode(1, RoverMode.GUIDED)
-    gcs.arm(1)
-    until(gcs, lambda g: len(acks(g)) >= 2)
-    t_stream_end = sitl.time_ms + 20_000
-    until(
-        gcs,
-        lambda g: sitl.time_ms > t_stream_end,
-        timeout_s=10.0,
-        each=lambda: gcs.send_heading(1, 0.0, 3.0),
-    )
-    got = until(gcs, lambda g: bool(sitl.record.guided_timeouts_s))
-    last_target = sitl.record.targets[-1][0]
-    t_out = sitl.record.guided_timeouts_s[0]
-    got += until(gcs, lambda g: sitl.time_ms > (t_out + 20.0) * 1000, timeout_s=10.0)
+@contextmanager
+def stepped(args: SitlArgs) -> Iterator[tuple[RoverSitl, MavlinkLink]]:
+    """A vehicle the test steps itself, in vehicle time (no serving thread, no pacing), and a
+    GCS: what the vehicle does then depends on no thread scheduling or machine load."""
+    sitl = RoverSitl(args)
+    gcs = MavlinkLink(f"udpout:127.0.0.1:{sitl.link.local_port}")
+    try:
+        yield sitl, gcs
+    finally:
+        gcs.close()
+        sitl.link.close()
+
+
+def delivered(sitl: RoverSitl, gcs: MavlinkLink, done: Callable[[], bool]) -> list[Received]:
+    """Let the vehicle read what the GCS sent (no step, no vehicle time) until ``done()``."""
+    got: list[Received] = []
+    deadline = time.monotonic() + 5.0  # liveness only: loopback delivers within microseconds
+    while not done():
+        assert time.monotonic() < deadline, "the vehicle never received the GCS's message"
+        sitl.handle_incoming(0.01)
+        got += gcs.poll(0.0)
+    return got
+
+
+def advance(
+    sitl: RoverSitl, gcs: MavlinkLink, vehicle_ms: int, each: Callable[[], None] | None = None
+) -> list[Received]:
+    """Step the vehicle through ``vehicle_ms`` of vehicle time as :meth:`RoverSitl.serve` does
+    (incoming, step, telemetry); ``each`` (a GCS message) is sent before every step and read
+    by the vehicle before that step."""
+    got: list[Received] = []
+    end_ms = sitl.time_ms + vehicle_ms
+    while sitl.time_ms < end_ms:
+        if each is not None:
+            count = len(sitl.record.targets)
+            each()
+            got += delivered(sitl, gcs, lambda n=count: len(sitl.record.targets) > n)
+        sitl.handle_incoming(0.0)
+        sitl.step()
+        sitl.send_telemetry()
+        got += gcs.poll(0.0)
+    return got + gcs.poll(0.05)
+
+
+def test_guided_timeout_stops_and_holds_position() -> None:
+    # stepped by the test: a GCS thread starved for 3 vehicle s (75 ms of wall clock at 40x,
+    # common on a loaded 2-core machine) would otherwise time the target out mid-stream
+    with stepped(sitl_args()) as (sitl, gcs):
+        gcs.set_mode(1, RoverMode.GUIDED)
+        gcs.arm(1)
+        got = delivered(sitl, gcs, lambda: sitl.armed)
+        got += until(gcs, lambda g: len(acks(got + g)) >= 2)
+        assert acks(got) == [(176, 0), (400, 0)]
+        advance(sitl, gcs, 20_000, each=lambda: gcs.send_heading(1, 0.0, 3.0))
+        assert len(sitl.record.targets) == 200  # one target every 0.1 s step for 20 s
+        last_target = sitl.record.targets[-1][0]
+        got = advance(sitl, gcs, 25_000)
     assert len(sitl.record.guided_timeouts_s) == 1
-    assert t_out - last_target == pytest.approx(3.0, abs=0.15)
+    t_out = sitl.record.guided_timeouts_s[0]
+    # Rover's 3 s, checked at every 0.1 s plant step: the first step more than 3 s after it
+    assert 3.0 < t_out - last_target <= 3.0 + 0.1 + 1e-9
     assert any(isinstance(r.message, StatusText) and "timeout" in r.message.text for r in got)
     assert sitl.mode == RoverMode.GUIDED  # like Rover: the mode stays, the boat stops
     states = np.array(sitl.record.states)
     t = np.array(sitl.record.times_s)
+    assert t[-1] >= t_out + 20.0
     speed = np.hypot(states[:, 3], states[:, 4])
     after = t > t_out + 1.0
     # no forward thrust (the reversing bucket brakes, as Rover's ATC_BRAKE), never speeds up
