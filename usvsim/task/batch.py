@@ -380,7 +380,7 @@ class PoleAvoidanceBatch:
             (self.n_boats, self._navplant.draws_needed(first, T))
         )
         speed, current, gnss = self.disturbances.inputs(
-            self._n_decisions * sc.decision_period_s, sc.dt_s, T
+            (self._n_decisions * sc.decision_period_s).astype(np.float64), sc.dt_s, T
         )
         if speed is None:  # the study's call, unchanged
             packed = self._navplant.run(self._s, psi_ref, sc.speed_mps, T, first, normals)

@@ -252,14 +252,16 @@ class OpenWaterBatch:
         sc = self.base
         T = sc.steps_per_decision
         traj = res.trajectory
-        t = (self._n_dec[:, None] * T + np.arange(1, T + 1)) * sc.dt_s  # (N, T) episode time
+        steps = self._n_dec[:, None] * T + np.arange(1, T + 1)
+        t: FloatArray = steps.astype(np.float64) * sc.dt_s  # (N, T) episode time
         d, hit_j = self._distances(traj[:, :, 0:2], t)
         d_min_t = d.min(axis=1, initial=np.inf)  # (N, T)
-        hit = hit_j.any(axis=1)
+        hit: NDArray[np.bool_] = np.any(hit_j, axis=1)
         dx, dy = traj[:, :, 0] - self.goal_ne[:, 0:1], traj[:, :, 1] - self.goal_ne[:, 1:2]
         in_goal = within_radius(dx, dy, sc.goal_radius_m)
-        collision, reached = hit.any(axis=1), in_goal.any(axis=1)
-        terminated = reached | collision
+        collision: NDArray[np.bool_] = np.any(hit, axis=1)
+        reached: NDArray[np.bool_] = np.any(in_goal, axis=1)
+        terminated: NDArray[np.bool_] = reached | collision
         end = np.where(terminated, np.argmax(hit | in_goal, axis=1), T - 1)
         upto = np.where(np.arange(T) > end[:, None], np.inf, d_min_t)
         self._min_d = np.minimum(self._min_d, upto.min(axis=1))
