@@ -190,7 +190,6 @@ class _ILRun:
             policy_accuracy=u.policy_accuracy,
             goal_rate=u.goal_rate,
         )
-        self.history.append(rec)
         self.milestones.add(rec)
         self.say(
             f"it {s.iteration:4d} {rec['wall_time_s']:6.0f}s val {rec['successes']:2d}/15 "
@@ -198,11 +197,14 @@ class _ILRun:
             f"{u.expert_accuracy:.2f}/{u.policy_accuracy:.2f}  goal {u.goal_rate:.2f}  "
             f"path-to-expert {rec['path_distance_m']:4.1f} m"
         )
-        ck = _checkpoint(agent, self.setup, self.train_args, rec, self.history)
+        ck = _checkpoint(agent, self.setup, self.train_args, rec, [*self.history, rec])
         if self.best is None or _rank(rec) > _rank(self.best):
             self.best = rec
             save_checkpoint(ck, self.out / "best.pt")
         save_checkpoint(ck, self.out / "latest.pt")
+        # only now: summary.json's checkpoint_iteration (history[-1]) must be what latest.pt holds
+        # even when a Ctrl-C lands inside the save
+        self.history.append(rec)
         with atomic_open(self.out / "latest.gail.pt", "wb") as handle:
             torch.save(agent.trainer.state_dict(), handle)
         self.log.write(plot=self.log.plot_due())

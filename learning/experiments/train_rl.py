@@ -103,16 +103,18 @@ class _Run:
     ) -> bool:
         val = validate(agent, self.setup)
         record = validation_record(row, wall, val, kl=stats.kl, entropy=stats.entropy)
-        self.history.append(record)
         self.milestones.add(record)
         ckpt = Checkpoint.from_agent(
             agent,
             self.setup,
             train_args=self.train_args,
             validation=record,
-            history=self.history,
+            history=[*self.history, record],
         )
         save_checkpoint(ckpt, self.out / "latest.pt")
+        # only now: summary.json's checkpoint_iteration (history[-1]) must be what latest.pt holds
+        # even when a Ctrl-C lands inside the save
+        self.history.append(record)
         key = (int(val["successes"]), float(val["mean_return"]))
         if self.best is None or key > self.best:
             self.best = key

@@ -69,7 +69,8 @@ def test_train_killed_at_random_points_keeps_a_loadable_checkpoint(tmp_path: Pat
         for name in ("latest.pt", "best.pt"):
             ckpt = load_checkpoint(out / name)
             load_agent(ckpt, out / name)
-        assert not ckpt.slim and int(ckpt.agent["iteration"]) >= 2
+        # best.pt (the last one loaded) may come from the first validation, at iteration 1
+        assert not ckpt.slim and int(ckpt.agent["iteration"]) >= 1
         with (out / "log.csv").open() as handle:
             rows = list(csv.DictReader(handle))
         assert rows and all(r["iteration"] for r in rows)

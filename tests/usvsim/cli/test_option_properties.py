@@ -97,7 +97,8 @@ def test_any_option_value_is_checked_or_refused(command: str, data: st.DataObjec
         # the flag leads, or a rule across several options names each of them
         assert str(err).startswith(flag(f.name)) or flag(f.name) in str(err), err
         # rules between options refuse some values inside the range: sitl-physics (two channels
-        # must differ, PWM min < trim < max), manoeuvre (--speed at most 5x the cruise speed of each vessel chosen)
+        # must differ, PWM min < trim < max), manoeuvre (--speed at most 5x the cruise speed of
+        # each vessel chosen)
         assert not _in_range(f, value) or command in ("sitl-physics", "manoeuvre")
         return
     assert _in_range(f, value), (command, f.name, value)
