@@ -434,8 +434,12 @@ class MavlinkLink:
         """
         msgs: list[Any] = []
         if not isinstance(self._conn, mavutil.mavudp):
-            while len(msgs) < max_packets and (m := self._conn.recv_msg()) is not None:
-                msgs.append(m)
+            try:
+                while len(msgs) < max_packets and (m := self._conn.recv_msg()) is not None:
+                    msgs.append(m)
+            except (ConnectionResetError, BrokenPipeError) as err:
+                # a peer that resets (RST) between the readiness check and the read
+                raise self._lose(f"connection reset by the peer ({err.strerror})") from None
             return msgs
         while len(msgs) < max_packets:
             data = self._conn.recv()

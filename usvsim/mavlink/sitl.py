@@ -442,11 +442,10 @@ class RoverSitl:
         A TCP client that goes away is forgotten (the endpoint listens for the next one).
         """
         try:
-            received = self.link.poll(timeout_s)
+            for r in self.link.poll(timeout_s):
+                self._dispatch(r)  # its replies may find the client gone too
         except LinkLostError:
             return
-        for r in received:
-            self._dispatch(r)
 
     def _dispatch(self, r: Received) -> None:
         msg = r.message
@@ -561,7 +560,10 @@ class RoverSitl:
             self._next_due_ms[name] += self._interval_ms[name] * max(
                 1, (self.time_ms - self._next_due_ms[name]) // self._interval_ms[name] + 1
             )
-        self._send_streams(due)
+        try:
+            self._send_streams(due)
+        except LinkLostError:
+            return  # the client went away: the endpoint listens for the next one
 
     def _send_streams(self, names: list[str]) -> None:
         est = self.nav.estimate

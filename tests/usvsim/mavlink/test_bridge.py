@@ -41,6 +41,9 @@ from usvsim.nav.telemetry import TelemetryEstimator
 from usvsim.task.batch import PoleAvoidanceBatch
 from usvsim.task.scenario import EpisodeSpec, Scenario, episode_geometry
 
+# an endpoint thread that dies of an exception is a failure, not a warning
+pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")
+
 SPEEDUP = 25.0
 PATH_TOLERANCE_M = 2.0  # measured 1.69 m on the default hull (usv105), every run, any load
 LOCKSTEP_S = 2.0  # wall s the endpoint waits for the bridge's answer (only a liveness bound)

@@ -23,6 +23,9 @@ from usvsim.mavlink.connection import VehicleError
 from usvsim.mavlink.messages import RoverMode
 from usvsim.mavlink.sitl import NOT_READY_TEXT
 
+# an endpoint thread that dies of an exception is a failure, not a warning
+pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")
+
 
 def events(tmp_path: Path) -> list[dict[str, str]]:
     return list(csv.DictReader((tmp_path / "decisions.csv").open()))

@@ -1,6 +1,8 @@
 """The typed MAVLink adapter (usvsim.mavlink.link) on loopback: OS-assigned ports, deadlines."""
 
 import math
+import socket
+import struct
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -9,7 +11,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav2
 
 from usvsim.mavlink import messages
-from usvsim.mavlink.link import MavlinkLink, load_signing_key, read_tlog
+from usvsim.mavlink.link import LinkLostError, MavlinkLink, load_signing_key, read_tlog
 from usvsim.mavlink.messages import (
     TYPE_MASK_VELOCITY_YAW,
     CommandLong,
@@ -188,3 +190,30 @@ def test_signing_key_file_formats(tmp_path: Path) -> None:
     with pytest.raises(ValueError) as err:
         load_signing_key(bad)
     assert "secret" not in str(err.value)
+
+
+def test_a_peer_reset_mid_read_is_a_lost_link_not_a_traceback() -> None:
+    """RST after data: the readiness check sees the data, the read then meets ECONNRESET.
+
+    Found by CI: a vehicle closing its end while the bridge read raised pymavlink's raw
+    ``ConnectionResetError`` instead of :class:`LinkLostError`, so no failsafe ran.
+    """
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+    link = MavlinkLink(f"tcp:127.0.0.1:{server.getsockname()[1]}")
+    peer, _ = server.accept()
+    mav = mav2.MAVLink(None, srcSystem=1, srcComponent=1)
+    frame = mav.heartbeat_encode(10, 3, 0, 0, 0).pack(mav)
+    peer.sendall(frame + frame[:5])  # one whole packet, then half of the next
+    peer.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    peer.close()  # linger 0: the kernel sends RST, not FIN
+    server.close()
+    time.sleep(0.05)
+    with pytest.raises(LinkLostError, match="reset by the peer"):
+        for _ in range(3):
+            link.poll(0.05)
+    assert link.lost is not None
+    with pytest.raises(LinkLostError):
+        link.poll(0.0)  # stays lost
+    link.close()

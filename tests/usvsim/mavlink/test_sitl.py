@@ -24,6 +24,9 @@ from usvsim.mavlink.messages import (
 )
 from usvsim.mavlink.sitl import RoverSitl, SitlArgs
 
+# an endpoint thread that dies of an exception is a failure, not a warning
+pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")
+
 SPEEDUP = 40.0
 KEY = bytes(range(1, 33))
 
