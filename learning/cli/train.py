@@ -16,7 +16,8 @@ file              contents
 ``latest.pt``     the full (resumable) checkpoint at the last validation
                   (:mod:`learning.experiments.checkpoint`)
 ``best.pt``       the checkpoint with the most validation successes (ties: higher mean return;
-                  IL: the smaller path distance to the expert's)
+                  IL: the most successes on 60 selection episodes, the 15 among them, then
+                  the smaller path distance to the expert's)
 ``summary.json``  the run's outcome: first 15/15 (iteration, env steps, wall-clock), stop reason
                   (IL also: first >= 14/15, the best validation record)
 ================  ===========================================================================

@@ -54,7 +54,7 @@ from usvsim.common.fileio import (
     atomic_open,
     remove_stale_temporaries,
 )
-from usvsim.evaluation.episodes import validation_episodes
+from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
@@ -74,13 +74,15 @@ IL_CSV_FIELDS = (
     "val_mean_return",
     "val_min_pole_distance_m",
     "val_path_distance_m",
+    "val_selection_successes",
 )
 """Columns of an IL run's ``log.csv``: :class:`learning.imitation.gail.GAILStats` (``env_return``
 the handcrafted return of the finished training episodes, a diagnostic; ``mean_reward`` the mean
 imitation reward; ``disc_*``, ``*_accuracy``, ``mean_d_*`` the discriminator's last Adam step),
 then the validation's (filled on validation iterations): successes /15, mean handcrafted return,
-closest pole approach (m) and path distance to the expert's paths (m,
-:mod:`usvsim.evaluation.likeness`).
+closest pole approach (m), path distance to the expert's paths (m,
+:mod:`usvsim.evaluation.likeness`) and successes on the 60 selection episodes
+(:func:`usvsim.evaluation.episodes.selection_episodes`, the 15 among them).
 ``wall_time_s`` counts from the start of GAIL (behavioural cloning included) and continues
 across ``--resume``."""
 
@@ -99,16 +101,24 @@ def _checkpoint(
 
 
 def validate_il(
-    agent: GAILAgent, setup: ILSetup, specs: Sequence[EpisodeSpec], reference: ExpertReference
+    agent: GAILAgent,
+    setup: ILSetup,
+    specs: Sequence[EpisodeSpec],
+    reference: ExpertReference,
+    extra_specs: Sequence[EpisodeSpec] = (),
 ) -> dict[str, float]:
     """The deterministic policy on ``specs`` (the 15 validation episodes):
     :func:`learning.experiments.validation.validation_summary` and the path distance to the
-    expert (m)."""
-    recs = policy_records(agent, setup, specs)
-    return {
-        **validation_summary(recs),
-        "path_distance_m": likeness(recs, reference).path_distance_m,
+    expert (m); with ``extra_specs`` (run in the same batch) also ``selection_successes``, the
+    successes on ``specs`` and ``extra_specs`` together."""
+    recs = policy_records(agent, setup, [*specs, *extra_specs])
+    val = {
+        **validation_summary(recs[: len(specs)]),
+        "path_distance_m": likeness(recs[: len(specs)], reference).path_distance_m,
     }
+    if extra_specs:
+        val["selection_successes"] = int(sum(r.success for r in recs))
+    return val
 
 
 class _ILRun:
@@ -150,6 +160,7 @@ class _ILRun:
         self.start = time.perf_counter()
         self.stop_reason = "iterations"
         self.specs = validation_episodes()
+        self.extra_specs = selection_episodes()[len(self.specs) :]
         self.reference = expert_reference(self.specs)
 
     def session_s(self) -> float:
@@ -176,7 +187,7 @@ class _ILRun:
     def _validate(
         self, s: IterationStats, agent: GAILAgent, row: dict[str, Any], wall: float
     ) -> bool:
-        val = validate_il(agent, self.setup, self.specs, self.reference)
+        val = validate_il(agent, self.setup, self.specs, self.reference, self.extra_specs)
         u = s.update
         assert isinstance(u, GAILStats)
         rec = validation_record(
@@ -264,8 +275,9 @@ def train_il(
     """Train ``setup`` by GAIL, writing into ``out_dir`` the files of ``usvsim train``
     (:mod:`learning.cli.train`; ``log.csv`` columns :data:`IL_CSV_FIELDS`).
 
-    ``best.pt`` is the best validation checkpoint (most successes, then the smallest path
-    distance to the expert, :mod:`usvsim.evaluation.likeness`), ``latest.pt`` the last one and
+    ``best.pt`` is the best validation checkpoint (most successes on the 60 selection episodes,
+    then on the 15 validation episodes, then the smallest path distance to the expert,
+    :mod:`usvsim.evaluation.likeness`; :func:`_rank`), ``latest.pt`` the last one and
     ``latest.gail.pt`` its discriminator state; ``resume`` continues from those two with the
     setup, hyperparameters and seed stored there, and keeps ``log.csv`` up to their iteration.
     Validation every ``validate_every`` iterations (0: the setup's) and at the last one; the
@@ -415,7 +427,12 @@ def _resume_state(
     return stored, {"agent": ck.agent, "gail": gail_state}, ck.history
 
 
-def _rank(rec: dict[str, Any]) -> tuple[int, float]:
-    """Most validation successes first, then the most expert-like path (the point of IL)."""
+def _rank(rec: dict[str, Any]) -> tuple[int, int, float]:
+    """Most successes on the 60 selection episodes first (the 15 validation episodes among
+    them; :func:`usvsim.evaluation.episodes.selection_episodes` says why 15 are too few to
+    choose among many 15/15 checkpoints), then on the 15, then the most expert-like path (the
+    point of IL). A record from before the selection set (a resumed older run) ranks as if it
+    had failed every extra episode."""
     d = rec.get("path_distance_m", math.inf)
-    return int(rec["successes"]), -d if math.isfinite(d) else -math.inf
+    selection = int(rec.get("selection_successes", rec["successes"]))
+    return selection, int(rec["successes"]), -d if math.isfinite(d) else -math.inf

@@ -15,6 +15,11 @@ Episode sets
   three times, 120° apart); its pole and noise seed come from a fixed seed (``VALIDATION_SEED``).
 * :func:`heldout_episodes` — 200 episodes drawn by :func:`usvsim.task.scenario.draw_episode` from a
   separate seed (``HELDOUT_SEED``); never used for model selection.
+* :func:`selection_episodes` — the 15 validation episodes followed by 45 more drawn from a third
+  seed (``SELECTION_SEED``): what an IL run ranks its checkpoints on (``best.pt``). Fifteen
+  episodes cannot tell a 94 % policy from a 99 % one (it scores 15/15 with probability
+  0.94^15 = 0.39), and an IL run has many 15/15 checkpoints to choose from; on 60 episodes the
+  94 % policy is perfect with probability 0.024.
 
 Success is strict (issue 3): within 10 m of the goal before the time limit, and never closer
 than 10 m to the pole (true positions, every 0.1 s plant step).
@@ -37,18 +42,21 @@ from usvsim.task.scenario import EpisodeSpec, Scenario, draw_episodes
 
 __all__ = [
     "HELDOUT_SEED",
+    "SELECTION_SEED",
     "VALIDATION_SEED",
     "EpisodeRecord",
     "EvaluationSummary",
     "evaluate",
     "format_records",
     "heldout_episodes",
+    "selection_episodes",
     "summarize",
     "validation_episodes",
 ]
 
 VALIDATION_SEED = 20190015  # seeds the validation set's poles and noise
 HELDOUT_SEED = 20190200  # seeds the held-out set (a separate stream)
+SELECTION_SEED = 20190060  # seeds the selection set's 45 extra episodes (a third stream)
 FloatArray = NDArray[np.float64]
 
 
@@ -64,6 +72,16 @@ def validation_episodes(scenario: Scenario | None = None) -> tuple[EpisodeSpec, 
         distance = lo + (hi - lo) * (k % 5) / 4
         specs.append(EpisodeSpec(pole, distance, math.radians(24.0 * k), 0.0, seed))
     return tuple(specs)
+
+
+def selection_episodes(
+    scenario: Scenario | None = None, n_extra: int = 45
+) -> tuple[EpisodeSpec, ...]:
+    """The 15 validation episodes, then ``n_extra`` drawn from ``SELECTION_SEED`` (module
+    docstring): a larger set to choose checkpoints on, disjoint from the held-out stream."""
+    scenario = scenario or Scenario()
+    extra = draw_episodes(np.random.default_rng(SELECTION_SEED), scenario, n_extra)
+    return validation_episodes(scenario) + tuple(extra)
 
 
 def heldout_episodes(scenario: Scenario | None = None, n: int = 200) -> tuple[EpisodeSpec, ...]:

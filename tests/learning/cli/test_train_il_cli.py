@@ -16,14 +16,16 @@ from learning.cli.train import TrainArgs, run
 from learning.experiments.checkpoint import load_checkpoint
 from learning.experiments.il_setups import IL_SETUPS
 from learning.experiments.train_il import IL_CSV_FIELDS
-from usvsim.evaluation.episodes import validation_episodes
+from usvsim.evaluation.episodes import evaluate, selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference
+from usvsim.helm.registry import make_helmsman
 
 SETUP = "il-gaussian-positional"
 STEPS = 4 * 16  # n_envs x steps_per_env of the tiny setup
 
 
 SPECS = tuple(validation_episodes()[:5])  # validation on 5 of the 15 episodes: a third of the time
+EXTRA = tuple(selection_episodes()[15:18])  # and 3 of the 45 extra selection episodes
 
 
 @pytest.fixture(scope="module")
@@ -42,6 +44,7 @@ def tiny(monkeypatch: pytest.MonkeyPatch, reference: ExpertReference) -> None:
     )
     monkeypatch.setitem(IL_SETUPS, SETUP, small)
     monkeypatch.setattr(train_il, "validation_episodes", lambda: SPECS)
+    monkeypatch.setattr(train_il, "selection_episodes", lambda: SPECS + EXTRA)
     monkeypatch.setattr(train_il, "expert_reference", lambda specs: reference)
 
 
@@ -136,3 +139,55 @@ def test_existing_run_is_not_overwritten_without_resume(tmp_path: Path) -> None:
 def test_resume_without_a_checkpoint_names_the_file(tmp_path: Path) -> None:
     with pytest.raises(SystemExit, match=r"cannot resume: .*latest\.pt"):
         run(_args(tmp_path, resume=True))
+
+
+@pytest.mark.usefixtures("tiny")
+def test_best_is_chosen_on_the_selection_set_before_the_path(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two 15/15 validations: the one with more selection successes wins over a closer path."""
+    base = {"successes": 15, "n_episodes": 15, "mean_return": -10.0, "min_pole_distance_m": 20.0}
+    vals = iter(
+        [
+            {**base, "path_distance_m": 2.0, "selection_successes": 55},
+            {**base, "path_distance_m": 6.0, "selection_successes": 59},
+            {**base, "path_distance_m": 1.0, "selection_successes": 59},
+            {**base, "path_distance_m": 0.5, "selection_successes": 58},
+        ]
+    )
+    seen: list[int] = []
+
+    def fake(agent: Any, setup: Any, specs: Any, reference: Any, extra: Any) -> dict[str, Any]:
+        seen.append(len(extra))
+        return dict(next(vals))
+
+    monkeypatch.setattr(train_il, "validate_il", fake)
+    assert run(_args(tmp_path, iterations=4, validate_every=1, stop_after=0)) == 0
+    assert seen == [len(EXTRA)] * 4
+    best = load_checkpoint(tmp_path / "best.pt").validation
+    assert (best["iteration"], best["path_distance_m"]) == (3, 1.0)
+    rows = _csv(tmp_path / "log.csv")
+    assert [r["val_selection_successes"] for r in rows] == ["55", "59", "59", "58"]
+
+
+def test_validate_il_counts_selection_successes_over_both_sets(
+    monkeypatch: pytest.MonkeyPatch, reference: ExpertReference
+) -> None:
+    """The 15-episode figures come from ``specs`` only, the selection count from both sets."""
+    recs = evaluate(  # a classical helmsman's episodes stand in for a policy's
+        make_helmsman("los-avoid"), [*SPECS, *EXTRA], observation="positional"
+    )
+    monkeypatch.setattr(train_il, "policy_records", lambda agent, setup, specs: recs)
+    monkeypatch.setattr(train_il, "likeness", lambda r, ref: _Path(len(r)))
+    setup = IL_SETUPS[SETUP]
+    val = train_il.validate_il(None, setup, SPECS, reference, EXTRA)  # type: ignore[arg-type]
+    assert val["n_episodes"] == len(SPECS) and val["path_distance_m"] == len(SPECS)
+    assert val["successes"] == sum(r.success for r in recs[: len(SPECS)])
+    assert val["selection_successes"] == sum(r.success for r in recs)
+    plain = train_il.validate_il(None, setup, SPECS, reference)  # type: ignore[arg-type]
+    assert "selection_successes" not in plain
+
+
+@dataclasses.dataclass
+class _Path:
+    path_distance_m: float

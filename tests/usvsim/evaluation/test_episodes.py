@@ -141,3 +141,14 @@ def test_episode_plots_write_pngs(straight_records, tmp_path):
     for name in ("episode.png", "strip.png"):
         data = (tmp_path / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5_000
+
+
+def test_selection_set_starts_with_validation_and_is_disjoint_from_heldout() -> None:
+    from usvsim.evaluation.episodes import heldout_episodes, selection_episodes
+
+    sel = selection_episodes()
+    assert len(sel) == 60 and sel[:15] == validation_episodes()
+    assert sel == selection_episodes()  # fixed, seeded
+    held = {s.noise_seed for s in heldout_episodes()}
+    assert not held & {s.noise_seed for s in sel}
+    assert len({s.noise_seed for s in sel}) == 60

@@ -104,5 +104,7 @@ def test_manoeuvre_command_writes_table_and_plots(tmp_path, capsys):
 def test_manoeuvre_command_rejects_an_unknown_vessel():
     from usvsim.cli.plant import ManoeuvreArgs
 
-    with pytest.raises(UserError, match="--vessel must be one of all, default, cybership2, loe-default"):
+    with pytest.raises(
+        UserError, match="--vessel must be one of all, default, cybership2, loe-default"
+    ):
         ManoeuvreArgs(vessel="titanic").check()
