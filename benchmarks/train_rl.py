@@ -179,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.ship:
         merged = merge_models_json(results, machine)
         atomic_write_text(MODELS_DIR / "models.json", json.dumps(merged, indent=2) + "\n")
-        write_readme_table(list(merged["models"].values()))
+        write_readme_table([m for m in merged["models"].values() if m["setup"].startswith("rl-")])
     print(table)
     return 0
 
