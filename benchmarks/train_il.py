@@ -17,10 +17,12 @@ at least 14/15 successes and to the first 15/15 (validation time included; behav
 included), the best validation (most successes, then most expert-like path; what ``best.pt``
 holds) and when it came, the study's best success and iterations to it (Table 4.1,
 ``shared/reference/table-4-1.md``), the whole run (it stops after ``--stop-after`` consecutive
-15/15, or at its iteration budget) and ``best.pt``'s validation, held-out and likeness
-results. ``--ship`` writes slim copies of the ``best.pt`` files to ``usvsim/models/<setup>.pt``
-(float16 weights for the radar CNN, as for RL), evaluates those, and records them in
-``usvsim/models/models.json`` and the IL table of ``usvsim/models/README.md``.
+15/15, or at its iteration budget), where an iteration's time went (rollout / batch / policy
+step / critic / discriminator, mean s; ``train_rl.time_split``) and ``best.pt``'s validation,
+held-out and likeness results. ``--ship`` writes slim copies of the ``best.pt`` files to
+``usvsim/models/<setup>.pt`` (float16 weights for the radar CNN, as for RL), evaluates those,
+and records them in ``usvsim/models/models.json`` and the IL table of
+``usvsim/models/README.md``.
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ from train_rl import (  # this folder
     merge_models_json,
     replace_readme_section,
     run_options,
+    split_cell,
+    time_split,
     write_results,
 )
 
@@ -80,9 +84,10 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
         "| first 15/15: wall-clock | env steps | iterations "
         "| best validation | at: wall-clock | env steps | iterations "
         "| study: best / iterations | run: iterations / wall-clock | stopped "
+        "| s per iteration: rollout / batch / policy / critic / discriminator "
         "| best.pt: validation | held-out (200) | min d_pole m (min / median, held-out) "
         "| path to expert m | side agreement | heading-change W1 deg |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     lines = []
     for r in results:
@@ -95,6 +100,7 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
             f"| {best['successes']}/15 | {_when(s['best'])} "
             f"| {study}/15 ({100 * s['study_success']:.1f} %) / ~{s['study_iterations']} "
             f"| {s['iterations']} / {s['wall_time_s']:.0f} s | {s['stop_reason']} "
+            f"| {split_cell(r)} "
             f"| {val['successes']}/15 | {held['successes']}/200 "
             f"({100 * held['success_rate']:.1f} %) "
             f"| {held['min_pole_distance_m']:.1f} / {held['median_pole_distance_m']:.1f} "
@@ -145,6 +151,7 @@ def main(argv: list[str] | None = None) -> int:
                 "command": summary["command"],
                 "checkpoint": str(best),
                 "summary": summary,
+                "time_split": time_split(run_dir),
                 "evaluation": evaluate_checkpoint(best),
                 "likeness": likeness_of(best),
             }

@@ -12,7 +12,9 @@ held-out episodes (:mod:`learning.cli.evaluate`) and writes a Markdown table::
 Reported per setup: wall-clock, environment steps and iterations to the FIRST 15/15 validation
 (validation time included), the study's iterations to its best validation (Table 4.1,
 ``shared/reference/table-4-1.md``), the whole run (it stops after ``--stop-after`` consecutive
-15/15), and the shipped checkpoint's validation / held-out results. ``--ship`` writes slim
+15/15), where an iteration's time went (mean s of ``log.csv``'s time columns: rollout / batch /
+policy step / critic, :func:`time_split`), and the shipped checkpoint's validation / held-out
+results. ``--ship`` writes slim
 copies (policy + normaliser; float16 weights for the radar CNN, see :func:`slim_copy`) to
 ``usvsim/models/<setup>.pt`` and records everything in ``usvsim/models/models.json`` and the
 table in ``usvsim/models/README.md``.
@@ -21,6 +23,7 @@ table in ``usvsim/models/README.md``.
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import os
 import platform
@@ -30,6 +33,7 @@ from typing import Any
 
 import torch
 
+from learning.algorithms.loop import TIME_FIELDS
 from learning.cli.evaluate import evaluation_row
 from learning.cli.train import TrainArgs, run
 from learning.experiments.checkpoint import (
@@ -82,12 +86,29 @@ def evaluate_checkpoint(path: Path) -> dict[str, Any]:
     }
 
 
+def time_split(run_dir: Path) -> dict[str, float]:
+    """Mean s per iteration of each time column of ``run_dir/log.csv`` that the run has
+    (:data:`learning.algorithms.loop.TIME_FIELDS`)."""
+    if not (run_dir / "log.csv").is_file():
+        return {}
+    with (run_dir / "log.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    fields = [f for f in TIME_FIELDS if rows and rows[0].get(f)]
+    return {f: round(sum(float(r[f]) for r in rows) / len(rows), 3) for f in fields}
+
+
+def split_cell(result: dict[str, Any]) -> str:
+    """``rollout / batch / policy / critic [/ discriminator]`` s per iteration, or —."""
+    split = result.get("time_split")
+    return " / ".join(f"{v:.2f}" for v in split.values()) if split else "—"
+
+
 def markdown_table(results: list[dict[str, Any]]) -> str:
     head = (
         "| setup | first 15/15: wall-clock | env steps | iterations | study iterations "
-        "| run: iterations / wall-clock | validation | held-out (200) "
-        "| min d_pole m (min / median, held-out) |\n"
-        "|---|---|---|---|---|---|---|---|---|\n"
+        "| run: iterations / wall-clock | s per iteration: rollout / batch / policy / critic "
+        "| validation | held-out (200) | min d_pole m (min / median, held-out) |\n"
+        "|---|---|---|---|---|---|---|---|---|---|\n"
     )
     lines = []
     for r in results:
@@ -101,7 +122,7 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {r['setup']} | {f_wall} | {f_steps} | {f_it} | ~{r['summary']['study_iterations']} "
             f"| {r['summary']['iterations']} / {r['summary']['wall_time_s']:.0f} s "
-            f"| {val['successes']}/15 | {held['successes']}/200 "
+            f"| {split_cell(r)} | {val['successes']}/15 | {held['successes']}/200 "
             f"({100 * held['success_rate']:.1f} %) "
             f"| {held['min_pole_distance_m']:.1f} / {held['median_pole_distance_m']:.1f} |"
         )
@@ -170,6 +191,7 @@ def main(argv: list[str] | None = None) -> int:
                 "checkpoint": str(source),
                 "checkpoint_bytes": source.stat().st_size,
                 "summary": summary,
+                "time_split": time_split(run_dir),
                 "evaluation": evaluation,
             }
         )

@@ -26,14 +26,20 @@ member                 meaning
 ``state_dict()``       plain data and tensors, with a ``"format"`` and a ``"config"`` entry
 ``load_state_dict``    restore a ``state_dict`` (raises ``ValueError`` on another format)
 =====================  ==================================================================
+
+Every update's statistics carry :class:`UpdateTimes`, where its wall-clock went (measured with
+:class:`Stopwatch`); with the rollout's time they are the ``log.csv`` columns
+:data:`learning.algorithms.loop.TIME_FIELDS`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import time
 import types
 import typing
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
@@ -45,7 +51,15 @@ from learning.algorithms.networks import NetworkConfig
 from learning.algorithms.normalization import ObservationNormalizer
 from learning.algorithms.rollout import Obs, RolloutBatch
 
-__all__ = ["Agent", "AlgorithmConfig", "UpdateStats", "config_from_dict", "log_row"]
+__all__ = [
+    "Agent",
+    "AlgorithmConfig",
+    "Stopwatch",
+    "UpdateStats",
+    "UpdateTimes",
+    "config_from_dict",
+    "log_row",
+]
 
 C = TypeVar("C")
 
@@ -67,10 +81,38 @@ class AlgorithmConfig(Protocol):
     def network(self) -> NetworkConfig: ...
 
 
+@dataclass(frozen=True)
+class UpdateTimes:
+    """Where one update's wall-clock went, s (``time.perf_counter``; parts it does not have: 0)."""
+
+    batch_s: float = 0.0  # V(s) of the batch, GAE, checked tensors; the statistics refresh after
+    policy_step_s: float = 0.0  # the policy step (TRPO: gradient, conjugate gradient, line search)
+    critic_s: float = 0.0  # the critic's regression (fit_critic)
+    discriminator_s: float = 0.0  # GAIL: the discriminator's step and the imitation rewards
+
+
+class Stopwatch:
+    """Splits wall-clock into the parts of :class:`UpdateTimes`: each :meth:`lap` adds the time
+    since the previous lap (or since the stopwatch was made) to one part."""
+
+    def __init__(self) -> None:
+        self.parts = dict.fromkeys((f.name for f in dataclasses.fields(UpdateTimes)), 0.0)
+        self.last = time.perf_counter()
+
+    def lap(self, part: str) -> None:
+        now = time.perf_counter()
+        self.parts[part] += now - self.last
+        self.last = now
+
+    def times(self) -> UpdateTimes:
+        return UpdateTimes(**self.parts)
+
+
 @runtime_checkable
 class UpdateStats(Protocol):
     """What one update did. ``LOG_FIELDS`` name the attributes written to ``log.csv``, in
-    order (booleans are written as 0/1); ``kl`` and ``entropy`` (nats) are shown by every run."""
+    order (booleans are written as 0/1); ``kl`` and ``entropy`` (nats) are shown by every run;
+    ``times`` is where the update's wall-clock went."""
 
     LOG_FIELDS: ClassVar[tuple[str, ...]]
 
@@ -78,6 +120,8 @@ class UpdateStats(Protocol):
     def kl(self) -> float: ...
     @property
     def entropy(self) -> float: ...
+    @property
+    def times(self) -> UpdateTimes: ...
 
 
 class Agent(Protocol):

@@ -5,10 +5,17 @@ for T steps (:class:`learning.algorithms.rollout.RolloutCollector`), then one
 :meth:`~learning.algorithms.base.Agent.update` on that batch; a callback sees the
 :class:`IterationStats` and may stop the run. The algorithm comes from the config's type
 (:func:`learning.algorithms.registry.algorithm_for`).
+
+Where an iteration's wall-clock goes (:func:`time_row`, the ``log.csv`` columns
+:data:`TIME_FIELDS`, s, measured with ``time.perf_counter``): ``rollout_s`` the rollout, then the
+update's :class:`learning.algorithms.base.UpdateTimes`: ``batch_s`` (values, GAE, statistics
+refresh), ``policy_step_s``, ``critic_s`` and, for GAIL, ``discriminator_s``. Their sum is at
+most the iteration's wall-clock (what is left: the update's own bookkeeping and the callback).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,9 +28,11 @@ from learning.algorithms.base import Agent, AlgorithmConfig, UpdateStats
 from learning.algorithms.registry import algorithm_for
 from learning.algorithms.rollout import RolloutCollector
 
-__all__ = ["IterationStats", "iterate", "train"]
+__all__ = ["TIME_FIELDS", "IterationStats", "iterate", "time_row", "train"]
 
 A = TypeVar("A", bound=Agent)
+
+TIME_FIELDS = ("rollout_s", "batch_s", "policy_step_s", "critic_s", "discriminator_s")
 
 
 @dataclass(frozen=True)
@@ -47,6 +56,12 @@ class IterationStats:
     @property
     def entropy(self) -> float:
         return self.update.entropy
+
+
+def time_row(stats: IterationStats, fields: tuple[str, ...] = TIME_FIELDS) -> dict[str, float]:
+    """The time-split columns ``fields`` (of :data:`TIME_FIELDS`) of one iteration, s (0.1 ms)."""
+    times = {"rollout_s": stats.rollout_time_s, **dataclasses.asdict(stats.update.times)}
+    return {name: round(times[name], 4) for name in fields}
 
 
 def iterate(

@@ -42,6 +42,7 @@ from gymnasium import spaces
 from torch import Tensor, nn
 
 from learning.algorithms.actor_critic import ActorCritic, fit_critic
+from learning.algorithms.base import Stopwatch, UpdateTimes
 from learning.algorithms.networks import (
     NetworkConfig,
     Policy,
@@ -228,6 +229,7 @@ class PPOUpdateStats:
 
     policy_step: PolicyUpdateStats
     value_loss: float  # mean squared error of the critic's last epoch
+    times: UpdateTimes = field(default_factory=UpdateTimes, compare=False)  # wall-clock split
 
     @property
     def kl(self) -> float:
@@ -285,7 +287,9 @@ class PPOAgent(ActorCritic):
         checked first: non-finite data raises :class:`NonFiniteError` before any parameter
         changes."""
         cfg = self.config
+        clock = Stopwatch()
         tb = self.training_batch(batch)
+        clock.lap("batch_s")
         step = ppo_step(
             self.policy,
             self.policy_optimizer,
@@ -295,6 +299,7 @@ class PPOAgent(ActorCritic):
             cfg,
             self.generator,
         )
+        clock.lap("policy_step_s")
         value_loss = fit_critic(
             self.critic,
             self.critic_optimizer,
@@ -304,5 +309,7 @@ class PPOAgent(ActorCritic):
             cfg.critic_minibatch,
             self.generator,
         )
+        clock.lap("critic_s")
         self.finish_update(tb)
-        return PPOUpdateStats(step, value_loss)
+        clock.lap("batch_s")
+        return PPOUpdateStats(step, value_loss, clock.times())

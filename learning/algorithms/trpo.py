@@ -37,6 +37,7 @@ from gymnasium import spaces
 from torch import Tensor
 
 from learning.algorithms.actor_critic import ActorCritic, fit_critic
+from learning.algorithms.base import Stopwatch, UpdateTimes
 from learning.algorithms.networks import NetworkConfig, Policy, TensorObs, rows
 from learning.algorithms.rollout import NonFiniteError, RolloutBatch
 from learning.algorithms.trust_region import (
@@ -178,6 +179,7 @@ class TRPOUpdateStats:
 
     policy_step: PolicyStepStats
     value_loss: float  # mean squared error of the critic's last epoch
+    times: UpdateTimes = field(default_factory=UpdateTimes, compare=False)  # wall-clock split
 
     @property
     def kl(self) -> float:
@@ -229,8 +231,11 @@ class TRPOAgent(ActorCritic):
         checked first: non-finite data raises :class:`NonFiniteError` before any parameter
         changes."""
         cfg = self.config
+        clock = Stopwatch()
         tb = self.training_batch(batch)
+        clock.lap("batch_s")
         step = trpo_step(self.policy, tb.obs, tb.actions, tb.advantages, cfg, self.generator)
+        clock.lap("policy_step_s")
         value_loss = fit_critic(
             self.critic,
             self.critic_optimizer,
@@ -240,5 +245,7 @@ class TRPOAgent(ActorCritic):
             cfg.critic_minibatch,
             self.generator,
         )
+        clock.lap("critic_s")
         self.finish_update(tb)
-        return TRPOUpdateStats(step, value_loss)
+        clock.lap("batch_s")
+        return TRPOUpdateStats(step, value_loss, clock.times())

@@ -24,7 +24,7 @@ from typing import Any
 import torch
 
 from learning.algorithms.base import log_row
-from learning.algorithms.loop import IterationStats
+from learning.algorithms.loop import TIME_FIELDS, IterationStats, time_row
 from learning.experiments.checkpoint import (
     Checkpoint,
     CheckpointError,
@@ -75,6 +75,7 @@ IL_CSV_FIELDS = (
     "val_min_pole_distance_m",
     "val_path_distance_m",
     "val_selection_successes",
+    *TIME_FIELDS,
 )
 """Columns of an IL run's ``log.csv``: :class:`learning.imitation.gail.GAILStats` (``env_return``
 the handcrafted return of the finished training episodes, a diagnostic; ``mean_reward`` the mean
@@ -82,7 +83,9 @@ imitation reward; ``disc_*``, ``*_accuracy``, ``mean_d_*`` the discriminator's l
 then the validation's (filled on validation iterations): successes /15, mean handcrafted return,
 closest pole approach (m), path distance to the expert's paths (m,
 :mod:`usvsim.evaluation.likeness`) and successes on the 60 selection episodes
-(:func:`usvsim.evaluation.episodes.selection_episodes`, the 15 among them).
+(:func:`usvsim.evaluation.episodes.selection_episodes`, the 15 among them); then where the
+iteration's wall-clock went, s (:data:`learning.algorithms.loop.TIME_FIELDS`: rollout, batch,
+policy step, critic, discriminator).
 ``wall_time_s`` counts from the start of GAIL (behavioural cloning included) and continues
 across ``--resume``."""
 
@@ -175,6 +178,7 @@ class _ILRun:
             "episodes": s.episodes,
             "env_return": s.mean_return,
             **log_row(s.update),
+            **time_row(s),
         }
         self.log.rows.append(row)
         stop = False

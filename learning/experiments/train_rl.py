@@ -5,7 +5,9 @@ checkpoints, early stop, and the run's files (``log.csv``, ``curve.png``, ``late
 
 ``log.csv`` columns (:func:`csv_fields`): :data:`COMMON_FIELDS`, then the algorithm's
 ``UpdateStats.LOG_FIELDS`` (TRPO: kl, entropy, surrogate_improvement, line_search_accepted,
-value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations).
+value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations), then
+:data:`TIME_FIELDS`: where the iteration's wall-clock went, s (rollout, batch, policy step,
+critic; :mod:`learning.algorithms.loop`).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any
 import torch
 
 from learning.algorithms.base import Agent, log_row
-from learning.algorithms.loop import IterationStats, train
+from learning.algorithms.loop import IterationStats, time_row, train
 from learning.algorithms.registry import get_algorithm
 from learning.algorithms.rollout import NonFiniteError
 from learning.experiments.checkpoint import (
@@ -33,16 +35,17 @@ from learning.experiments.setups import RLSetup, setup_from_params
 from learning.experiments.validation import RunResult, finish_run, validate, validation_record
 from usvsim.common.fileio import remove_stale_temporaries
 
-__all__ = ["COMMON_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
+__all__ = ["COMMON_FIELDS", "TIME_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
 
 COMMON_FIELDS = ("iteration", "env_steps", "wall_time_s", "episodes", "mean_return", "mean_length")
 VALIDATION_FIELDS = ("val_successes", "val_mean_return", "val_min_pole_distance_m")
+TIME_FIELDS = ("rollout_s", "batch_s", "policy_step_s", "critic_s")  # of loop.TIME_FIELDS
 
 
 def csv_fields(setup: RLSetup) -> tuple[str, ...]:
     """The ``log.csv`` columns of a run of ``setup`` (module docstring)."""
     stats = get_algorithm(setup.algorithm).stats_type
-    return COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS
+    return COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS + TIME_FIELDS
 
 
 class _Run:
@@ -89,6 +92,7 @@ class _Run:
             "mean_return": stats.mean_return,
             "mean_length": stats.mean_length,
             **log_row(stats.update),
+            **time_row(stats, TIME_FIELDS),
         }
         self.rows.append(row)
         stop = False

@@ -56,8 +56,9 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -67,6 +68,7 @@ from gymnasium.vector import VectorEnv
 from numpy.typing import NDArray
 from torch import Tensor
 
+from learning.algorithms.base import UpdateTimes
 from learning.algorithms.loop import IterationStats, iterate
 from learning.algorithms.networks import refresh_batchnorm
 from learning.algorithms.rollout import Obs, RolloutBatch
@@ -172,6 +174,7 @@ class GAILStats:
     kl: float
     entropy: float
     line_search_accepted: bool
+    times: UpdateTimes = field(default_factory=UpdateTimes, compare=False)  # wall-clock split
 
 
 def end_kinds(batch: RolloutBatch) -> NDArray[np.bool_]:
@@ -243,12 +246,14 @@ class GAILAgent:
     def update(self, batch: RolloutBatch) -> GAILStats:
         """Discriminator step, imitation rewards into ``batch.rewards``, TRPO step."""
         agent, gail, cfg = self.policy_agent, self.trainer, self.gail_config
+        start = time.perf_counter()
         ends = end_kinds(batch)
         obs, az, abs_obs, abs_az = gail.policy_samples(batch, ends)
         if abs_az.shape[0]:
             obs, az = cat_obs([obs, abs_obs]), torch.cat([az, abs_az])
         diag = gail.update_discriminator(obs, az)
         batch.rewards = gail.rewards(batch, ends, self.config.gamma)
+        discriminator_s = time.perf_counter() - start
         # warm-up: the critic learns the imitation reward's values (and D its task) before
         # the first policy step, so that noisy advantages do not undo the cloned policy
         frozen = agent.iteration < cfg.policy_warmup
@@ -271,6 +276,7 @@ class GAILAgent:
             kl=step.kl,
             entropy=step.entropy,
             line_search_accepted=step.line_search_accepted,
+            times=dataclasses.replace(step.times, discriminator_s=discriminator_s),
             **diag,
         )
 

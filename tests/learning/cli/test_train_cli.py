@@ -17,6 +17,7 @@ from learning.cli.evaluate import run as run_evaluate
 from learning.cli.train import TrainArgs, run
 from learning.experiments.checkpoint import load_checkpoint
 from learning.experiments.setups import get_setup
+from learning.experiments.train_rl import TIME_FIELDS, csv_fields
 
 SETUP = "rl-categorical-positional"
 
@@ -40,6 +41,7 @@ def test_two_iterations_write_checkpoints_log_curve_and_summary(tmp_path: Path) 
         "latest.pt", "best.pt", "log.csv", "curve.png", "summary.json",
     }  # fmt: skip
     rows = _csv(tmp_path / "log.csv")
+    assert tuple(rows[0]) == csv_fields(get_setup(SETUP))
     assert [int(r["iteration"]) for r in rows] == [1, 2]
     assert all(r["val_successes"] != "" for r in rows)
     ckpt = load_checkpoint(tmp_path / "latest.pt", expected_setup=SETUP)
@@ -49,6 +51,20 @@ def test_two_iterations_write_checkpoints_log_curve_and_summary(tmp_path: Path) 
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["iterations"] == 2 and summary["stop_reason"] == "iterations"
     assert (tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_time_split_is_positive_and_within_each_iteration(tmp_path: Path) -> None:
+    assert run(_args(tmp_path, iterations=3)) == 0
+    rows = _csv(tmp_path / "log.csv")
+    assert TIME_FIELDS == ("rollout_s", "batch_s", "policy_step_s", "critic_s")
+    walls = [0.0] + [float(r["wall_time_s"]) for r in rows]
+    for r, start, end in zip(rows, walls, walls[1:], strict=False):
+        parts = [float(r[f]) for f in TIME_FIELDS]
+        assert min(parts) > 0
+        # wall_time_s is rounded to 1 ms, the parts to 0.1 ms
+        assert sum(parts) <= end - start + 1e-3
+    # the first row's wall-clock is its rollout and update alone: the split covers it
+    assert sum(float(rows[0][f]) for f in TIME_FIELDS) >= 0.9 * walls[1]
 
 
 def test_resume_continues_the_run(tmp_path: Path) -> None:

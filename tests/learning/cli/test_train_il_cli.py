@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 
 import learning.experiments.train_il as train_il
+from learning.algorithms.loop import TIME_FIELDS
 from learning.cli.train import TrainArgs, run
 from learning.experiments.checkpoint import load_checkpoint
 from learning.experiments.il_setups import IL_SETUPS
@@ -83,6 +84,12 @@ def test_two_iterations_write_log_curve_summary_and_checkpoints(tmp_path: Path) 
     assert float(rows[1]["val_path_distance_m"]) > 0
     assert all(0 <= float(r[f]) <= 1 for r in rows for f in ("expert_accuracy", "policy_accuracy"))
     assert 0 < float(rows[0]["wall_time_s"]) <= float(rows[1]["wall_time_s"])
+    # where each iteration's wall-clock went: every part > 0, together within the iteration
+    assert IL_CSV_FIELDS[-5:] == TIME_FIELDS and "discriminator_s" in TIME_FIELDS
+    walls = [0.0] + [float(r["wall_time_s"]) for r in rows]
+    for r, start, end in zip(rows, walls, walls[1:], strict=False):
+        parts = [float(r[f]) for f in TIME_FIELDS]
+        assert min(parts) > 0 and sum(parts) <= end - start + 1e-3  # wall rounded to 1 ms
     summary = _summary(tmp_path)
     assert (summary["setup"], summary["iterations"], summary["env_steps"]) == (SETUP, 2, 2 * STEPS)
     assert summary["stop_reason"] == "iterations"
