@@ -25,3 +25,14 @@ if ENV_ID not in gymnasium.registry:
         entry_point="usvsim.task.env:PoleAvoidanceEnv",
         vector_entry_point="usvsim.task.vector_env:PoleAvoidanceVectorEnv",
     )
+
+OPEN_WATER_ENV_ID = "usvsim/OpenWater-v0"
+
+if OPEN_WATER_ENV_ID not in gymnasium.registry:
+    # the open-water family (usvsim.task.openwater_env): a vector env only,
+    # gymnasium.make_vec(OPEN_WATER_ENV_ID, num_envs=N, observation="scene", ...)
+    gymnasium.register(
+        id=OPEN_WATER_ENV_ID,
+        entry_point=None,
+        vector_entry_point="usvsim.task.openwater_env:OpenWaterVectorEnv",
+    )

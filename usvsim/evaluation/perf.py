@@ -21,6 +21,7 @@ from usvsim.vessel.plant import Plant
 __all__ = [
     "env_throughput",
     "measure_plant",
+    "open_water_env_throughput",
     "open_water_figures",
     "open_water_throughput",
     "per_boat_loop_rate",
@@ -144,6 +145,10 @@ def _env_figures(seconds: float) -> dict[str, Any]:
     for obs in ("positional", "radar+goal"):
         for n in (1, 256):
             figures[f"{obs} N={n}"] = round(env_throughput(obs, n, seconds))
+    trained: tuple[ObservationKind, ...] = ("scene", "radar+goal")  # issue 18's training env
+    for kind in trained:
+        rate = open_water_env_throughput(kind, 256, seconds)
+        figures[f"OpenWater-v0 {kind} N=256 (family)"] = round(rate)
     return {
         "decision_steps_per_s": figures,
         "targets": {"positional N=256": 50_000, "radar+goal N=256": 10_000},
@@ -157,6 +162,18 @@ def env_throughput(observation: ObservationKind, n_envs: int, seconds: float = 2
     included) for about ``seconds`` after a short warm-up; returns ``n_envs × steps / time``.
     """
     env = PoleAvoidanceVectorEnv(n_envs, observation=observation, action="gaussian")
+    env.reset(seed=0)
+    return _decision_rate(env.step, n_envs, seconds)
+
+
+def open_water_env_throughput(
+    observation: ObservationKind, n_envs: int, seconds: float = 2.0
+) -> float:
+    """Decision steps per second of :class:`usvsim.task.openwater_env.OpenWaterVectorEnv` on
+    its training family (random Gaussian actions, autoresets that draw new episodes included)."""
+    from usvsim.task.openwater_env import OpenWaterVectorEnv
+
+    env = OpenWaterVectorEnv(n_envs, observation=observation, action="gaussian")
     env.reset(seed=0)
     return _decision_rate(env.step, n_envs, seconds)
 

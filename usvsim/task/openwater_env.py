@@ -1,0 +1,366 @@
+"""The open-water family as a native ``gymnasium.vector.VectorEnv`` for training
+(``usvsim/OpenWater-v0``).
+
+:class:`OpenWaterVectorEnv` wraps :class:`usvsim.task.openwater_batch.OpenWaterBatch` the way
+:class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv` wraps the pole task: autoreset
+``SAME_STEP`` (``final_obs`` / ``final_info``), per-boat seeded generators, the reward horizon
+of :mod:`usvsim.task.horizon`. Each new episode of a boat is drawn from a
+:class:`ScenarioMixture` of :class:`usvsim.task.openwater.OpenWaterScenario` members (domain
+randomisation over the family's ranges, :data:`OPEN_WATER_FAMILY`); its disturbances (cruise
+speed, current, GNSS quality) and radar quality are the episode's own, as the family defines
+them (:mod:`usvsim.task.openwater`).
+
+Reward (the study's, :class:`usvsim.task.reward.GaussianReward`, on the scene): at the end of a
+decision period (for an episode that terminated, at its first goal / collision plant step),
+from the TRUE position,
+
+    d_pole = min_j ( |p − c_j| − R_j + R_pole )     R_pole = 1 m, over every static disc and
+                                                    every vessel at its position at that step
+    d_goal = |p − g|
+    r      = GaussianReward(d_pole, d_goal)
+
+i.e. the pole term sees the nearest obstacle by its pole-equivalent distance, the quantity of
+the family's success rule (≥ 10 m from every obstacle). With no obstacle d_pole = ∞ and the pole
+term is 0. A study episode (one 1 m pole) gives d_pole = the pole's centre distance: the pole
+task's reward exactly (tested against ``PoleAvoidanceVectorEnv``).
+
+``reward_horizon="fixed"`` is :func:`usvsim.task.horizon.apply_reward_horizon` with each
+episode's own number of decisions K_i (the family's time limits differ per episode): the
+horizon is evaluated against one reference horizon K_ref with every boat's clock advanced by
+K_ref − K_i decisions, so m = K_i − (t + 1) as in the pole task.
+
+The loop over boats that remains is over *finished* boats only, as in the pole task's env:
+drawing their next episodes (scalar, seeded code per episode) and the ``final_obs`` object
+array; the reset itself is one batched call.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from usvsim.task.batch import ActionKind, Observation, observation_rows, write_observation_rows
+from usvsim.task.horizon import RewardHorizon, apply_reward_horizon
+from usvsim.task.observations import POSITIONAL_STANDARDIZATION, ObservationKind
+from usvsim.task.openwater import (
+    OpenWaterEpisode,
+    OpenWaterScenario,
+    draw_open_water,
+    vessel_motion,
+)
+from usvsim.task.openwater_batch import OpenWaterBatch, OpenWaterStep
+from usvsim.task.options import EnvOptions, normalized_observation
+from usvsim.task.radar import RadarConfig
+from usvsim.task.reward import GaussianReward, RewardFunction
+from usvsim.vessel.plant import Plant
+
+__all__ = [
+    "OPEN_WATER_FAMILY",
+    "OpenWaterVectorEnv",
+    "ScenarioMixture",
+    "draw_family",
+    "draw_family_episode",
+]
+
+FloatArray = NDArray[np.float64]
+DEG = math.pi / 180.0
+_HORIZON_REF_S = 20_000.0  # s, the reference horizon K_ref · 2 s (module docstring); > any limit
+
+
+@dataclass(frozen=True)
+class ScenarioMixture:
+    """A training distribution over members of the family: each episode picks member j with
+    probability ``weights[j]`` (normalised), then draws from it."""
+
+    members: tuple[OpenWaterScenario, ...]
+    weights: tuple[float, ...]
+    names: tuple[str, ...] = ()  # one label per member, for reports
+
+    def __post_init__(self) -> None:
+        w = np.asarray(self.weights, dtype=float)
+        if not self.members or len(self.weights) != len(self.members):
+            raise ValueError("ScenarioMixture needs one weight per member (and a member)")
+        if not (np.all(np.isfinite(w)) and np.all(w >= 0) and w.sum() > 0):
+            raise ValueError(f"ScenarioMixture weights must be >= 0 with a positive sum: {w}")
+        if self.names and len(self.names) != len(self.members):
+            raise ValueError("ScenarioMixture needs one name per member (or none)")
+
+    @property
+    def probabilities(self) -> FloatArray:
+        w = np.asarray(self.weights, dtype=float)
+        return w / w.sum()
+
+
+# The family's ranges: every perturbation of the stress suite (usvsim.evaluation.stress) at up
+# to its strongest level, each drawn from 0 (or the study's value) upward, so calm water and
+# clean sensors stay in the distribution. usvsim's choice for training (issue 18), not tuned.
+_RANGES = OpenWaterScenario(
+    start_distance_range_m=(30.0, 200.0),
+    goal_distance_range_m=(100.0, 320.0),
+    goal_bearing_range_rad=(-180 * DEG, 180 * DEG),
+    goal_lateral_range_m=(0.0, 60.0),
+    heading_offset_range_rad=(-180 * DEG, 180 * DEG),
+    vessel_turn_rate_range_radps=(-0.3 * DEG, 0.3 * DEG),
+    current_speed_range_mps=(0.0, 0.8),
+    speed_range_mps=(1.5, 5.0),
+    gnss_noise_scale_range=(1.0, 3.0),
+    gnss_outlier_probability_range=(0.0, 0.05),
+    gnss_dropout_probability=0.3,
+    gnss_dropout_duration_range_s=(10.0, 30.0),
+    radar_clutter_range=(0.0, 0.001),
+    radar_speckle_range=(0.0, 0.5),
+    radar_missed_range=(0.0, 0.2),
+    radar_noise_range=(0.0, 40.0),
+)
+
+# poles: the study's pole plus 0-6 obstacles of 1-3 m (a fifth of them islets) in the route's
+# corridor, 0-2 vessels
+_POLES = replace(
+    _RANGES, n_extra_range=(0, 6), extra_radius_range_m=(1.0, 3.0), islet_probability=0.2,
+    n_vessels_range=(0, 2),
+)  # fmt: skip
+# islets: the primary obstacle 8-25 m in radius, 0-2 more islets
+_ISLETS = replace(
+    _RANGES, primary_radius_range_m=(8.0, 25.0), n_extra_range=(0, 2), islet_probability=1.0
+)
+# traffic: no pole, 1-3 vessels head-on, crossing or overtaken
+_TRAFFIC = replace(_RANGES, primary_obstacle=False, n_vessels_range=(1, 3))
+# a close pair: a second pole 15-30 m from the first
+_PAIR = replace(_RANGES, n_extra_range=(1, 1), near_primary_range_m=(15.0, 30.0), min_gap_m=0.0)
+
+OPEN_WATER_FAMILY = ScenarioMixture(
+    members=(OpenWaterScenario(), _POLES, _ISLETS, _TRAFFIC, _PAIR),  # the study's task first
+    weights=(0.15, 0.45, 0.15, 0.15, 0.10),
+    names=("study", "poles", "islets", "traffic", "close-pair"),
+)
+
+
+def draw_family_episode(
+    family: ScenarioMixture | OpenWaterScenario, rng: np.random.Generator
+) -> OpenWaterEpisode:
+    """One episode of ``family`` from ``rng``: the member (a mixture only), then an episode
+    seed, then :func:`usvsim.task.openwater.draw_open_water` of that member with that seed."""
+    if isinstance(family, OpenWaterScenario):
+        member = family
+    else:
+        member = family.members[int(rng.choice(len(family.members), p=family.probabilities))]
+    return draw_open_water(member, int(rng.integers(2**63)), 1)[0]
+
+
+def draw_family(
+    family: ScenarioMixture | OpenWaterScenario, seed: int, n: int
+) -> tuple[OpenWaterEpisode, ...]:
+    """``n`` episodes of ``family``; episode k from ``default_rng([seed, k])`` (a fixed set)."""
+    return tuple(draw_family_episode(family, np.random.default_rng([seed, k])) for k in range(n))
+
+
+class OpenWaterVectorEnv(VectorEnv):
+    """Native batched open-water environment: ``num_envs`` boats, one plant call per step.
+
+    ## Description
+    The family of :mod:`usvsim.task.openwater` (many, large and moving obstacles, goals
+    anywhere, currents, degraded GNSS and radar), one episode per boat drawn from ``family``
+    (default :data:`OPEN_WATER_FAMILY`). Every 2 s the helmsman changes the heading reference
+    relative to the estimated heading, as in the pole task.
+
+    ## Action Space
+    As the pole task: ``"gaussian"`` ``Box(-1, 1, (1,))`` (Δψ = 30° · a), ``"categorical"``
+    ``Discrete(41)``.
+
+    ## Observation Space
+    From the navigation estimate (:mod:`usvsim.task.openwater_batch`): ``"positional"`` (the
+    nearest obstacle by pole-equivalent distance as the study's pole), ``"scene"`` (52 floats:
+    goal, own velocity, the k = 8 nearest obstacles), ``"radar"``, ``"radar+goal"`` (every disc
+    at its true extent, with the episode's radar degradation). ``normalize_observation=True``
+    standardises the positional observation as in the pole task; the others are unchanged.
+
+    ## Rewards
+    The study's reward on the nearest obstacle's pole-equivalent distance (module docstring);
+    ``info["reward_pole"]``, ``info["reward_goal"]``. ``reward_horizon="fixed"`` for training.
+
+    ## Starting State
+    Boat i draws its episodes from its own generator, seeded ``seed + i`` by
+    ``reset(seed=seed)`` (or ``seed[i]``); ``reset(options={"episodes": [OpenWaterEpisode,
+    ...]})`` starts the given episodes (one per boat), later autoresets draw again.
+
+    ## Episode End
+    Terminated: goal reached or a collision (and, under the fixed horizon, leaving the area);
+    truncated: the episode's time limit or leaving the area (its ``area_radius_m``). Autoreset
+    ``SAME_STEP``: ``info["final_obs"]``, ``info["final_info"]`` as in
+    :class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`.
+
+    ## Arguments
+    ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
+    ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
+    ``plant``, ``radar``, ``backend``. ``render_mode`` must be ``None``: the top view draws one
+    pole (:mod:`usvsim.task.render`).
+    """
+
+    def __init__(
+        self,
+        num_envs: int,
+        observation: ObservationKind = "positional",
+        action: ActionKind = "gaussian",
+        family: ScenarioMixture | OpenWaterScenario | None = None,
+        render_mode: str | None = None,
+        reward_horizon: RewardHorizon = "episode",
+        gamma: float = 0.99,
+        normalize_observation: bool = False,
+        reward: RewardFunction | None = None,
+        plant: Plant | None = None,
+        radar: RadarConfig | None = None,
+        backend: Literal["auto", "compiled", "casadi"] = "auto",
+    ) -> None:
+        self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
+        if render_mode is not None:
+            raise ValueError(
+                f"render_mode must be None for the open-water env (the top view draws one "
+                f"pole), got {render_mode!r}"
+            )
+        self.metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+        self.render_mode = None
+        self.family = OPEN_WATER_FAMILY if family is None else family
+        self.reward: RewardFunction = reward or GaussianReward()
+        self.sim = OpenWaterBatch(
+            num_envs, observation=observation, action=action, plant=plant, radar=radar,
+            backend=backend,
+        )  # fmt: skip
+        self.num_envs = self.sim.n_boats
+        self._normalize = normalize_observation and observation == "positional"
+        space = self.sim.single_observation_space
+        if self._normalize:
+            assert isinstance(space, spaces.Box)
+            space = spaces.Box(
+                POSITIONAL_STANDARDIZATION.apply(space.low),
+                POSITIONAL_STANDARDIZATION.apply(space.high),
+                dtype=np.float32,
+            )
+        self.single_observation_space = space
+        self.single_action_space = self.sim.inner.single_action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._boat_rngs = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
+        base = self.sim.base
+        self._horizon = replace(base, time_limit_s=_HORIZON_REF_S)  # K_ref (module docstring)
+        self._decisions = np.zeros(self.num_envs, dtype=np.int64)
+        self._max_decisions = np.zeros(self.num_envs, dtype=np.int64)
+
+    def _draw(self, boats: NDArray[np.intp]) -> list[OpenWaterEpisode]:
+        return [draw_family_episode(self.family, self._boat_rngs[i]) for i in boats.tolist()]
+
+    def _start(self, boats: NDArray[np.intp], episodes: Sequence[OpenWaterEpisode]) -> Observation:
+        """Start ``episodes`` on ``boats`` in one batched reset; their first observation."""
+        obs = self.sim.reset(boats, episodes)
+        limits = self.sim.time_limit[boats]
+        self._max_decisions[boats] = np.ceil(limits / self.sim.base.decision_period_s - 1e-9)
+        self._decisions[boats] = 0
+        return self._observation(obs)
+
+    def _observation(self, obs: Observation) -> Observation:
+        if self._normalize:
+            return normalized_observation("positional", obs)
+        return obs
+
+    def reset(
+        self, *, seed: int | Sequence[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        """Reset every boat; ``seed`` int → boat i uses ``seed + i``; ``options``: ``episodes``."""
+        super().reset(seed=seed if isinstance(seed, int) or seed is None else None)
+        if seed is not None:
+            seeds = [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else seed
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"need {self.num_envs} seeds, got {len(seeds)}")
+            self._boat_rngs = [seeding.np_random(int(s))[0] for s in seeds]
+        options = dict(options or {})
+        episodes = options.pop("episodes", None)
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}; known: ['episodes']")
+        everyone = np.arange(self.num_envs)
+        if episodes is None:
+            episodes = self._draw(everyone)
+        if len(episodes) != self.num_envs:
+            raise ValueError(f"need one episode per boat ({self.num_envs}), got {len(episodes)}")
+        obs = self._start(everyone, list(episodes))
+        return obs, {"goal_ne": self.sim.goal_ne.copy()}
+
+    def _end_distance(self, res: OpenWaterStep) -> FloatArray:
+        """Pole-equivalent distance (m) to the nearest obstacle at each boat's end step (N,)."""
+        sim, rows = self.sim, np.arange(self.num_envs)
+        end = res.end_step - 1
+        pos = res.trajectory[rows, end, 0:2]  # (N, 2) true position
+        steps = (self._decisions - 1) * sim.base.steps_per_decision + end + 1
+        t = steps.astype(np.float64) * sim.base.dt_s  # (N,) episode time of the end step
+        vessels, _ = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, t[:, None])
+        centres = np.concatenate([sim.centres, vessels], axis=1)  # (N, J, 2)
+        radii = np.concatenate([sim.radii, sim.v_radius], axis=1)
+        ok = np.concatenate([sim.static_ok, sim.vessel_ok], axis=1)
+        h = np.hypot(pos[:, None, 0] - centres[..., 0], pos[:, None, 1] - centres[..., 1])
+        d = np.where(ok, h + (sim.base.pole_radius_m - radii), np.inf)
+        return d.min(axis=1, initial=np.inf)
+
+    def step(
+        self, actions: Any
+    ) -> tuple[Observation, FloatArray, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        res = self.sim.step(actions)
+        self._decisions += 1
+        d_obstacle = self._end_distance(res)
+        terms = self.reward(d_obstacle, res.distance_to_goal_m)
+        dp = self.sim.base.decision_period_s
+        time_s = (self._decisions * dp).astype(np.float64)
+        o = self.options
+        shifted = time_s + (self._horizon.max_decisions - self._max_decisions) * dp
+        reward, terminated, truncated = apply_reward_horizon(
+            o.reward_horizon, o.gamma, self._horizon, terms.total, res.terminated, res.truncated,
+            res.out_of_area, shifted,
+        )  # fmt: skip
+        arrays: dict[str, NDArray[np.generic]] = {
+            "reward_pole": terms.pole,
+            "reward_goal": terms.goal,
+            "heading_change_rad": res.heading_change_rad,
+            "distance_to_obstacle_m": d_obstacle,
+            "distance_to_goal_m": res.distance_to_goal_m,
+            "min_distance_m": res.min_distance_m,
+            "reached_goal": res.reached_goal,
+            "collision": res.collision,
+            "out_of_area": res.out_of_area,
+            "time_limit": res.time_limit,
+            "is_success": res.is_success,
+            "time_s": time_s,
+            "time_to_goal_s": res.time_to_goal_s,
+        }
+        everyone = np.ones(self.num_envs, dtype=bool)
+        info: dict[str, Any] = {}
+        for key, value in arrays.items():
+            info[key], info[f"_{key}"] = value, everyone
+        obs = self._observation(res.observation)
+        done = terminated | truncated
+        if done.any():
+            idx = np.flatnonzero(done)
+            final_obs = np.full(self.num_envs, None, dtype=object)
+            for i, row in zip(idx.tolist(), _rows_list(obs, idx), strict=True):
+                final_obs[i] = row
+            final_info: dict[str, Any] = {}
+            for key, value in arrays.items():
+                final_info[key], final_info[f"_{key}"] = value.copy(), done
+            info.update(
+                final_obs=final_obs, _final_obs=done, final_info=final_info, _final_info=done
+            )
+            write_observation_rows(obs, idx, self._start(idx, self._draw(idx)))
+        return obs, reward, terminated, truncated, info
+
+
+def _rows_list(obs: Observation, idx: NDArray[np.intp]) -> list[Any]:
+    """The rows ``idx`` of a batched observation as a list of single observations (copies)."""
+    rows = observation_rows(obs, idx)
+    if isinstance(rows, dict):
+        return [{k: v[j] for k, v in rows.items()} for j in range(idx.size)]
+    return list(rows)
