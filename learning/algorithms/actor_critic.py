@@ -104,6 +104,24 @@ def fit_critic(
     return float(np.mean(losses)) if losses else float("nan")
 
 
+def _finite(raw_obs: Obs, obs: TensorObs) -> bool:
+    """True if every normalised part of ``obs`` is finite. Parts of integer raw observations
+    (images / 255) always are; a float part is, exactly when its float64 sum is (a NaN or ±inf
+    anywhere makes the sum non-finite; float32 values cannot overflow it), a sum being ~10x
+    cheaper than ``isfinite(x).all()``."""
+    if isinstance(obs, dict):
+        assert isinstance(raw_obs, dict)
+        pairs = [(raw_obs[k], obs[k]) for k in obs]
+    else:
+        assert not isinstance(raw_obs, dict)
+        pairs = [(raw_obs, obs)]
+    return all(
+        bool(torch.isfinite(t.sum(dtype=torch.float64)))
+        for raw, t in pairs
+        if not np.issubdtype(raw.dtype, np.integer)
+    )
+
+
 class ActorCritic:
     """Policy, critic, observation normaliser, random state and counters of one run.
 
@@ -158,10 +176,13 @@ class ActorCritic:
             actions = np.clip(actions, self.action_space.low, self.action_space.high)
         return actions
 
-    @torch.inference_mode()
     def values(self, obs: Obs, chunk: int = 4096) -> np.ndarray:
         """V(s) (M,) for raw observations (M, ...)."""
-        t = self.policy_input(obs)
+        return self.critic_values(self.policy_input(obs), chunk)
+
+    @torch.inference_mode()
+    def critic_values(self, t: TensorObs, chunk: int = 4096) -> np.ndarray:
+        """V(s) (M,) for normalised tensor observations (M, ...), ``chunk`` rows at a time."""
         M = next(iter(t.values())).shape[0] if isinstance(t, dict) else t.shape[0]
         out = [self.critic(rows(t, torch.arange(i, min(M, i + chunk)))) for i in range(0, M, chunk)]
         return torch.cat(out).numpy()
@@ -175,7 +196,10 @@ class ActorCritic:
         any parameter or statistic changes.
         """
         cfg = self.config
-        attach_values(batch, self.values)
+        # the observations are normalised once, for V(s_t) and for the update
+        raw_obs = flatten_obs(batch.obs, 2)
+        obs = self.policy_input(raw_obs)
+        attach_values(batch, self.values, self.critic_values(obs))
         assert batch.values is not None and batch.next_values is not None
         advantages, returns = gae(
             batch.rewards,
@@ -187,18 +211,17 @@ class ActorCritic:
             cfg.gae_lambda,
         )
         valid = batch.valid.reshape(-1)
-        raw_obs = flatten_obs(batch.obs, 2)
-        raw_obs = (
-            {k: v[valid] for k, v in raw_obs.items()}
-            if isinstance(raw_obs, dict)
-            else raw_obs[valid]
-        )
-        obs = self.policy_input(raw_obs)
+        if not valid.all():
+            raw_obs = (
+                {k: v[valid] for k, v in raw_obs.items()}
+                if isinstance(raw_obs, dict)
+                else raw_obs[valid]
+            )
+            obs = rows(obs, torch.as_tensor(valid))
         actions = torch.as_tensor(batch.actions.reshape(-1, *batch.actions.shape[2:])[valid])
         adv = torch.as_tensor(advantages.reshape(-1)[valid])
         ret = torch.as_tensor(returns.reshape(-1)[valid])
-        parts = obs.values() if isinstance(obs, dict) else [obs]
-        if not all(bool(torch.isfinite(p).all()) for p in parts):
+        if not _finite(raw_obs, obs):
             raise NonFiniteError("non-finite observation in the batch: no update made")
         if not (torch.isfinite(adv).all() and torch.isfinite(ret).all()):
             raise NonFiniteError("non-finite advantages or returns: no update made")

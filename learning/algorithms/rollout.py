@@ -110,18 +110,26 @@ class RolloutBatch:
         return self.terminated | self.truncated
 
 
-def attach_values(batch: RolloutBatch, value_fn: ValueFn) -> None:
+def attach_values(
+    batch: RolloutBatch, value_fn: ValueFn, obs_values: NDArray[np.float32] | None = None
+) -> None:
     """Set ``batch.values`` = V(s_t) and ``batch.next_values`` = V(s'_t) in one ``value_fn`` call.
 
     s'_t is s_{t+1} (or ``last_obs`` for t = T − 1) except where a SAME_STEP autoreset replaced
     it: there it is the stored final observation. (With NEXT_STEP the final observation *is*
-    s_{t+1}.) ``value_fn`` maps raw observations (M, ...) to (M,).
+    s_{t+1}.) ``value_fn`` maps raw observations (M, ...) to (M,). ``obs_values``, when the
+    caller has them, are V(s_t) of ``flatten_obs(batch.obs, 2)`` (T·N,); ``value_fn`` then
+    evaluates only ``last_obs`` and the final observations.
     """
     T, N = batch.rewards.shape
-    parts = [flatten_obs(batch.obs, 2), batch.last_obs]
+    parts = [batch.last_obs]
     if batch.final_obs is not None:
         parts.append(batch.final_obs)
+    if obs_values is None:
+        parts.insert(0, flatten_obs(batch.obs, 2))
     v = np.asarray(value_fn(concat_obs(parts)), dtype=np.float32)
+    if obs_values is not None:
+        v = np.concatenate([np.asarray(obs_values, dtype=np.float32), v])
     values = v[: T * N].reshape(T, N)
     seq = np.concatenate([values, v[T * N : T * N + N][None]], axis=0)
     next_values = seq[1:].copy()
