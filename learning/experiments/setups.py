@@ -9,6 +9,25 @@ setup                          observation  action       network
 ``rl-categorical-radar``       radar+goal   categorical  CNN, late goal fusion, FC 400-300
 =============================  ===========  ===========  =====================================
 
+Setups on the open-water family (issue 18; ``-ow``, ``task="open-water"``): the same
+algorithms and networks, trained on :class:`usvsim.task.openwater_env.OpenWaterVectorEnv`
+(domain randomisation over :data:`usvsim.task.openwater_env.OPEN_WATER_FAMILY`, the study's
+reward on the nearest obstacle's pole-equivalent distance, the same fixed horizon):
+
+=============================  ===========  ===========  =====================================
+setup                          observation  action       network
+=============================  ===========  ===========  =====================================
+``rl-gaussian-scene-ow``       scene        gaussian     MLP 400-300 tanh on the 52 floats
+``rl-categorical-scene-ow``    scene        categorical  MLP 400-300 tanh, 41 logits
+``rl-gaussian-radar-ow``       radar+goal   gaussian     CNN, balanced late goal fusion
+``rl-categorical-radar-ow``    radar+goal   categorical  CNN, balanced late goal fusion
+=============================  ===========  ===========  =====================================
+
+``scene`` is the k-nearest positional form (goal, own velocity, the 8 nearest obstacles with a
+validity mask; :mod:`usvsim.task.observations`); the radar sees every obstacle. Their runs are
+validated on the study's 15 episodes (the reported validation) and on a fixed family set
+(:func:`learning.experiments.validation.family_validation_episodes`).
+
 "radar" setups use the ``radar+goal`` observation: the study's RL radar setups fed the
 standardised goal vector to the CNN after the convolution ("late fusion"); with the image alone
 the goal is invisible once the pole is passed (``shared/reference/table-4-1.md``,
@@ -61,10 +80,12 @@ from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
 from usvsim.task.observations import ObservationKind
+from usvsim.task.openwater_env import OpenWaterVectorEnv
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 __all__ = [
     "SETUPS",
+    "TASKS",
     "RLSetup",
     "get_setup",
     "setup_from_params",
@@ -117,7 +138,12 @@ RL_PPO = PPOConfig(
 RADAR_PPO = dataclasses.replace(
     RL_PPO, num_envs=64, network=NetworkConfig(init_std_fraction=0.5, balanced_fusion=True)
 )
+# the open-water family (issue 18): twice the boats per batch (its episodes differ far more than
+# the study's) and a larger budget; otherwise the study setups' values, not tuned
+OW_TRPO = dataclasses.replace(RL_TRPO, iterations=1000, num_envs=64)
+OW_RADAR_TRPO = dataclasses.replace(RADAR_TRPO, iterations=1000)
 AlgorithmConfig = TRPOConfig | PPOConfig
+TASKS = ("pole", "open-water")  # RLSetup.task: the study's task or the open-water family
 
 
 @dataclass(frozen=True)
@@ -130,6 +156,11 @@ class RLSetup:
     algorithm_config: AlgorithmConfig = field(default=RL_TRPO)  # a registered algorithm's
     validate_every: int = 5  # iterations between validations on the 15 episodes
     study_iterations: int = 0  # the study's iterations to its best validation (Table 4.1)
+    task: str = "pole"  # one of TASKS: the training environment (make_vector_env)
+
+    def __post_init__(self) -> None:
+        if self.task not in TASKS:
+            raise ValueError(f"RLSetup.task must be one of {TASKS}, got {self.task!r}")
 
     @property
     def algorithm(self) -> str:
@@ -144,7 +175,16 @@ class RLSetup:
 
     def make_vector_env(self, num_envs: int, **env_kwargs: Any) -> VectorEnv:
         """The training environment: ``num_envs`` boats on the fixed reward horizon with the
-        run's γ (module docstring)."""
+        run's γ (module docstring); the open-water family for ``task="open-water"``."""
+        if self.task == "open-water":
+            return OpenWaterVectorEnv(
+                num_envs,
+                observation=self.observation,
+                action=self.action,
+                reward_horizon="fixed",
+                gamma=self.algorithm_config.gamma,
+                **env_kwargs,
+            )
         return PoleAvoidanceVectorEnv(
             num_envs,
             observation=self.observation,
@@ -183,6 +223,13 @@ SETUPS: dict[str, RLSetup] = {
         RLSetup("rl-categorical-positional-ppo", "positional", "categorical", RL_PPO, 1, 1000),
         RLSetup("rl-gaussian-radar-ppo", "radar+goal", "gaussian", RADAR_PPO, 5, 1300),
         RLSetup("rl-categorical-radar-ppo", "radar+goal", "categorical", RADAR_PPO, 5, 4300),
+        # on the open-water family (issue 18): the k-nearest positional form and the radar
+        RLSetup("rl-gaussian-scene-ow", "scene", "gaussian", OW_TRPO, task="open-water"),
+        RLSetup("rl-categorical-scene-ow", "scene", "categorical", OW_TRPO, task="open-water"),
+        RLSetup("rl-gaussian-radar-ow", "radar+goal", "gaussian", OW_RADAR_TRPO, task="open-water"),
+        RLSetup(
+            "rl-categorical-radar-ow", "radar+goal", "categorical", OW_RADAR_TRPO, task="open-water"
+        ),
     )
 }
 

@@ -7,7 +7,8 @@ checkpoints, early stop, and the run's files (``log.csv``, ``curve.png``, ``late
 ``UpdateStats.LOG_FIELDS`` (TRPO: kl, entropy, surrogate_improvement, line_search_accepted,
 value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations), then
 :data:`TIME_FIELDS`: where the iteration's wall-clock went, s (rollout, batch, policy step,
-critic; :mod:`learning.algorithms.loop`).
+critic; :mod:`learning.algorithms.loop`), and for a setup on the open-water family
+:data:`FAMILY_FIELDS` (its family validation set, :mod:`learning.experiments.validation`).
 """
 
 from __future__ import annotations
@@ -32,20 +33,41 @@ from learning.experiments.checkpoint import (
 )
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
-from learning.experiments.validation import RunResult, finish_run, validate, validation_record
+from learning.experiments.validation import (
+    RunResult,
+    family_passed,
+    finish_run,
+    selection_key,
+    validate,
+    validation_record,
+)
 from usvsim.common.fileio import remove_stale_temporaries
 
-__all__ = ["COMMON_FIELDS", "TIME_FIELDS", "VALIDATION_FIELDS", "csv_fields", "train_rl"]
+__all__ = [
+    "COMMON_FIELDS",
+    "FAMILY_FIELDS",
+    "TIME_FIELDS",
+    "VALIDATION_FIELDS",
+    "csv_fields",
+    "train_rl",
+]
 
 COMMON_FIELDS = ("iteration", "env_steps", "wall_time_s", "episodes", "mean_return", "mean_length")
 VALIDATION_FIELDS = ("val_successes", "val_mean_return", "val_min_pole_distance_m")
 TIME_FIELDS = ("rollout_s", "batch_s", "policy_step_s", "critic_s")  # of loop.TIME_FIELDS
+FAMILY_FIELDS = (  # open-water setups: validation.family_summary
+    "val_family_successes",
+    "val_family_n_episodes",
+    "val_family_collisions",
+    "val_family_min_distance_m",
+)
 
 
 def csv_fields(setup: RLSetup) -> tuple[str, ...]:
     """The ``log.csv`` columns of a run of ``setup`` (module docstring)."""
     stats = get_algorithm(setup.algorithm).stats_type
-    return COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS + TIME_FIELDS
+    family = FAMILY_FIELDS if setup.task == "open-water" else ()
+    return COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS + TIME_FIELDS + family
 
 
 class _Run:
@@ -79,7 +101,7 @@ class _Run:
         self.wall_offset_s = float(history[-1]["wall_time_s"]) if history else 0.0
         for h in history:
             self.milestones.add(h)
-            key = (int(h["successes"]), float(h["mean_return"]))
+            key = selection_key(h)
             self.best = key if self.best is None or key > self.best else self.best
 
     def on_iteration(self, stats: IterationStats, agent: Agent) -> bool:
@@ -119,12 +141,12 @@ class _Run:
         # only now: summary.json's checkpoint_iteration (history[-1]) must be what latest.pt holds
         # even when a Ctrl-C lands inside the save
         self.history.append(record)
-        key = (int(val["successes"]), float(val["mean_return"]))
+        key = selection_key(val)
         if self.best is None or key > self.best:
             self.best = key
             save_checkpoint(ckpt, self.out / "best.pt")
         self.log.write(plot=self.log.plot_due())
-        reason = self.milestones.stop_reason(self.stop_after)
+        reason = self.milestones.stop_reason(self.stop_after) if family_passed(val) else ""
         if reason:
             self.stop_reason = reason
             return True

@@ -1,11 +1,22 @@
 """Validation of a policy during training, shared by RL and IL runs: the deterministic policy on
 the study's 15 validation episodes (:func:`usvsim.evaluation.episodes.validation_episodes`), its
 summary, and the record a validation leaves in the checkpoints' history and ``summary.json``.
+
+A setup trained on the open-water family (``task="open-water"``, issue 18) is validated on the
+15 episodes (the reported validation) *and* on a fixed family set
+(:func:`family_validation_episodes`: :data:`FAMILY_VALIDATION_SIZE` episodes of
+:data:`usvsim.task.openwater_env.OPEN_WATER_FAMILY` from their own seed, never a stress set's),
+whose ``family_*`` entries join the validation record. Such a run keeps as ``best.pt`` the
+checkpoint with the most successes over both sets together, then the higher mean return
+(:func:`selection_key`), and stops early only at a validation that also passes
+:data:`FAMILY_STOP_RATE` of the family set (:func:`family_passed`).
 """
 
 from __future__ import annotations
 
+import functools
 import json
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,17 +28,87 @@ from learning.algorithms.base import Agent
 from learning.experiments.checkpoint import PolicyHelmsman
 from usvsim.common.fileio import atomic_write_text, json_safe
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
+from usvsim.evaluation.openwater import OpenWaterRecord, evaluate_open_water
+from usvsim.task.openwater import OpenWaterEpisode
+from usvsim.task.openwater_env import OPEN_WATER_FAMILY, draw_family
 from usvsim.task.scenario import EpisodeSpec
 
-__all__ = ["RunResult", "validate", "validation_record", "validation_summary"]
+__all__ = [
+    "FAMILY_STOP_RATE",
+    "FAMILY_VALIDATION_SEED",
+    "FAMILY_VALIDATION_SIZE",
+    "RunResult",
+    "family_passed",
+    "family_validation_episodes",
+    "selection_key",
+    "validate",
+    "validation_record",
+    "validation_summary",
+]
+
+# the family set's seed: the CRC-32 of its name, as the stress sets' (usvsim.evaluation.stress),
+# so it is none of theirs
+FAMILY_VALIDATION_SEED = zlib.crc32(b"family-validation")
+FAMILY_VALIDATION_SIZE = 100  # episodes; Wilson 95 % interval about ±5 points near 95 %
+FAMILY_STOP_RATE = 0.95  # -, family success an early stop needs (module docstring)
+
+
+@functools.lru_cache(maxsize=4)
+def family_validation_episodes(n: int = FAMILY_VALIDATION_SIZE) -> tuple[OpenWaterEpisode, ...]:
+    """The fixed family validation set: ``n`` episodes of the training family, episode k from
+    ``default_rng([FAMILY_VALIDATION_SEED, k])`` (:func:`usvsim.task.openwater_env.draw_family`)."""
+    return draw_family(OPEN_WATER_FAMILY, FAMILY_VALIDATION_SEED, n)
+
+
+def _on_family(setup: Any) -> bool:
+    return getattr(setup, "task", "pole") == "open-water"
 
 
 def validate(
     agent: Agent, setup: Any, specs: Sequence[EpisodeSpec] | None = None
 ) -> dict[str, float]:
     """The deterministic policy of ``agent`` on ``specs`` (default: the 15 validation episodes)
-    in ``setup``'s observation and action kinds: :func:`validation_summary`."""
-    return validation_summary(policy_records(agent, setup, specs))
+    in ``setup``'s observation and action kinds: :func:`validation_summary`; with the family
+    set's ``family_*`` entries for an open-water setup (module docstring) when ``specs`` is
+    None."""
+    summary = validation_summary(policy_records(agent, setup, specs))
+    if specs is None and _on_family(setup):
+        summary.update(family_summary(family_records(agent, setup)))
+    return summary
+
+
+def family_records(agent: Agent, setup: Any) -> list[OpenWaterRecord]:
+    """The records of ``agent``'s deterministic policy on :func:`family_validation_episodes`."""
+    return evaluate_open_water(
+        PolicyHelmsman(agent, setup.observation, setup.action),
+        family_validation_episodes(),
+        observation=setup.observation,
+        action=setup.action,
+    )
+
+
+def family_summary(records: Sequence[OpenWaterRecord]) -> dict[str, float]:
+    """Successes, episodes, collisions and the closest approach (pole-equivalent, m) of the
+    family set, each key prefixed ``family_``."""
+    return {
+        "family_successes": int(sum(r.success for r in records)),
+        "family_n_episodes": len(records),
+        "family_collisions": int(sum(r.collision for r in records)),
+        "family_min_distance_m": float(min(r.min_pole_distance_m for r in records)),
+    }
+
+
+def selection_key(val: dict[str, Any]) -> tuple[int, float]:
+    """How validations rank for ``best.pt``: successes (the study's 15, plus the family set's
+    where validated on it), then the mean return on the 15."""
+    return int(val["successes"]) + int(val.get("family_successes", 0)), float(val["mean_return"])
+
+
+def family_passed(val: dict[str, Any]) -> bool:
+    """True without a family set, else whether its success rate reaches :data:`FAMILY_STOP_RATE`."""
+    if "family_successes" not in val:
+        return True
+    return int(val["family_successes"]) >= FAMILY_STOP_RATE * int(val["family_n_episodes"])
 
 
 def policy_records(

@@ -1,0 +1,152 @@
+"""Setups on the open-water family (issue 18): their env, networks, family validation, and
+``usvsim train`` end to end; the study's setups unchanged."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from learning.algorithms.registry import get_algorithm
+from learning.experiments.setups import SETUPS, get_setup, setup_from_params, setup_params
+from learning.experiments.train_rl import FAMILY_FIELDS, csv_fields
+from learning.experiments.validation import (
+    FAMILY_STOP_RATE,
+    FAMILY_VALIDATION_SEED,
+    FAMILY_VALIDATION_SIZE,
+    family_passed,
+    family_validation_episodes,
+    selection_key,
+    validate,
+)
+from usvsim.evaluation.stress import STRESS_SETS, stress_episodes
+from usvsim.task.batch import action_space
+from usvsim.task.observations import observation_space
+from usvsim.task.openwater_env import OPEN_WATER_FAMILY, OpenWaterVectorEnv
+from usvsim.task.vector_env import PoleAvoidanceVectorEnv
+
+OW = ("rl-gaussian-scene-ow", "rl-categorical-scene-ow", "rl-gaussian-radar-ow",
+      "rl-categorical-radar-ow")  # fmt: skip
+STUDY = (
+    "rl-gaussian-positional", "rl-categorical-positional", "rl-gaussian-radar",
+    "rl-categorical-radar", "rl-gaussian-positional-ppo", "rl-categorical-positional-ppo",
+    "rl-gaussian-radar-ppo", "rl-categorical-radar-ppo",
+)  # fmt: skip
+
+
+def test_the_study_setups_stay_on_the_pole_task():
+    assert tuple(SETUPS)[: len(STUDY)] == STUDY
+    for name in STUDY:
+        setup = get_setup(name)
+        assert setup.task == "pole" and "val_family_successes" not in csv_fields(setup)
+        env = setup.make_vector_env(2)
+        assert isinstance(env, PoleAvoidanceVectorEnv)
+        assert env.layer.options.reward_horizon == "fixed"
+
+
+@pytest.mark.parametrize("name", OW)
+def test_open_water_setups_train_on_the_family_with_the_fixed_horizon(name):
+    setup = get_setup(name)
+    assert setup.task == "open-water" and name.endswith("-ow")
+    env = setup.make_vector_env(2)
+    assert isinstance(env, OpenWaterVectorEnv) and env.family is OPEN_WATER_FAMILY
+    assert env.options.reward_horizon == "fixed"
+    assert env.options.gamma == setup.algorithm_config.gamma
+    assert env.single_observation_space == observation_space(setup.observation)
+    assert csv_fields(setup)[-len(FAMILY_FIELDS) :] == FAMILY_FIELDS
+    assert setup_from_params(get_setup(STUDY[0]), setup_params(setup)) == setup
+
+
+def test_unknown_task_is_refused():
+    with pytest.raises(ValueError, match=r"RLSetup\.task must be one of"):
+        get_setup("rl-gaussian-scene-ow").replace(task="lake")
+
+
+@pytest.mark.parametrize("name", ["rl-gaussian-scene-ow", "rl-categorical-scene-ow"])
+def test_policy_takes_the_52_float_scene_observation(name):
+    setup = get_setup(name)
+    agent = get_algorithm(setup.algorithm).make_agent(
+        observation_space(setup.observation), action_space(setup.action), setup.run_config(0)
+    )
+    env = setup.make_vector_env(5)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (5, 52)
+    first = agent.policy.trunk.body[0]
+    assert isinstance(first, torch.nn.Linear) and first.in_features == 52
+    actions = agent.act(obs, deterministic=True)
+    assert env.action_space.contains(actions.astype(env.action_space.dtype))
+
+
+def test_family_validation_set_is_fixed_and_none_of_the_stress_sets():
+    episodes = family_validation_episodes()
+    assert len(episodes) == FAMILY_VALIDATION_SIZE == 100
+    assert episodes == family_validation_episodes.__wrapped__()  # drawn again: the same
+    assert FAMILY_VALIDATION_SEED not in {s.seed for s in STRESS_SETS}
+    key = lambda e: (e.goal_ne, e.start.start_distance_m, e.start.noise_seed)  # noqa: E731
+    sets = [s for s in STRESS_SETS if s.kind == "open-water"]
+    stress = {key(e) for s in sets for e in stress_episodes(s, 100)}
+    assert not stress & {key(e) for e in episodes}
+    assert len({len(e.obstacles) + 10 * len(e.vessels) for e in episodes}) > 5  # a varied set
+
+
+def test_selection_and_early_stop_count_the_family_set():
+    study = {"successes": 15, "mean_return": -30.0}
+    assert selection_key(study) == (15, -30.0) and family_passed(study)
+    weak = {**study, "family_successes": 60, "family_n_episodes": 100}
+    strong = {**study, "successes": 14, "family_successes": 90, "family_n_episodes": 100}
+    assert selection_key(strong) > selection_key(weak)  # 104 > 75 successes
+    assert not family_passed(weak) and not family_passed(strong)
+    assert family_passed({**weak, "family_successes": round(100 * FAMILY_STOP_RATE)})
+
+
+def test_validation_of_an_open_water_setup_reports_both_sets():
+    setup = get_setup("rl-gaussian-scene-ow")
+    agent = get_algorithm(setup.algorithm).make_agent(
+        observation_space(setup.observation), action_space(setup.action), setup.run_config(0)
+    )
+    val = validate(agent, setup)
+    assert val["n_episodes"] == 15 and val["family_n_episodes"] == FAMILY_VALIDATION_SIZE
+    assert 0 <= val["family_successes"] <= 100 and 0 <= val["family_collisions"] <= 100
+    assert np.isfinite(val["family_min_distance_m"])
+    pole = validate(agent, get_setup("rl-gaussian-positional").replace(observation="scene"))
+    assert "family_successes" not in pole and pole["successes"] == val["successes"]
+
+
+@pytest.fixture(autouse=True)
+def one_torch_thread():
+    """2 torch threads crawl on a shared, loaded 2-core machine (as in test_learning_pole)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+def _csv(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+@pytest.mark.slow
+def test_usvsim_train_scene_ow_end_to_end(tmp_path: Path) -> None:
+    from learning.cli.train import TrainArgs, run
+    from learning.experiments.checkpoint import load_checkpoint, load_helmsman
+
+    args = TrainArgs(
+        setup="rl-gaussian-scene-ow", iterations=2, validate_every=1, n_envs=4,
+        out=str(tmp_path), quiet=True, threads=1,
+    )  # fmt: skip
+    assert run(args) == 0
+    rows = _csv(tmp_path / "log.csv")
+    assert tuple(rows[0]) == csv_fields(get_setup("rl-gaussian-scene-ow"))
+    assert [r["val_family_n_episodes"] for r in rows] == ["100", "100"]
+    ckpt = load_checkpoint(tmp_path / "best.pt", expected_setup="rl-gaussian-scene-ow")
+    assert ckpt.observation == "scene" and ckpt.history[-1]["family_n_episodes"] == 100
+    assert ckpt.agent["env_steps"] in (4 * 64, 2 * 4 * 64)
+    helm = load_helmsman(tmp_path / "best.pt")
+    assert helm.observation == "scene"
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["setup"] == "rl-gaussian-scene-ow" and summary["iterations"] == 2
