@@ -162,6 +162,12 @@ def run_perf(args: PerfArgs) -> int:
         f"  per-boat Python loop: {plant['per_boat_python_loop_boat_substeps_per_s']:,}/s; "
         f"batched N=1024 is {plant['batched_N1024_over_loop']}x faster"
     )
+    kernels = plant["kernels_N=1024_boat_substeps_per_s"]
+    print(
+        f"  kernels at N=1024, same run (load {plant['load_average_1min']}): "
+        + ", ".join(f"{k}: {v:,}/s" for k, v in kernels.items())
+        + f"; soa is {plant['soa_over_scalar']}x scalar, {plant['soa_over_casadi_map']}x casadi_map"
+    )
     env = result.get("env", {})
     for key, value in env.get("decision_steps_per_s", {}).items():
         print(f"env {key}: {value:,} decision steps/s")

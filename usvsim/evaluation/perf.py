@@ -16,10 +16,12 @@ import numpy as np
 
 from usvsim.task.observations import ObservationKind
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
+from usvsim.vessel.codegen import BatchStepper
 from usvsim.vessel.plant import Plant
 
 __all__ = [
     "env_throughput",
+    "kernel_rates",
     "measure_plant",
     "open_water_env_throughput",
     "open_water_figures",
@@ -55,6 +57,26 @@ def measure_plant(plant: Plant, n_boats: int, seconds: float = 1.0) -> float:
     return _timed_rate(work, seconds)
 
 
+def kernel_rates(n_boats: int = 1024, seconds: float = 1.0, rounds: int = 3) -> dict[str, float]:
+    """Boat-substeps per second of the default plant with each kernel, measured in the same run.
+
+    ``soa`` (structure-of-arrays C, the default), ``scalar`` (CasADi-generated scalar C) and
+    ``casadi_map`` (CasADi's ``Function.map(N, "thread", 2)`` in its virtual machine): each gets
+    ``rounds`` turns of ``seconds / rounds``, interleaved so that a change of machine load hits
+    all alike; the median turn is reported.
+    """
+    plants = {
+        "soa": Plant("default", backend="soa"),
+        "scalar": Plant("default", backend="scalar"),
+        "casadi_map": Plant("default", backend="casadi"),
+    }
+    turns: dict[str, list[float]] = {name: [] for name in plants}
+    for _ in range(rounds):
+        for name, plant in plants.items():
+            turns[name].append(measure_plant(plant, n_boats, seconds / rounds))
+    return {name: float(np.median(rates)) for name, rates in turns.items()}
+
+
 def per_boat_loop_rate(plant: Plant, n_boats: int = 32, seconds: float = 1.0) -> float:
     """Boat-substeps per second of a plain Python loop calling the CasADi Function per boat."""
     rng = np.random.default_rng(0)
@@ -78,12 +100,22 @@ def per_boat_loop_rate(plant: Plant, n_boats: int = 32, seconds: float = 1.0) ->
     return _timed_rate(work, seconds)
 
 
+def _load_average() -> float | None:
+    """The 1-minute load average (figures depend on it), None where the OS has none."""
+    try:
+        return round(os.getloadavg()[0], 2)
+    except (AttributeError, OSError):
+        return None
+
+
 def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
     """All throughput figures as a JSON-ready dict."""
     plant = Plant("default")
     loop = per_boat_loop_rate(plant, seconds=seconds)
     n1 = measure_plant(plant, 1, seconds)
     n1024 = measure_plant(plant, 1024, seconds)
+    kernels = kernel_rates(1024, 3.0 * seconds)
+    stepper = BatchStepper(plant.step_function)  # the plant's choice of kernel, to name it
     result: dict[str, Any] = {
         "machine": {
             "cpus": os.cpu_count(),
@@ -92,10 +124,17 @@ def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
         },
         "plant": {
             "backend": plant.backend,
+            "kernel": stepper.kernel,
+            "build": stepper.build,
             "boat_substeps_per_s": {"N=1": round(n1), "N=1024": round(n1024)},
             "per_boat_python_loop_boat_substeps_per_s": round(loop),
             "batched_N1024_over_loop": round(n1024 / loop, 1),
-            "targets": {"N=1024": 2_000_000, "ratio": 100},
+            # the same run, interleaved: the kernels side by side (issue 17)
+            "kernels_N=1024_boat_substeps_per_s": {k: round(v) for k, v in kernels.items()},
+            "soa_over_scalar": round(kernels["soa"] / kernels["scalar"], 2),
+            "soa_over_casadi_map": round(kernels["soa"] / kernels["casadi_map"], 1),
+            "load_average_1min": _load_average(),
+            "targets": {"N=1024": 20_000_000, "ratio": 100, "soa_over_casadi_map": 3},
         },
     }
     if env:

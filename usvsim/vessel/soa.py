@@ -212,10 +212,11 @@ void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
                    const double* per_boat, int n_per_boat, const double* pool, int n_pool,
                    const long long* index, const double* factor, double* traj) {{
   int n_blocks = (n + B - 1) / B;
-  #pragma omp parallel for schedule(static) if(n_blocks > 1)
+  /* dynamic: on a loaded machine a thread that runs takes the blocks of one that waits */
+  #pragma omp parallel for schedule(dynamic, 1) if(n_blocks > 1)
   for (int b = 0; b < n_blocks; ++b) {{
-    double s[NS * B] __attribute__((aligned(64)));
-    double s_next[NS * B] __attribute__((aligned(64)));
+    double state[2][NS * B] __attribute__((aligned(64)));
+    double *s = state[0], *s_next = state[1];
     double wb[(NA > 0 ? NA : 1) * B] __attribute__((aligned(64)));
     double e[NPS1 * B] __attribute__((aligned(64)));
     int i0 = b * B, nb = n - i0 < B ? n - i0 : B;
@@ -236,7 +237,9 @@ void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
         double* row = traj + ((long)(i0 + j) * n_sub + k) * NS;
         for (int m = 0; m < NS; ++m) row[m] = s_next[m * B + j];
       }}
-      memcpy(s, s_next, sizeof(s));
+      double* done = s;
+      s = s_next;
+      s_next = done;
     }}
   }}
 }}
