@@ -18,7 +18,7 @@ correctly rounded value (glibc manual, "Errors in Math Functions"). No fast-math
 ``-fno-math-errno`` only stops ``errno`` from being set, it changes no number.
 
 The stand-ins cover the arguments a plant meets: ``fmod`` (exact, the C library's bits) where
-``|x / y| < 2⁵³``, ``sin`` and ``cos`` where ``|x| < 10⁵``. Elsewhere (and for NaN and
+``|x / y| < 2⁵⁰``, ``sin`` and ``cos`` where ``|x| < 10⁵``. Elsewhere (and for NaN and
 infinities) the kernel reports the sub-step and the driver recomputes it for that block with the
 scalar CasADi-generated function, which calls the C library.
 
@@ -105,13 +105,14 @@ USV_INLINE double usv_vfmax(double x, double y) {
 USV_INLINE double usv_vfmin(double x, double y) {
   return isnan(x) ? y : (isnan(y) ? x : (x <= y ? x : y));
 }
-/* fmod with the C library's bits where |x / y| < 2^53: the remainder is exactly representable,
-   so x - n y with the right integer n, by one FMA, is it (n from the rounded quotient, corrected
-   by one where the quotient rounded across an integer). Elsewhere (NaN, infinities, huge
-   quotients) the kernel flags the sub-step (usv_vfmod_special) and the driver recomputes it with
-   the C library. */
+/* fmod with the C library's bits where |x / y| < 2^50: the remainder is exactly representable,
+   so x - n y with the right integer n, by one FMA, is it. n comes from x * (1 / y) (1 / y is
+   folded where y is a constant, as 2 pi is: no division), within 2 ulp of x / y, so at most one
+   off, and is corrected by one where it is. Elsewhere (NaN, infinities, huge quotients) the
+   kernel flags the sub-step (usv_vfmod_special) and the driver recomputes it with the C
+   library. */
 USV_INLINE double usv_vfmod_special(double x, double y) {
-  return fabs(x / y) < 9007199254740992.0 ? 0.0 : 1.0;
+  return fabs(x * (1.0 / y)) < 1125899906842624.0 ? 0.0 : 1.0;
 }
 USV_INLINE double usv_vtrunc(double q) { /* trunc(q) for |q| < 2^53 (sign of 0 aside) */
   double a = fabs(q);
@@ -120,7 +121,7 @@ USV_INLINE double usv_vtrunc(double q) { /* trunc(q) for |q| < 2^53 (sign of 0 a
   return copysign(a < 4503599627370496.0 ? t : a, q); /* from 2^52 on a is an integer */
 }
 USV_INLINE double usv_vfmod(double x, double y) {
-  double n = usv_vtrunc(x / y); /* trunc() would not vectorise without -fno-trapping-math */
+  double n = usv_vtrunc(x * (1.0 / y)); /* trunc() would not vectorise (trapping math) */
   double r = fma(-n, y, x);
   double away = (x < 0.0) == (y < 0.0) ? 1.0 : -1.0; /* sign of the quotient */
   /* n - away where r and x differ in sign (r != 0), n + away where |r| >= |y|: select only */

@@ -207,3 +207,20 @@ def test_kernel_rates_side_by_side_rank_the_vectorised_kernel_first() -> None:
     assert set(rates) == {"soa", "scalar", "casadi_map"}
     # interleaved turns: machine load slows all alike (measured 4-60x apart; bars kept loose)
     assert rates["soa"] > rates["casadi_map"] > 0
+
+
+def test_fmod_stand_in_gives_the_c_librarys_bits_for_constant_and_variable_divisors() -> None:
+    s, w, g = ca.SX.sym("s", 2), ca.SX.sym("w", 1), ca.SX.sym("g", 1)
+    # a constant divisor (the heading wrap's 2 pi: its reciprocal folded) and a variable one
+    out = ca.vertcat(ca.fmod(s[0], 2 * math.pi), ca.fmod(s[0], s[1]))
+    stepper = BatchStepper(ca.Function("fmod_probe", [s, w, g], [out]), "soa")
+    rng = np.random.default_rng(4)
+    n = 60_000
+    x = rng.uniform(-1, 1, n) * 10.0 ** rng.uniform(-300, 17, n)
+    y = rng.choice([-1.0, 1.0], n) * 10.0 ** rng.uniform(-5, 5, n)
+    k = rng.integers(-(2**40), 2**40, n // 4).astype(float)
+    x[: n // 4] = k * y[: n // 4] + rng.choice([0.0, 1e-15, -1e-12], n // 4)  # near multiples
+    x[n // 4 : n // 2] = k * (2 * math.pi) * (1.0 + rng.uniform(-1e-15, 1e-15, n // 4))
+    got = stepper.run(np.column_stack([x, y]), np.zeros((n, 1)), np.zeros(1), 1)[:, 0, :]
+    assert got[:, 0].view(np.uint64).tolist() == np.fmod(x, 2 * math.pi).view(np.uint64).tolist()
+    assert got[:, 1].view(np.uint64).tolist() == np.fmod(x, y).view(np.uint64).tolist()
