@@ -62,16 +62,13 @@ _CFLAGS = [
     "-Wl,-Bsymbolic",
 ]
 # The structure-of-arrays kernel: builds tried in turn until one compiles and links. No
-# fast-math: -fno-math-errno only stops errno from being set (so that sqrt vectorises), and
-# -fno-builtin-<f> keeps GCC from merging sin and cos into sincos, which has no vector variant.
-# 512-bit vectors: 1.4x the 256-bit ones GCC prefers on this CPU; scheduling before register
-# allocation, aware of register pressure (the kernel keeps ~100 values live): 1.15x (measured;
-# the order of independent instructions only). -Wl,-z,defs turns a vector function missing from
-# an older libmvec into a link error here, not a failure at call.
-_SOA_COMMON = [
+# fast-math: -fno-math-errno only stops errno from being set (so that sqrt vectorises). Tuning
+# (measured on this CPU, the order of independent instructions only): scheduling before register
+# allocation, aware of register pressure (the kernel keeps ~100 values live), 1.15x; 512-bit
+# vectors, 1.4x the 256-bit ones GCC prefers here. -Wl,-z,defs turns a vector function missing
+# from an older libmvec into a link error here, not a failure at call.
+_SOA_BASE = [
     "-O3",
-    "-fschedule-insns",
-    "-fsched-pressure",
     "-fPIC",
     "-shared",
     "-fopenmp",
@@ -80,19 +77,15 @@ _SOA_COMMON = [
     "-fno-plt",
     "-Wl,-Bsymbolic",
 ]
+_SOA_TUNED = [*_SOA_BASE, "-fschedule-insns", "-fsched-pressure"]
 _SOA_NATIVE = ["-march=native", "-mprefer-vector-width=512"]
-_SOA_VECTOR_MATH = [
-    "-DUSV_SIMD_MATH",
-    *(f"-fno-builtin-{f}" for f in ("sin", "cos", "tan", "atan2", "exp", "log", "pow")),
-    "-Wl,-z,defs",
-    "-lmvec",
-]
+_SOA_VECTOR_MATH = ["-DUSV_SIMD_MATH", "-Wl,-z,defs", "-lmvec"]
 #: The structure-of-arrays builds in the order tried: (name, compiler flags).
 SOA_BUILDS: tuple[tuple[str, list[str]], ...] = (
-    ("native+libmvec", [*_SOA_COMMON, *_SOA_NATIVE, *_SOA_VECTOR_MATH]),
-    ("native", [*_SOA_COMMON, *_SOA_NATIVE]),
-    ("portable+libmvec", [*_SOA_COMMON, *_SOA_VECTOR_MATH]),  # the compiler's default target
-    ("portable", _SOA_COMMON),
+    ("native+libmvec", [*_SOA_TUNED, *_SOA_NATIVE, *_SOA_VECTOR_MATH]),
+    ("native", [*_SOA_TUNED, *_SOA_NATIVE]),
+    ("portable+libmvec", [*_SOA_TUNED, *_SOA_VECTOR_MATH]),  # the compiler's default target
+    ("portable", _SOA_BASE),  # plain -O3 and OpenMP: any GCC-compatible compiler
 )
 
 
