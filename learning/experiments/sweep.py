@@ -303,11 +303,17 @@ def _init_ray(spec: SweepSpec, where: SweepRun) -> None:
 
 def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
     from ray import tune
-    from ray.tune.search import ConcurrencyLimiter
-    from ray.tune.search.basic_variant import BasicVariantGenerator
 
     from learning.experiments.sweep_progress import Progress
+    from learning.experiments.sweep_search import (
+        SessionLimitedGenerator,
+        SessionLimiter,
+        set_session_limit,
+    )
 
+    # this session's --max-concurrent, also for a continued sweep (Tune restores the first
+    # session's search algorithm; sweep_search says why its cap is read from here)
+    set_session_limit(where.max_concurrent)
     storage = where.root / "tune"
     if tune.Tuner.can_restore(str(storage / "sweep")):
         where.say(f"continuing the sweep in {where.root} (Tune state in {storage})")
@@ -321,12 +327,9 @@ def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
         from ray.tune.search.optuna import OptunaSearch
 
         search_alg: Any = OptunaSearch(metric=OBJECTIVE, mode="max", seed=spec.search_seed)
-        if where.max_concurrent:
-            search_alg = ConcurrencyLimiter(search_alg, max_concurrent=where.max_concurrent)
+        search_alg = SessionLimiter(search_alg, max_concurrent=max(1, where.max_concurrent))
     else:
-        search_alg = BasicVariantGenerator(
-            random_state=spec.search_seed, max_concurrent=where.max_concurrent
-        )
+        search_alg = SessionLimitedGenerator(random_state=spec.search_seed)
     return tune.Tuner(
         _trainable(spec),
         param_space=_param_space(spec, where.root),

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -158,9 +159,9 @@ SWEEP = [
 ]  # fmt: skip
 
 
-def _sweep(out: Path, ray_tmp: Path) -> subprocess.Popen[str]:
+def _sweep(out: Path, ray_tmp: Path, *extra: str) -> subprocess.Popen[str]:
     main = "import sys; from usvsim.cli.main import main; sys.exit(main())"
-    cmd = [sys.executable, "-c", main, "sweep", *SWEEP, "--out", str(out)]
+    cmd = [sys.executable, "-c", main, "sweep", *SWEEP, "--out", str(out), *extra]
     env = {**os.environ, "MPLBACKEND": "Agg", "RAY_TMPDIR": str(ray_tmp)}
     env.pop("RAY_ADDRESS", None)  # always a local Ray of its own
     return subprocess.Popen(  # its own process group: Ctrl-C below reaches all of it
@@ -174,7 +175,7 @@ def _sweep(out: Path, ray_tmp: Path) -> subprocess.Popen[str]:
 
 
 @pytest.fixture
-def start_sweep() -> Iterator[Callable[[Path], subprocess.Popen[str]]]:
+def start_sweep() -> Iterator[Callable[..., subprocess.Popen[str]]]:
     """Start the test sweep in ``out``; what is still running at the end is killed (its group).
 
     Ray's files go to a short folder of the test's own (socket paths are limited to 107 bytes),
@@ -185,8 +186,8 @@ def start_sweep() -> Iterator[Callable[[Path], subprocess.Popen[str]]]:
     ray_tmp = Path(tempfile.mkdtemp(prefix="ray-", dir="/tmp"))
     (ray_tmp / "ray_current_cluster").write_text("127.0.0.1:1")
 
-    def start(out: Path) -> subprocess.Popen[str]:
-        procs.append(_sweep(out, ray_tmp))
+    def start(out: Path, *extra: str) -> subprocess.Popen[str]:
+        procs.append(_sweep(out, ray_tmp, *extra))
         return procs[-1]
 
     yield start
@@ -205,13 +206,13 @@ def _log(run: Path) -> list[dict[str, str]]:
 @pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_sweep_interrupted_resumed_and_report_matches_the_logs(
-    tmp_path: Path, start_sweep: Callable[[Path], subprocess.Popen[str]]
+    tmp_path: Path, start_sweep: Callable[..., subprocess.Popen[str]]
 ) -> None:
     pytest.importorskip("ray.tune")  # the sweep extra
     pytest.importorskip("rliable")
     out = tmp_path / "sweep"
     t0 = time.monotonic()
-    first = start_sweep(out)
+    first = start_sweep(out, "--max-concurrent", "1")  # one trial at a time, then two
     latest = [out / "runs" / f"rl-categorical-positional-seed{s}" / "latest.pt" for s in (0, 1)]
     deadline = time.monotonic() + 120
     while not any(p.exists() for p in latest) and first.poll() is None:
@@ -234,7 +235,9 @@ def test_sweep_interrupted_resumed_and_report_matches_the_logs(
     wall = time.monotonic() - t0
     assert second.returncode == 0, text
     assert "continuing the sweep" in text
-    assert wall < 180, f"interrupted + resumed sweep took {wall:.0f} s (37 s at load 1.3, 55 s at 3.5)"
+    # the second session's cap (2), not the first one's that Tune restored: both trials at once
+    assert re.search(r"\[sweep\] start \S+ \(.*, 1 running\)", text), text
+    assert wall < 180, f"interrupted + resumed sweep took {wall:.0f} s (37 s at load 1.3)"
 
     report = json.loads((out / "report.json").read_text())
     assert [t["status"] for t in report["trials"]] == ["finished", "finished"]
@@ -286,7 +289,7 @@ def test_sweep_interrupted_resumed_and_report_matches_the_logs(
 @pytest.mark.slow
 @pytest.mark.timeout(180)
 def test_sigterm_stops_the_sweep_as_ctrl_c_does(
-    tmp_path: Path, start_sweep: Callable[[Path], subprocess.Popen[str]]
+    tmp_path: Path, start_sweep: Callable[..., subprocess.Popen[str]]
 ) -> None:
     pytest.importorskip("ray.tune")  # the sweep extra
     out = tmp_path / "sweep"
@@ -441,3 +444,36 @@ def test_config_file_values_are_range_checked_as_the_flags(tmp_path: Path) -> No
     for f in dataclasses.fields(SweepSpec):  # one range per option, whichever way it is given
         if BOUNDS_KEY in f.metadata:
             assert flags[f.name] == f.metadata[BOUNDS_KEY], f.name
+
+
+def test_a_continued_sweep_takes_this_sessions_concurrency_cap() -> None:
+    """Tune restores the first session's search algorithm; its cap must be the new one's."""
+    pytest.importorskip("ray.tune")
+    pytest.importorskip("optuna")
+    import pickle
+
+    from ray.tune.search.optuna import OptunaSearch
+
+    from learning.experiments.sweep_search import (
+        SessionLimitedGenerator,
+        SessionLimiter,
+        set_session_limit,
+    )
+
+    try:
+        set_session_limit(1)
+        first = SessionLimitedGenerator(random_state=0)
+        limiter = SessionLimiter(OptunaSearch(metric="m", mode="max"), max_concurrent=1)
+        assert (first.max_concurrent, limiter.max_concurrent) == (1, 1)
+        stored, state = pickle.dumps(first), first.get_state()
+        set_session_limit(3)  # the continuing session's --max-concurrent
+        restored = pickle.loads(stored)
+        restored.set_state(state)
+        assert restored.max_concurrent == 3
+        assert pickle.loads(pickle.dumps(limiter)).max_concurrent == 3
+        set_session_limit(0)
+        assert restored.max_concurrent == 0 and limiter.max_concurrent > 10**6  # no cap
+        with pytest.raises(ValueError, match="max_concurrent must be >= 0"):
+            set_session_limit(-1)
+    finally:
+        set_session_limit(0)
