@@ -8,8 +8,12 @@ distribution      parameters                   actions                     used 
 ================  ===========================  ==========================  ===================
 
 Both give ``log_prob``, ``entropy``, ``kl(other)`` = KL(self ‖ other) per row, ``sample`` from an
-explicit ``torch.Generator`` (reproducible runs), ``mode`` (the deterministic action) and
-``detach``/``rows`` (the "old" policy of a TRPO step, or a sub-sample of it).
+explicit ``torch.Generator`` (reproducible runs), ``mode`` (the deterministic action),
+``detach``/``rows`` (the "old" policy of a TRPO step, or a sub-sample of it), and for TRPO's
+Fisher-vector products ``params`` (the parameter tensors of the table) and ``fisher(t)``: the
+Hessian of the mean KL in those parameters, at the distribution itself, times ``t``
+(Gaussian: t_μ / σ² per row and 2 t_logσ; categorical: p ⊙ t − p (pᵀt) per row; each per-row
+term divided by B).
 """
 
 from __future__ import annotations
@@ -56,6 +60,15 @@ class ActionDistribution(ABC):
     def rows(self, idx: Tensor) -> ActionDistribution:
         """The distributions of rows ``idx``."""
 
+    @abstractmethod
+    def params(self) -> tuple[Tensor, ...]:
+        """The parameter tensors of the module table, in its order."""
+
+    @abstractmethod
+    def fisher(self, tangents: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
+        """∇²_q D̄_KL(self ‖ q)|_{q = self} · t for tangents t shaped as :meth:`params`
+        (D̄: the mean over the B rows); the Fisher information of the distribution's parameters."""
+
 
 class DiagGaussian(ActionDistribution):
     """N(mean, diag(exp(log_std)²)); ``log_std`` is state-independent, shape (A,)."""
@@ -92,6 +105,15 @@ class DiagGaussian(ActionDistribution):
     def rows(self, idx: Tensor) -> DiagGaussian:
         return DiagGaussian(self.mean[idx], self.log_std)
 
+    def params(self) -> tuple[Tensor, ...]:
+        return self.mean, self.log_std
+
+    def fisher(self, tangents: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
+        # ∂²KL/∂μ_q² = 1/σ², ∂²KL/∂(log σ_q)² = 2, no cross term, at q = p
+        t_mean, t_log_std = tangents
+        inv_var = torch.exp(-2 * self.log_std.detach())
+        return t_mean * inv_var / self.mean.shape[0], 2 * t_log_std
+
 
 class Categorical(ActionDistribution):
     """Softmax over ``logits`` (B, K)."""
@@ -121,3 +143,12 @@ class Categorical(ActionDistribution):
 
     def rows(self, idx: Tensor) -> Categorical:
         return Categorical(self.logits[idx])
+
+    def params(self) -> tuple[Tensor, ...]:
+        return (self.logits,)
+
+    def fisher(self, tangents: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
+        # the Hessian of log-sum-exp: diag(p) − p pᵀ
+        (t,) = tangents
+        p = self.log_p.detach().exp()
+        return ((p * t - p * (p * t).sum(-1, keepdim=True)) / t.shape[0],)

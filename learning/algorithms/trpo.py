@@ -11,9 +11,9 @@ One iteration, top to bottom (:func:`learning.algorithms.loop.train`, :meth:`TRP
        subject to  D̄_KL(θ_old, θ) = Ê[KL(π_θold ‖ π_θ)] ≤ δ
 
    g = ∇_θ L; the Fisher matrix F = ∇²_θ D̄_KL at θ_old (plus damping·I) is never formed:
-   conjugate gradient solves F x = g from Fisher-vector products
-   (:func:`learning.algorithms.trust_region.fisher_vector_product`, double backprop of the
-   mean KL on a sub-sample of the batch). The full step is β = sqrt(2δ / xᵀFx) · x; a
+   conjugate gradient solves F x = g from Fisher-vector products on a sub-sample of the batch
+   (:func:`learning.algorithms.trust_region.fisher_vector_product`: Jᵀ M J v for the CNN,
+   double backprop of the mean KL for the MLP). The full step is β = sqrt(2δ / xᵀFx) · x; a
    backtracking line search (:func:`learning.algorithms.trust_region.line_search`) shrinks it until
    D̄_KL ≤ δ and L improves, and restores θ_old if no fraction does.
 4. Critic: regress V_φ on the λ-returns with Adam over minibatches (:func:`fit_critic`).
@@ -22,8 +22,9 @@ One iteration, top to bottom (:func:`learning.algorithms.loop.train`, :meth:`TRP
    log-probabilities of the rollout and of the update agree).
 
 Cost per iteration (B samples, P policy parameters): one forward+backward on B for g; one
-forward + create_graph backward on the FVP sub-sample, reused by every CG iteration (each FVP is
-then one backward through that graph); one no-grad forward on B per line-search trial.
+forward (MLP: + create_graph backward) on the FVP sub-sample, reused by every CG iteration (each
+FVP is then a forward-mode pass and one backward, or one backward through the double graph);
+one no-grad forward on B per line-search trial.
 """
 
 from __future__ import annotations

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import time
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -21,6 +22,8 @@ from learning.algorithms.trust_region import (
     conjugate_gradient,
     fisher_vector_product,
     get_flat,
+    jacobian_fisher_vector_product,
+    kl_hessian_vector_product,
     line_search,
 )
 
@@ -75,17 +78,38 @@ def test_conjugate_gradient_solves_spd_system() -> None:
 
 
 @pytest.mark.parametrize(
+    "product",
+    [fisher_vector_product, kl_hessian_vector_product, jacobian_fisher_vector_product],
+    ids=["chosen", "double-backward", "jacobian"],
+)
+@pytest.mark.parametrize("trunk", ["mlp", "cnn"])
+@pytest.mark.parametrize(
     "action_space",
     [spaces.Box(-2.0, 2.0, (2,), np.float32), spaces.Discrete(5)],
     ids=["gaussian", "categorical"],
 )
-def test_fisher_vector_product_equals_hessian_of_mean_kl(action_space: spaces.Space) -> None:
+def test_fisher_vector_product_equals_hessian_of_mean_kl(
+    action_space: spaces.Space, trunk: str, product: Any
+) -> None:
     torch.manual_seed(0)
-    obs_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
-    policy = make_policy(obs_space, action_space, NetworkConfig(hidden=(4,))).double()
+    if trunk == "mlp":
+        obs_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        obs = torch.randn(6, 3, dtype=torch.float64)
+    else:  # a small image: conv 2 × 3×3 stride 2 → ReLU → BatchNorm (eval, set statistics)
+        obs_space = spaces.Box(0, 255, (1, 7, 7), np.uint8)
+        obs = torch.rand(6, 1, 7, 7, dtype=torch.float64)
+    cfg = NetworkConfig(hidden=(4,), conv_kernels=2, conv_size=3, conv_stride=2)
+    policy = make_policy(obs_space, action_space, cfg).double()
     with torch.no_grad():  # a head that is not almost zero, so the Hessian is non-trivial
         policy.head.weight.normal_()
-    obs = torch.randn(6, 3, dtype=torch.float64)
+        for m in policy.modules():
+            if isinstance(m, torch.nn.BatchNorm2d):
+                for value, (low, high) in zip(
+                    (m.running_mean, m.running_var, m.weight, m.bias),
+                    ((0.1, 0.3), (0.5, 2.0), (0.5, 1.5), (-0.2, 0.2)),
+                    strict=True,
+                ):
+                    value.uniform_(low, high)
     names = [n for n, _ in policy.named_parameters()]
     shapes = [p.shape for p in policy.parameters()]
     theta = get_flat(list(policy.parameters()))
@@ -98,10 +122,10 @@ def test_fisher_vector_product_equals_hessian_of_mean_kl(action_space: spaces.Sp
 
     H = torch.autograd.functional.hessian(mean_kl, theta)
     v = torch.randn_like(theta)
-    fvp = fisher_vector_product(policy, obs, damping=0.0)
+    fvp = product(policy, obs, damping=0.0)
     torch.testing.assert_close(fvp(v), H @ v, rtol=1e-9, atol=1e-12)
     torch.testing.assert_close(
-        fisher_vector_product(policy, obs, damping=0.3)(v), H @ v + 0.3 * v, rtol=1e-9, atol=1e-12
+        product(policy, obs, damping=0.3)(v), H @ v + 0.3 * v, rtol=1e-9, atol=1e-12
     )
     assert float(H.abs().max()) > 1e-3  # the comparison is not 0 == 0
 
