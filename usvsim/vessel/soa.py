@@ -19,12 +19,14 @@ correctly rounded value (glibc manual, "Errors in Math Functions"). No fast-math
 
 The stand-ins cover the arguments a plant meets: ``fmod`` (exact, the C library's bits) where
 ``|x / y| < 2⁵⁰``, ``sin`` and ``cos`` where ``|x| < 10⁵``. Elsewhere (and for NaN and
-infinities) the kernel reports the sub-step and the driver recomputes it for that block with the
+infinities) the kernel flags the boat and the driver recomputes that boat's sub-step with the
 scalar CasADi-generated function, which calls the C library.
 
 The driver (``usv_soa_batch``) has the scalar driver's signature (``usv_batch`` in
 :mod:`usvsim.vessel.codegen`): blocks of B boats go to OpenMP threads; per block the state stays in
-block arrays over all sub-steps, each sub-step's per-step input is gathered from its pool
+block arrays over all sub-steps (a block short of B boats is filled with copies of its first,
+so that every boat runs through the same vector code: a boat's numbers do not depend on the
+batch it is in), each sub-step's per-step input is gathered from its pool
 (:class:`usvsim.vessel.codegen.GatheredSteps`) into a block array, and each sub-step's state is
 written to the (N, n_sub, ns) trajectory.
 """
@@ -36,8 +38,8 @@ import casadi as ca
 __all__ = ["BLOCK", "SoaUnsupportedError", "soa_source"]
 
 #: Boats per block: the vector loop's length (a multiple of 8 doubles, one AVX-512 register);
-#: 16, 32 and 64 measured within 3 % of each other at N = 1024.
-BLOCK = 32
+#: 8, 16 and 32 measured within 5 % of each other at N = 1024, and 8 costs least at N = 1.
+BLOCK = 8
 
 
 class SoaUnsupportedError(ValueError):
@@ -111,8 +113,9 @@ USV_INLINE double usv_vfmin(double x, double y) {
    off, and is corrected by one where it is. Elsewhere (NaN, infinities, huge quotients) the
    kernel flags the sub-step (usv_vfmod_special) and the driver recomputes it with the C
    library. */
-USV_INLINE double usv_vfmod_special(double x, double y) {
-  return fabs(x * (1.0 / y)) < 1125899906842624.0 ? 0.0 : 1.0;
+USV_INLINE double usv_vfmod_special(double x, double y) { /* y = inf: fma(-0, inf, x) is NaN */
+  double quotient_ok = fabs(x * (1.0 / y)) < 1125899906842624.0 ? 0.0 : 1.0;
+  return fabs(y) <= 1.7976931348623157e308 ? quotient_ok : 1.0;
 }
 USV_INLINE double usv_vtrunc(double q) { /* trunc(q) for |q| < 2^53 (sign of 0 aside) */
   double a = fabs(q);
@@ -190,10 +193,10 @@ _DEFINES = r"""
 #define NPS1 (NPS > 0 ? NPS : 1)
 """
 
-_DRIVER = r"""/* the scalar generated function, for sub-steps the kernel reports special */
-static void usv_scalar_block(int nb, const double* s, const double* wb, const double* g,
-                             const double* e, double* out) {{
-  for (int j = 0; j < nb; ++j) {{
+_DRIVER = r"""/* the scalar generated function, for the boats whose sub-step the kernel flags */
+static void usv_scalar_lane(int j, const double* s, const double* wb, const double* g,
+                            const double* e, double* out) {{
+  {{
     double sj[NS], wj[NA > 0 ? NA : 1], ej[NPS1], oj[NS];
     const casadi_real* arg[{sz_arg}];
     casadi_real* res[{sz_res}];
@@ -214,26 +217,31 @@ void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
                    const long long* index, const double* factor, double* traj) {{
   int n_blocks = (n + B - 1) / B;
   /* dynamic: on a loaded machine a thread that runs takes the blocks of one that waits */
-  #pragma omp parallel for schedule(dynamic, 1) if(n_blocks > 1)
+  #pragma omp parallel for schedule(dynamic, 1) if(n >= 64)
   for (int b = 0; b < n_blocks; ++b) {{
     double state[2][NS * B] __attribute__((aligned(64)));
     double *s = state[0], *s_next = state[1];
     double wb[(NA > 0 ? NA : 1) * B] __attribute__((aligned(64)));
     double e[NPS1 * B] __attribute__((aligned(64)));
+    double flag[B] __attribute__((aligned(64)));
     int i0 = b * B, nb = n - i0 < B ? n - i0 : B;
-    for (int j = 0; j < nb; ++j) {{
-      for (int m = 0; m < NS; ++m) s[m * B + j] = s0[(long)(i0 + j) * NS + m];
-      for (int m = 0; m < NA; ++m) wb[m * B + j] = per_boat[(long)(i0 + j) * n_per_boat + m];
+    /* a block short of B boats is filled up with copies of its first: every boat goes through
+       the same vector code, so a boat's numbers do not depend on the batch it is in */
+    for (int j = 0; j < B; ++j) {{
+      long i = i0 + (j < nb ? j : 0);
+      for (int m = 0; m < NS; ++m) s[m * B + j] = s0[i * NS + m];
+      for (int m = 0; m < NA; ++m) wb[m * B + j] = per_boat[i * n_per_boat + m];
     }}
     for (int k = 0; k < n_sub; ++k) {{
       for (int m = 0; m < NPS; ++m) {{
         long long c = index[k * NPS + m];
         double f = factor[k * NPS + m];
-        for (int j = 0; j < nb; ++j)
-          e[m * B + j] = c >= 0 ? pool[(long)(i0 + j) * n_pool + c] * f : f;
+        for (int j = 0; j < B; ++j)
+          e[m * B + j] = c >= 0 ? pool[(i0 + (j < nb ? j : 0)) * (long)n_pool + c] * f : f;
       }}
-      if (usv_soa_kernel(nb, s, wb, shared_in, e, s_next))
-        usv_scalar_block(nb, s, wb, shared_in, e, s_next);
+      usv_soa_kernel(s, wb, shared_in, e, s_next, flag);
+      for (int j = 0; j < nb; ++j)
+        if (flag[j] != 0.0) usv_scalar_lane(j, s, wb, shared_in, e, s_next);
       for (int j = 0; j < nb; ++j) {{
         double* row = traj + ((long)(i0 + j) * n_sub + k) * NS;
         for (int m = 0; m < NS; ++m) row[m] = s_next[m * B + j];
@@ -270,7 +278,7 @@ def _check_layout(fn: ca.Function) -> None:
 
 
 def _kernel(fn: ca.Function) -> tuple[str, set[str]]:
-    """``usv_soa_kernel``: one sub-step of nb <= B boats, and the C library functions it calls."""
+    """``usv_soa_kernel``: one sub-step of B boats, and the C library functions it calls."""
     _check_layout(fn)
     # common subexpressions once (sin ψ of RK4's first stage and of the autopilot, ...): the
     # same operations on the same operands, so the same numbers
@@ -315,17 +323,20 @@ def _kernel(fn: ca.Function) -> tuple[str, set[str]]:
     shared_decl = f"const double {shared};" if shared else ""
     lines = "\n      ".join(body)
     kernel = f"""
-static int usv_soa_kernel(int nb, const double* restrict s, const double* restrict wb,
-                          const double* restrict g, const double* restrict e,
-                          double* restrict out) {{
-  double special = 0.0; /* a count as a double: an int |= here made GCC branch */
+/* one sub-step of B boats; flag[j] != 0 where boat j needs the C library (a count as a
+   double: an int |= here made GCC branch). B is a constant: no remainder loop, whose code (and
+   C-library calls) could differ from the vector loop's */
+static void usv_soa_kernel(const double* restrict s, const double* restrict wb,
+                           const double* restrict g, const double* restrict e,
+                           double* restrict out, double* restrict flag) {{
   {shared_decl}
-  #pragma omp simd reduction(+:special)
-  for (int j = 0; j < nb; ++j) {{
+  #pragma omp simd
+  for (int j = 0; j < B; ++j) {{
+      double special = 0.0;
       double {work};
       {lines}
+      flag[j] = special;
   }}
-  return special != 0.0;
 }}
 """
     return kernel, libm

@@ -224,3 +224,14 @@ def test_fmod_stand_in_gives_the_c_librarys_bits_for_constant_and_variable_divis
     got = stepper.run(np.column_stack([x, y]), np.zeros((n, 1)), np.zeros(1), 1)[:, 0, :]
     assert got[:, 0].view(np.uint64).tolist() == np.fmod(x, 2 * math.pi).view(np.uint64).tolist()
     assert got[:, 1].view(np.uint64).tolist() == np.fmod(x, y).view(np.uint64).tolist()
+
+
+def test_a_boats_numbers_do_not_depend_on_its_batch() -> None:
+    plant = Plant("default")
+    stepper = BatchStepper(plant.step_function, "soa")
+    s0, w = random_inputs(plant, 3 * BLOCK + 3, seed=12)
+    s0[BLOCK + 2, 2] = 4e7  # a neighbour the C library must step (heading out of range)
+    batch = stepper.run(s0, w, plant.gains, 12)
+    for i in (0, 5, BLOCK + 1, BLOCK + 3, 3 * BLOCK + 2):
+        alone = stepper.run(s0[i : i + 1], w[i : i + 1], plant.gains, 12)
+        np.testing.assert_array_equal(alone[0], batch[i])
