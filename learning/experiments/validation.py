@@ -8,8 +8,9 @@ A setup trained on the open-water family (``task="open-water"``, issue 18) is va
 :data:`usvsim.task.openwater_env.OPEN_WATER_FAMILY` from their own seed, never a stress set's),
 whose ``family_*`` entries join the validation record. Such a run keeps as ``best.pt`` the
 checkpoint with the most successes over both sets together, then the higher mean return
-(:func:`selection_key`), and stops early only at a validation that also passes
-:data:`FAMILY_STOP_RATE` of the family set (:func:`family_passed`).
+(:func:`selection_key`; ``summary.json``'s ``best.successes`` is that sum), and stops early
+only at a validation that also passes :data:`FAMILY_STOP_RATE` of the family set
+(:func:`family_passed`).
 """
 
 from __future__ import annotations
