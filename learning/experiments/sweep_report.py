@@ -83,9 +83,24 @@ class TrialRecord:
 
 
 def load_trials(root: Path) -> list[TrialRecord]:
-    """Every trial of the sweep in ``root`` (from ``trials.json`` and the run folders)."""
+    """Every trial of the sweep in ``root`` (from ``trials.json`` and the run folders), in the
+    order of ``sweep.json``'s setups, then overrides, then seed: ``trials.json`` is in Tune's
+    order, which a continued sweep shuffles, and the report's per-seed columns follow this one."""
     out = []
-    for t in json.loads((root / "trials.json").read_text()):
+    listed = json.loads((root / "trials.json").read_text())
+    spec_path = root / "sweep.json"
+    setups = list(json.loads(spec_path.read_text())["setups"]) if spec_path.is_file() else []
+    for t in listed:
+        if t["setup"] not in setups:
+            setups.append(t["setup"])
+    listed.sort(
+        key=lambda t: (
+            setups.index(t["setup"]),
+            json.dumps(t["overrides"], sort_keys=True),
+            int(t["seed"]),
+        )
+    )
+    for t in listed:
         run = root / "runs" / t["dir"]
         finished = t["status"] == "finished"
         heldout = json.loads((run / "heldout.json").read_text()) if finished else {}

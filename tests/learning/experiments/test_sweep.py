@@ -477,3 +477,24 @@ def test_a_continued_sweep_takes_this_sessions_concurrency_cap() -> None:
             set_session_limit(-1)
     finally:
         set_session_limit(0)
+
+
+def test_trials_are_reported_in_setup_then_seed_order(tmp_path: Path) -> None:
+    """trials.json is in Tune's order (a continued sweep shuffles it); the report is not."""
+    from learning.experiments.sweep_report import load_trials
+
+    setups = ["rl-gaussian-radar", "il-gaussian-radar"]
+    (tmp_path / "sweep.json").write_text(json.dumps({"setups": setups}))
+    shuffled = [("il-gaussian-radar", 2), ("rl-gaussian-radar", 1), ("il-gaussian-radar", 0)]
+    shuffled += [("rl-gaussian-radar", 0), ("il-gaussian-radar", 1)]
+    rows = [
+        {"setup": s, "seed": k, "overrides": {}, "dir": f"{s}-seed{k}", "status": "not run",
+         "error": ""}
+        for s, k in shuffled
+    ]  # fmt: skip
+    (tmp_path / "trials.json").write_text(json.dumps(rows))
+    order = [(t.setup, t.seed) for t in load_trials(tmp_path)]
+    assert order == [
+        ("rl-gaussian-radar", 0), ("rl-gaussian-radar", 1),
+        ("il-gaussian-radar", 0), ("il-gaussian-radar", 1), ("il-gaussian-radar", 2),
+    ]  # fmt: skip
