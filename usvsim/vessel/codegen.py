@@ -277,6 +277,11 @@ def _load_kernel(fn: ca.Function, kernel: str) -> tuple[Callable[..., None], str
     Raises :class:`CompileError` where no build succeeds, :class:`SoaUnsupportedError` where the
     structure-of-arrays generator lacks an operation of ``fn``.
     """
+    # libgomp reads its wait policy once, when the first kernel loads it: passive (a thread done
+    # with its boats sleeps at the barrier) unless the user set one. The default, spinning a
+    # while, made 2 threads 6x slower than 1 on this 2-core machine while other jobs ran (the
+    # spinning thread burns the CPU time its partner needs); quiet, it costs nothing measurable.
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     scalar = _generate_source(fn)
     if kernel == "scalar":
         batch, build = ctypes.CDLL(str(_compile(scalar))).usv_batch, "scalar"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import casadi as ca
 import numpy as np
@@ -235,3 +236,15 @@ def test_a_boats_numbers_do_not_depend_on_its_batch() -> None:
     for i in (0, 5, BLOCK + 1, BLOCK + 3, 3 * BLOCK + 2):
         alone = stepper.run(s0[i : i + 1], w[i : i + 1], plant.gains, 12)
         np.testing.assert_array_equal(alone[0], batch[i])
+
+
+@pytest.mark.parametrize("preset", [None, "ACTIVE"])
+def test_openmp_threads_wait_passively_unless_the_user_chose(
+    monkeypatch: pytest.MonkeyPatch, preset: str | None
+) -> None:
+    if preset is None:
+        monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    else:
+        monkeypatch.setenv("OMP_WAIT_POLICY", preset)
+    BatchStepper(Plant("default").step_function, "soa")
+    assert os.environ["OMP_WAIT_POLICY"] == (preset or "PASSIVE")
