@@ -44,8 +44,10 @@ SETUP_GROUPS: dict[str, tuple[str, ...]] = {
         "il-gaussian-radar",
         "il-categorical-radar",
     ),
-    "rl": tuple(s for s in SETUPS if not s.endswith("-ppo")),
+    # the study's four RL setups (not the PPO variants, not the open-water ``-ow`` setups)
+    "rl": tuple(n for n, s in SETUPS.items() if not n.endswith("-ppo") and s.task == "pole"),
     "il": tuple(IL_SETUPS),
+    "open-water": tuple(n for n, s in SETUPS.items() if s.task == "open-water"),
 }
 # fields of a setup that name it rather than tune it
 _FIXED_FIELDS = {"name", "observation", "action", "study_iterations", "study_success"}

@@ -81,6 +81,10 @@ def test_seeds_groups_and_trial_count() -> None:
         "t", expand_setups(["radar"]), (0, 1, 2), grid=(("max_kl", (0.01, 0.02)),), samples=1
     )
     assert expected_trials(spec) == 4 * 3 * 2
+    # the study's groups stay the study's eight setups when open-water setups are added
+    assert len(expand_setups(["rl", "il"])) == 8
+    assert not any(s.endswith("-ow") for s in expand_setups(["rl", "radar", "positional"]))
+    assert all(s.endswith("-ow") for s in expand_setups(["open-water"]))
 
 
 def test_spec_round_trip_and_refusals() -> None:
