@@ -13,7 +13,7 @@ other C-library functions (``atan2``, ...) to glibc's vector math library (libmv
 Numbers (tested: ``tests/usvsim/vessel/test_soa.py``): arithmetic, ``sqrt``, ``fabs``,
 comparisons, ``fmin``/``fmax`` and ``fmod`` give CasADi's virtual machine's results, up to the
 compiler's fused multiply-add contraction (as in the scalar generated code); ``sin`` and ``cos``
-are within 1 ulp of glibc's (tested on 500k arguments), libmvec's ``atan2`` within 4 ulp of the
+are within 1 ulp of glibc's (tested on 250k arguments), libmvec's ``atan2`` within 4 ulp of the
 correctly rounded value (glibc manual, "Errors in Math Functions"). No fast-math:
 ``-fno-math-errno`` only stops ``errno`` from being set, it changes no number.
 
