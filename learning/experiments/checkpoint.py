@@ -271,7 +271,9 @@ def _read(path: Path) -> dict[str, Any]:
     try:
         with zipfile.ZipFile(path) as archive:
             bad = archive.testzip()
-    except (zipfile.BadZipFile, OSError, EOFError) as err:
+    # ValueError: e.g. UnicodeDecodeError for a member name flagged UTF-8 that is not (found
+    # by hypothesis); NotImplementedError: a compression method zipfile does not know
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError, NotImplementedError) as err:
         raise CheckpointError(
             f"{path}: not a readable checkpoint (corrupt or truncated file?): {err}"
         ) from None
@@ -279,7 +281,14 @@ def _read(path: Path) -> dict[str, Any]:
         raise CheckpointError(f"{path}: not a readable checkpoint (corrupt member {bad})")
     try:
         data = torch.load(path, map_location="cpu", weights_only=True)
-    except (RuntimeError, pickle.UnpicklingError, EOFError, OSError, IndexError) as err:
+    except (
+        RuntimeError,
+        pickle.UnpicklingError,
+        EOFError,
+        OSError,
+        IndexError,
+        ValueError,
+    ) as err:
         raise CheckpointError(
             f"{path}: not a readable checkpoint (corrupt or truncated file?): {err}"
         ) from None

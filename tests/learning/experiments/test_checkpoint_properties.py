@@ -99,3 +99,22 @@ def test_mutated_content_loads_or_raises_checkpoint_error(
     target = tmp_path / "c.pt"
     torch.save(content, target)
     _try(target)
+
+
+def test_member_name_flagged_utf8_but_not_is_a_checkpoint_error(tmp_path: Path) -> None:
+    """Found by hypothesis: a flipped flag bit made zipfile raise UnicodeDecodeError."""
+    import struct
+
+    raw = bytearray(RAW)
+    i = raw.find(b"PK\x01\x02")  # the first central-directory header
+    flags = struct.unpack_from("<H", raw, i + 8)[0]
+    struct.pack_into("<H", raw, i + 8, flags | 0x800)  # "file name is UTF-8"
+    raw[i + 46] = 0xFF  # ... and its first byte is not
+    path = tmp_path / "c.pt"
+    path.write_bytes(bytes(raw))
+    try:
+        load_checkpoint(path)
+    except CheckpointError as err:
+        assert str(path) in str(err)
+    else:
+        raise AssertionError("a corrupt member name was read")
