@@ -61,6 +61,7 @@ from usvsim.task.openwater_batch import OpenWaterBatch, OpenWaterStep
 from usvsim.task.options import EnvOptions, normalized_observation
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction
+from usvsim.task.vector_env import boat_generators, episodes_option
 from usvsim.vessel.plant import Plant
 
 __all__ = [
@@ -276,14 +277,8 @@ class OpenWaterVectorEnv(VectorEnv):
         """Reset every boat; ``seed`` int → boat i uses ``seed + i``; ``options``: ``episodes``."""
         super().reset(seed=seed if isinstance(seed, int) or seed is None else None)
         if seed is not None:
-            seeds = [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else seed
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"need {self.num_envs} seeds, got {len(seeds)}")
-            self._boat_rngs = [seeding.np_random(int(s))[0] for s in seeds]
-        options = dict(options or {})
-        episodes = options.pop("episodes", None)
-        if options:
-            raise ValueError(f"unknown reset options {sorted(options)}; known: ['episodes']")
+            self._boat_rngs = boat_generators(self.num_envs, seed)
+        episodes = episodes_option(options)
         everyone = np.arange(self.num_envs)
         if episodes is None:
             episodes = self._draw(everyone)

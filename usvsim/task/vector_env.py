@@ -37,9 +37,26 @@ from usvsim.task.options import EnvLayer, EnvOptions
 from usvsim.task.render import RENDER_MODES, RenderConfig, tile_frames
 from usvsim.task.scenario import draw_episode
 
-__all__ = ["PoleAvoidanceVectorEnv"]
+__all__ = ["PoleAvoidanceVectorEnv", "boat_generators", "episodes_option"]
 
 FloatArray = NDArray[np.float64]
+
+
+def boat_generators(num_envs: int, seed: int | Sequence[int]) -> list[np.random.Generator]:
+    """Each boat's episode generator: boat i seeded ``seed + i`` (an int) or ``seed[i]``."""
+    seeds = [seed + i for i in range(num_envs)] if isinstance(seed, int) else list(seed)
+    if len(seeds) != num_envs:
+        raise ValueError(f"need {num_envs} seeds, got {len(seeds)}")
+    return [seeding.np_random(int(s))[0] for s in seeds]
+
+
+def episodes_option(options: dict[str, Any] | None) -> Any:
+    """The ``episodes`` reset option (None when absent); any other option is refused."""
+    options = dict(options or {})
+    episodes = options.pop("episodes", None)
+    if options:
+        raise ValueError(f"unknown reset options {sorted(options)}; known: ['episodes']")
+    return episodes
 
 
 class PoleAvoidanceVectorEnv(VectorEnv):
@@ -99,14 +116,8 @@ class PoleAvoidanceVectorEnv(VectorEnv):
         """Reset every boat; ``seed`` int → boat i uses ``seed + i``; ``options``: ``episodes``."""
         super().reset(seed=seed if isinstance(seed, int) or seed is None else None)
         if seed is not None:
-            seeds = [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else seed
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"need {self.num_envs} seeds, got {len(seeds)}")
-            self._boat_rngs = [seeding.np_random(int(s))[0] for s in seeds]
-        options = dict(options or {})
-        specs = options.pop("episodes", None)
-        if options:
-            raise ValueError(f"unknown reset options {sorted(options)}; known: ['episodes']")
+            self._boat_rngs = boat_generators(self.num_envs, seed)
+        specs = episodes_option(options)
         if specs is None:
             specs = [draw_episode(g, self.sim.scenario) for g in self._boat_rngs]
         self._obs = self.layer.started(np.arange(self.num_envs), self.sim.reset(None, list(specs)))
