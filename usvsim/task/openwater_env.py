@@ -42,7 +42,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
-from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -50,7 +49,7 @@ from numpy.typing import NDArray
 
 from usvsim.task.batch import ActionKind, Observation, observation_rows, write_observation_rows
 from usvsim.task.horizon import RewardHorizon, apply_reward_horizon
-from usvsim.task.observations import POSITIONAL_STANDARDIZATION, ObservationKind
+from usvsim.task.observations import ObservationKind
 from usvsim.task.openwater import (
     OpenWaterEpisode,
     OpenWaterScenario,
@@ -58,7 +57,7 @@ from usvsim.task.openwater import (
     vessel_motion,
 )
 from usvsim.task.openwater_batch import OpenWaterBatch, OpenWaterStep
-from usvsim.task.options import EnvOptions, normalized_observation
+from usvsim.task.options import EnvOptions, normalized_observation, normalized_positional_space
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction
 from usvsim.task.vector_env import boat_generators, episodes_option
@@ -239,12 +238,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self._normalize = normalize_observation and observation == "positional"
         space = self.sim.single_observation_space
         if self._normalize:
-            assert isinstance(space, spaces.Box)
-            space = spaces.Box(
-                POSITIONAL_STANDARDIZATION.apply(space.low),
-                POSITIONAL_STANDARDIZATION.apply(space.high),
-                dtype=np.float32,
-            )
+            space = normalized_positional_space(space)
         self.single_observation_space = space
         self.single_action_space = self.sim.inner.single_action_space
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)

@@ -29,7 +29,17 @@ from usvsim.task.horizon import RewardHorizon, apply_reward_horizon, parse_rewar
 from usvsim.task.observations import POSITIONAL_STANDARDIZATION
 from usvsim.task.render import RENDER_MODES, Frame, HumanWindow, RenderConfig, TopView
 
-__all__ = ["EnvLayer", "EnvOptions", "normalized_observation"]
+__all__ = ["EnvLayer", "EnvOptions", "normalized_observation", "normalized_positional_space"]
+
+
+def normalized_positional_space(space: spaces.Space) -> spaces.Box:
+    """The positional observation space as ``normalize_observation=True`` reports it."""
+    assert isinstance(space, spaces.Box)
+    return spaces.Box(
+        POSITIONAL_STANDARDIZATION.apply(space.low),
+        POSITIONAL_STANDARDIZATION.apply(space.high),
+        dtype=np.float32,
+    )
 
 
 def normalized_observation(kind: str, obs: Observation) -> Observation:
@@ -71,12 +81,7 @@ class EnvLayer:
         self._normalize = options.normalize_observation and sim.observation_kind == "positional"
         space = sim.single_observation_space
         if self._normalize:
-            assert isinstance(space, spaces.Box)
-            space = spaces.Box(
-                POSITIONAL_STANDARDIZATION.apply(space.low),
-                POSITIONAL_STANDARDIZATION.apply(space.high),
-                dtype=np.float32,
-            )
+            space = normalized_positional_space(space)
         self.single_observation_space: spaces.Space = space
         self._view: TopView | None = None
         self._radar: NDArray[np.uint8] | None = None
