@@ -61,7 +61,7 @@ from learning.experiments.sweep_spec import (
     parse_seeds,
     trial_dir_name,
 )
-from usvsim.common.fileio import atomic_write_text
+from usvsim.common.fileio import atomic_write_text, remove_stale_temporaries
 
 __all__ = [
     "OBJECTIVE",
@@ -75,6 +75,7 @@ __all__ = [
     "expected_trials",
     "parse_seeds",
     "progress_metrics",
+    "remove_trial_temporaries",
     "run_sweep",
     "run_trial",
     "trial_dir_name",
@@ -278,16 +279,19 @@ def progress_metrics(out: Path) -> dict[str, Any]:
     }
 
 
-def _init_ray(spec: SweepSpec, where: SweepRun) -> None:
+def _init_ray(spec: SweepSpec, where: SweepRun) -> bool:
+    """Connect to ``where.address`` or start a Ray of the sweep's own; True if this call started
+    a local Ray (the sweep shuts it down when it ends), False if Ray was already initialised or
+    is a cluster's."""
     import logging
 
     import ray
 
     if ray.is_initialized():
-        return
+        return False
     if where.address:
         ray.init(address=where.address, log_to_driver=False, logging_level=logging.WARNING)
-        return
+        return False
     cpus = os.cpu_count() or 1
     if where.max_concurrent:
         cpus = min(cpus, where.max_concurrent * spec.threads) or spec.threads
@@ -299,6 +303,7 @@ def _init_ray(spec: SweepSpec, where: SweepRun) -> None:
         logging_level=logging.WARNING,
         configure_logging=False,
     )
+    return True
 
 
 def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
@@ -370,10 +375,15 @@ def run_sweep(spec: SweepSpec, where: SweepRun) -> list[dict[str, Any]]:
             )
     else:
         atomic_write_text(stored, json.dumps(spec.to_json(), indent=2) + "\n")
-    _init_ray(spec, where)
+    own_ray = _init_ray(spec, where)
     t0 = time.time()
     with _sigterm_as_ctrl_c():
         results = _tuner(spec, where).fit()
+    if own_ray:  # end the trials' worker processes before cleaning up after them
+        import ray
+
+        ray.shutdown()
+    remove_trial_temporaries(root)
     trials = []
     for result in results:
         config = result.config or {}
@@ -404,6 +414,17 @@ def run_sweep(spec: SweepSpec, where: SweepRun) -> list[dict[str, Any]]:
     sessions.append({"start": t0, "wall_s": time.time() - t0, "finished_trials": finished})
     atomic_write_text(sessions_path, json.dumps(sessions, indent=2) + "\n")
     return trials
+
+
+def remove_trial_temporaries(root: Path) -> list[Path]:
+    """Remove what stopped trials were writing when their workers were killed (a
+    ``.curve.png.*.tmp`` of a plot in progress, a staging folder) from every run folder under
+    ``root/runs``, so an interrupted sweep leaves only whole files (``latest.pt`` and ``log.csv``
+    are written atomically and stay). Returns what was removed."""
+    runs = root / "runs"
+    if not runs.is_dir():
+        return []
+    return [p for run in sorted(runs.iterdir()) for p in remove_stale_temporaries(run)]
 
 
 @contextlib.contextmanager

@@ -28,6 +28,7 @@ from learning.experiments.sweep import (
     expand_setups,
     expected_trials,
     parse_seeds,
+    remove_trial_temporaries,
     trial_dir_name,
 )
 from learning.experiments.sweep_report import (
@@ -337,6 +338,17 @@ def test_a_crashed_trial_is_reported_not_dropped(tmp_path: Path) -> None:
     assert report["arms"][0]["heldout_iqm"] is None
     assert "crashed" in (out / "report.md").read_text()
     assert "CRASHED rl-categorical-positional-seed0-gamma=1.5" in done.stdout
+
+
+def test_temporaries_of_stopped_trials_are_removed_and_whole_files_kept(tmp_path: Path) -> None:
+    run = tmp_path / "runs" / "rl-gaussian-positional-seed0"
+    (run / ".staging-bench").mkdir(parents=True)
+    (run / ".curve.png.gu5q52he.tmp").write_bytes(b"half a PNG")
+    (run / "latest.pt").write_bytes(b"whole")
+    removed = remove_trial_temporaries(tmp_path)
+    assert sorted(p.name for p in removed) == [".curve.png.gu5q52he.tmp", ".staging-bench"]
+    assert [p.name for p in run.iterdir()] == ["latest.pt"]
+    assert remove_trial_temporaries(tmp_path / "no-such-sweep") == []
 
 
 def test_a_budget_without_validation_is_refused() -> None:
