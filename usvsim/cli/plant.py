@@ -64,6 +64,7 @@ class PerfArgs:
     json: bool = False  # print JSON only
     seconds: float = field(default=1.0, metadata=bounds(gt=0, le=3600))  # per figure, s
     no_env: bool = False  # skip the environment figures
+    profile: bool = False  # only profile decision steps: where a step's time goes
 
 
 def _autopilot_config(name: str) -> Any:
@@ -149,6 +150,10 @@ def run_perf(args: PerfArgs) -> int:
 
     if args.seconds <= 0:
         raise SystemExit("usvsim perf: --seconds must be > 0")
+    if args.profile:
+        from usvsim.evaluation.perf import profile_steps
+
+        return _print_profile(profile_steps(max(args.seconds, 1.0)), args.json)
     result = measure(args.seconds, env=not args.no_env)
     if args.json:
         print(json.dumps(result, indent=2))
@@ -173,4 +178,26 @@ def run_perf(args: PerfArgs) -> int:
         print(f"env {key}: {value:,} decision steps/s")
     for key, value in result.get("open_water", {}).get("decision_steps_per_s", {}).items():
         print(f"open-water {key}: {value:,} decision steps/s")
+    for kind, fig in result.get("everything_set", {}).get("decision_steps_per_s", {}).items():
+        print(
+            f"everything set {kind} N=256: {fig['everything N=256']:,} decision steps/s, "
+            f"{fig['ratio']:.2f} of the study task's {fig['study task N=256']:,}"
+        )
+    return 0
+
+
+def _print_profile(result: dict[str, Any], as_json: bool) -> int:
+    if as_json:
+        print(json.dumps(result, indent=2))
+        return 0
+    for workload, fig in result.items():
+        print(
+            f"{workload} (N=256): {fig['ms_per_step']:.2f} ms per step under the profiler "
+            f"({fig['decision_steps_per_s_profiled']:,} decision steps/s)"
+        )
+        for row in fig["top"]:
+            print(
+                f"  {row['share']:6.1%}  {row['ms_per_step']:7.3f} ms  "
+                f"{row['calls_per_step']:8.2f} calls  {row['function']}"
+            )
     return 0

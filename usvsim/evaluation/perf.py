@@ -27,7 +27,9 @@ __all__ = [
     "open_water_figures",
     "open_water_throughput",
     "per_boat_loop_rate",
+    "profile_steps",
     "run_perf",
+    "stress_set_throughput",
 ]
 
 
@@ -140,6 +142,7 @@ def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
     if env:
         result["env"] = _env_figures(seconds)
         result["open_water"] = open_water_figures(seconds)
+        result["everything_set"] = _everything_figures(seconds)
     return result
 
 
@@ -177,6 +180,118 @@ def open_water_throughput(
     sim = OpenWaterBatch(n_boats, observation=observation)
     sim.reset(None, draw_open_water(sc, 0, n_boats))
     return _decision_rate(sim.step, n_boats, seconds)
+
+
+def stress_set_throughput(
+    set_name: str, observation: ObservationKind, n_boats: int = 256, seconds: float = 2.0
+) -> float:
+    """Decision steps per second of :class:`usvsim.task.openwater_batch.OpenWaterBatch` on
+    ``n_boats`` episodes of the stress set ``set_name`` (e.g. ``everything``: obstacles,
+    vessels, current, GNSS and radar degradation at once; random Gaussian actions, boats keep
+    going after their episode ends)."""
+    from usvsim.evaluation.stress import select_sets, stress_episodes
+    from usvsim.task.openwater_batch import OpenWaterBatch
+
+    (stress_set,) = select_sets([set_name])
+    sim = OpenWaterBatch(n_boats, observation=observation)
+    sim.reset(None, list(stress_episodes(stress_set, n_boats)))
+    return _decision_rate(sim.step, n_boats, seconds)
+
+
+def _everything_figures(seconds: float) -> dict[str, Any]:
+    """The ``everything`` stress set beside the study's task, same observation, same run
+    (issue 17: the former at >= 50 % of the latter)."""
+    figures: dict[str, Any] = {}
+    kinds: tuple[ObservationKind, ...] = ("positional", "radar+goal", "scene")
+    for kind in kinds:
+        study = env_throughput(kind, 256, seconds)
+        everything = stress_set_throughput("everything", kind, 256, seconds)
+        figures[kind] = {
+            "everything N=256": round(everything),
+            "study task N=256": round(study),
+            "ratio": round(everything / study, 3),
+        }
+    return {"decision_steps_per_s": figures, "target_ratio": 0.5}
+
+
+PROFILE_WORKLOADS: tuple[tuple[str, str, ObservationKind], ...] = (
+    ("study task", "", "positional"),
+    ("study task", "", "radar+goal"),
+    ("everything set", "everything", "positional"),
+    ("everything set", "everything", "radar+goal"),
+    ("everything set", "everything", "scene"),
+)
+
+
+def profile_steps(seconds: float = 2.0, n_boats: int = 256, top: int = 8) -> dict[str, Any]:
+    """Where a decision step's time goes (``usvsim perf --profile``): cProfile over about
+    ``seconds`` of steps of each :data:`PROFILE_WORKLOADS` entry (the study task's vector env
+    with autoresets; the ``everything`` stress set on the open-water batch), at ``n_boats``.
+
+    Per workload: steps/s under the profiler (slower than without it), ms per step, and the
+    ``top`` functions by their own time (``tottime``) with calls and ms per step and share of
+    the step.
+    """
+    import cProfile
+    import pstats
+
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1.0, 1.0, (64, n_boats, 1)).astype(np.float32)
+    result: dict[str, Any] = {}
+    for label, set_name, kind in PROFILE_WORKLOADS:
+        if set_name:
+            from usvsim.evaluation.stress import select_sets, stress_episodes
+            from usvsim.task.openwater_batch import OpenWaterBatch
+
+            sim = OpenWaterBatch(n_boats, observation=kind)
+            sim.reset(None, list(stress_episodes(select_sets([set_name])[0], n_boats)))
+            step: Callable[[Any], Any] = sim.step
+        else:
+            env = PoleAvoidanceVectorEnv(n_boats, observation=kind, action="gaussian")
+            env.reset(seed=0)
+            step = env.step
+        for k in range(3):
+            step(actions[k])
+        profiler = cProfile.Profile()
+        steps, start = 0, time.perf_counter()
+        profiler.enable()
+        while time.perf_counter() - start < seconds or steps == 0:
+            step(actions[steps % 64])
+            steps += 1
+        profiler.disable()
+        elapsed = time.perf_counter() - start
+        table = pstats.Stats(profiler).stats  # type: ignore[attr-defined]
+        total = sum(row[2] for row in table.values())
+        rows = sorted(table.items(), key=lambda item: -item[1][2])[:top]
+        result[f"{label}, {kind}"] = {
+            "decision_steps_per_s_profiled": round(n_boats * steps / elapsed),
+            "ms_per_step": round(1e3 * elapsed / steps, 3),
+            "top": [
+                {
+                    "function": _function_name(where),
+                    "calls_per_step": round(row[1] / steps, 2),
+                    "ms_per_step": round(1e3 * row[2] / steps, 3),
+                    "share": round(row[2] / total, 3),
+                }
+                for where, row in rows
+            ],
+        }
+    return result
+
+
+def _function_name(where: tuple[str, int, str]) -> str:
+    """``package/module.py:line(function)`` from a pstats key, or the built-in's name."""
+    path, line, name = where
+    if path == "~":
+        return name
+    parts = path.replace("\\", "/").split("/")
+    for anchor in ("usvsim", "learning", "baselines", "numpy"):
+        if anchor in parts:
+            path = "/".join(parts[len(parts) - 1 - parts[::-1].index(anchor) :])
+            break
+    else:
+        path = parts[-1]
+    return f"{path}:{line}({name})"
 
 
 def _env_figures(seconds: float) -> dict[str, Any]:

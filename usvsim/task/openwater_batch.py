@@ -41,8 +41,8 @@ from usvsim.task.observations import (
 )
 from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
 from usvsim.task.radar import RadarConfig
-from usvsim.task.scenario import BoatNoise, Scenario
-from usvsim.task.scene_radar import RadarDegradation, render_scene
+from usvsim.task.scenario import Scenario
+from usvsim.task.scene_radar import RadarDegradation, RadarStreams, render_scene
 from usvsim.vessel.plant import Plant
 
 __all__ = ["OpenWaterBatch", "OpenWaterStep"]
@@ -104,7 +104,7 @@ class OpenWaterBatch:
             n_boats, observation="positional", action=action, scenario=self.base, plant=plant,
             backend=backend,
         )  # fmt: skip
-        self._radar_noise = BoatNoise(n_boats)
+        self._radar_streams = RadarStreams(n_boats)
         self._r_pole = self.base.pole_radius_m
         self._half_beam = self.inner.plant.vessel.half_beam_m
         self._set_scene(list(range(n_boats)), [])
@@ -174,7 +174,7 @@ class OpenWaterBatch:
         inner.pole_ne[idx] = 1e9  # the inner single-pole flags are not used
         self._set_scene(idx.tolist(), episodes)
         inner.goal_ne[idx] = self.goal_ne[idx]
-        self._radar_noise.seed(idx, [e.radar_seed for e in episodes])
+        self._radar_streams.seed(idx.tolist(), [e.radar_seed for e in episodes])
         pos = inner.state.x[idx, 0:2]
         self._n_dec[idx] = 0
         d0, _ = self._distances(pos[:, None, :], np.zeros((idx.size, 1)), idx)
@@ -233,14 +233,13 @@ class OpenWaterBatch:
             out[:, 2], out[:, 3] = r_g, b_g
             return out
         r, b = relative_polar(pos, psi, centres)
-        noise = self._radar_noise
         q = self.degradation
         degr = RadarDegradation(
             q.clutter_probability[sl], q.speckle[sl], q.missed_probability[sl],
             q.noise_amplitude[sl],
         )  # fmt: skip
-        served = np.arange(self.n_boats)[sl]
-        image = render_scene(r, b, radii, ok, self.radar, degr, _Rows(noise, served))
+        streams = self._radar_streams.rows(np.arange(self.n_boats)[sl])
+        image = render_scene(r, b, radii, ok, self.radar, degr, streams)
         if kind == "radar":
             return image
         r_g, b_g = relative_polar(pos, psi, goal)
@@ -288,19 +287,6 @@ class OpenWaterBatch:
             trajectory=traj,
             end_step=end + 1,
         )
-
-
-class _Rows:
-    """The radar noise streams of the boats ``served`` (a subset when only some are observed)."""
-
-    def __init__(self, noise: BoatNoise, served: NDArray[np.intp]) -> None:
-        self._noise, self._served = noise, served
-
-    def for_boats(self, boats: NDArray[np.intp] | None) -> BoatNoise:
-        return self._noise.for_boats(self._served if boats is None else self._served[boats])
-
-    def random(self, size: tuple[int, ...]) -> FloatArray:
-        return self._noise.random(size)
 
 
 def _pad(a: NDArray[Any], width: int) -> NDArray[Any]:

@@ -18,23 +18,28 @@ column set itself is the bounding-box one (half-width asin(R/ρ), exact for a di
 Per-boat degradation (:class:`usvsim.task.openwater.RadarQuality` as arrays, each (N,)):
 missed returns (each disc's return missing in a frame with probability p_miss), clutter (a pixel
 lit at a uniform random intensity with probability p_clutter), speckle (a lit pixel's intensity
-times U[1 − s, 1]) and uniform additive noise. Draws come from each boat's own stream, a fixed
-number per frame (:data:`MAX_DISCS` for the misses), so a boat's image does not depend on its
-neighbours.
+times U[1 − s, 1]) and uniform additive noise (+ a · U[0, 1) on every pixel). Draws come from each
+boat's own generator (:class:`RadarStreams`), so a boat's image does not depend on its
+neighbours, and only as many as the frame needs: :data:`MAX_DISCS` uniforms for the misses; for
+clutter the positions of P Bernoulli(p_clutter) trials drawn as their geometric gaps
+(:func:`bernoulli_positions`) and one intensity per clutter pixel; one speckle factor per lit
+pixel; P noise values only where a > 0. A frame with ~6 clutter pixels thus needs ~50 numbers, not
+the 3 P + 32 = 17,882 of one uniform per pixel and effect.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
-from usvsim.task.radar import RadarConfig, UniformSource
+from usvsim.task.radar import RadarConfig
 
-__all__ = ["MAX_DISCS", "RadarDegradation", "render_scene"]
+__all__ = ["MAX_DISCS", "RadarDegradation", "RadarStreams", "bernoulli_positions", "render_scene"]
 
 FloatArray = NDArray[np.float64]
 MAX_DISCS = 32  # discs a scene may hold (missed-return draws per frame)
@@ -60,6 +65,26 @@ class RadarDegradation:
         )
 
 
+class RadarStreams:
+    """One radar random generator per boat (PCG64), restarted from each episode's radar seed.
+
+    A boat's draws depend on its own frames only, so a batch of N boats equals N single boats
+    and the count of draws may vary from frame to frame (module docstring).
+    """
+
+    def __init__(self, n_boats: int) -> None:
+        self._gens: list[np.random.Generator | None] = [None] * n_boats
+
+    def seed(self, boats: Sequence[int], seeds: Sequence[int]) -> None:
+        """Restart the streams of ``boats`` from ``seeds`` (one per boat)."""
+        for i, s in zip(boats, seeds, strict=True):
+            self._gens[int(i)] = np.random.default_rng(int(s))
+
+    def rows(self, boats: NDArray[np.intp]) -> list[np.random.Generator | None]:
+        """The generators of ``boats``, in that order (None for a boat never seeded)."""
+        return [self._gens[i] for i in boats.tolist()]
+
+
 def render_scene(
     range_m: FloatArray,
     bearing_rad: FloatArray,
@@ -67,16 +92,21 @@ def render_scene(
     valid: NDArray[np.bool_],
     cfg: RadarConfig | None = None,
     degradation: RadarDegradation | None = None,
-    noise: UniformSource | None = None,
+    rngs: Sequence[np.random.Generator | None] | None = None,
     box_radius_m: float = 1.0,
 ) -> NDArray[np.uint8]:
     """Radar images (N, 1, rows, cols) uint8 of N boats, each seeing J discs.
 
     ``range_m``, ``bearing_rad`` (relative to heading), ``radius_m``, ``valid`` all (N, J);
-    J ≤ :data:`MAX_DISCS`. ``noise`` serves the degraded boats' draws (``for_boats`` protocol of
-    :class:`usvsim.task.scenario.BoatNoise`) and is needed only when some boat is degraded.
-    Discs no larger than ``box_radius_m`` (the study's 1 m pole) are drawn as the study draws its
-    pole, as their polar box (:func:`usvsim.task.radar.render_radar`, the same pixels).
+    J ≤ :data:`MAX_DISCS`. ``rngs[k]`` is boat k's radar generator (:class:`RadarStreams`), needed
+    only for the boats that ``degradation`` degrades. Discs no larger than ``box_radius_m`` (the
+    study's 1 m pole) are drawn as the study draws its pole, as their polar box
+    (:func:`usvsim.task.radar.render_radar`, the same pixels).
+
+    Raises
+    ------
+    ValueError
+        If J > :data:`MAX_DISCS`, or a degraded boat has no generator.
     """
     cfg = cfg or RadarConfig()
     rho = np.asarray(range_m, dtype=float)
@@ -84,18 +114,19 @@ def render_scene(
     if j > MAX_DISCS:
         raise ValueError(f"a scene holds at most {MAX_DISCS} discs, got {j}")
     valid = np.asarray(valid, dtype=bool).copy()
-    u_pix = None
+    gens: list[np.random.Generator] = []
+    boats = np.zeros(0, dtype=np.intp)
     if degradation is not None and degradation.degraded.any():
-        if noise is None:
-            raise ValueError("radar degradation is enabled: pass a noise source")
         boats = np.flatnonzero(degradation.degraded)
-        draws = noise.for_boats(boats).random((boats.size, MAX_DISCS + 3 * cfg.n_rows * cfg.n_cols))  # type: ignore[attr-defined]
-        noise.for_boats(None)  # type: ignore[attr-defined]
-        u_miss = np.ones((n, MAX_DISCS))
-        u_miss[boats] = draws[:, :MAX_DISCS]
-        valid &= u_miss[:, :j] >= degradation.missed_probability[:, None]
-        u_pix = np.zeros((n, 3, cfg.n_rows, cfg.n_cols))
-        u_pix[boats] = draws[:, MAX_DISCS:].reshape(boats.size, 3, cfg.n_rows, cfg.n_cols)
+        given = [None if rngs is None else rngs[k] for k in boats.tolist()]
+        gens = [g for g in given if g is not None]
+        if len(gens) < boats.size:
+            raise ValueError(
+                "radar degradation is enabled: pass a noise source (a generator per degraded boat)"
+            )
+        # each degraded boat's missed returns: MAX_DISCS uniforms, one per possible disc
+        u_miss = np.stack([g.random(MAX_DISCS) for g in gens])
+        valid[boats] &= u_miss[:, :j] >= degradation.missed_probability[boats, None]
     phi = ssa(np.asarray(bearing_rad, dtype=float))
     r = np.asarray(radius_m, dtype=float)
     b_edges = cfg.bearing_edges_rad
@@ -119,28 +150,76 @@ def render_scene(
     far = along + chord
     in_box = box[boat, disc]
     near, far = np.where(in_box, rho_c - r_c, near), np.where(in_box, rho_c + r_c, far)
-    # rows k_lo..k_hi marked +1 / -1 in a difference array laid out (boat, column, range) and
-    # summed along range: no (N, J, rows, cols) array
+    # rows k_lo..k_hi marked +1 / -1 in a difference array laid out (boat, range, column) and
+    # summed along range (contiguous rows of columns: the fast axis for cumsum): no
+    # (N, J, rows, cols) array
     dr = cfg.max_range_m / cfg.n_rows
     k_lo = np.floor(np.maximum(near, 0.0) / dr)
     k_hi = np.minimum(np.floor(far / dr), cfg.n_rows - 1)
     keep = (k_lo <= k_hi) & (k_lo < cfg.n_rows) & (far >= 0)
-    stride = cfg.n_rows + 1
-    base = (boat[keep] * cfg.n_cols + col[keep]) * stride
-    diff = np.zeros(n * cfg.n_cols * stride, dtype=np.int16)  # J <= 32 discs: no overflow
-    np.add.at(diff, base + k_lo[keep].astype(np.intp), 1)
-    np.add.at(diff, base + k_hi[keep].astype(np.intp) + 1, -1)
-    depth = np.cumsum(diff.reshape(n, cfg.n_cols, stride), axis=2, dtype=np.int16)
-    lit = (depth[:, :, : cfg.n_rows] > 0).transpose(0, 2, 1)  # (N, rows, cols)
+    row_len = cfg.n_cols
+    base = boat[keep] * ((cfg.n_rows + 1) * row_len) + col[keep]
+    diff = np.zeros(n * (cfg.n_rows + 1) * row_len, dtype=np.int8)  # J <= 32: no overflow
+    np.add.at(diff, base + k_lo[keep].astype(np.intp) * row_len, 1)
+    np.add.at(diff, base + (k_hi[keep].astype(np.intp) + 1) * row_len, -1)
+    depth = np.cumsum(diff.reshape(n, cfg.n_rows + 1, row_len), axis=1, dtype=np.int8)
+    lit = depth[:, : cfg.n_rows] > 0  # (N, rows, cols)
     out = np.empty((n, *cfg.shape), dtype=np.uint8)
-    if u_pix is None or degradation is None:
-        np.multiply(lit.view(np.uint8), np.uint8(255), out=out[:, 0])
-        return out
-    level = lit.astype(np.float64) * 255.0
-    level *= 1.0 - degradation.speckle[:, None, None] * u_pix[:, 2]
-    p = degradation.clutter_probability[:, None, None]
-    clutter = u_pix[:, 0] < p
-    level = np.where(clutter, np.maximum(level, 255.0 * u_pix[:, 0] / np.maximum(p, 1e-12)), level)
-    level += degradation.noise_amplitude[:, None, None] * u_pix[:, 1]
-    out[:, 0] = np.clip(level, 0.0, 255.0).astype(np.uint8)
+    np.multiply(lit.view(np.uint8), np.uint8(255), out=out[:, 0])
+    if gens:
+        assert degradation is not None
+        out[boats, 0] = _degrade(lit[boats], gens, degradation, boats)
     return out
+
+
+def _degrade(
+    lit: NDArray[np.bool_],
+    gens: Sequence[np.random.Generator],
+    q: RadarDegradation,
+    boats: NDArray[np.intp],
+) -> NDArray[np.uint8]:
+    """The degraded images (B, rows, cols) of B boats from their lit pixels (module docstring):
+    speckle on lit pixels, then clutter (the brighter of the return and the clutter), then
+    additive noise, clipped to 0..255. ``gens[b]``, ``q``'s fields at ``boats[b]``: boat b's."""
+    b_count, rows, cols = lit.shape
+    pixels = rows * cols
+    flat_lit = lit.reshape(b_count, pixels)
+    level = flat_lit.astype(np.float32) * np.float32(255.0)
+    speckle, clutter = q.speckle[boats], q.clutter_probability[boats]
+    noise = q.noise_amplitude[boats]
+    lit_counts = np.count_nonzero(flat_lit, axis=1).tolist()
+    factors, clutter_at, clutter_level, noise_rows, noise_fields = [], [], [], [], []
+    for b, g in enumerate(gens):
+        if speckle[b] > 0:  # one factor per lit pixel, in pixel order
+            factors.append(1.0 - speckle[b] * g.random(lit_counts[b], dtype=np.float32))
+        if clutter[b] > 0:
+            at = bernoulli_positions(g, pixels, float(clutter[b]))
+            clutter_at.append(b * pixels + at)
+            clutter_level.append(255.0 * g.random(at.size, dtype=np.float32))
+        if noise[b] > 0:
+            noise_rows.append(b)
+            noise_fields.append(g.random(pixels, dtype=np.float32))
+    flat = level.reshape(-1)
+    if factors:  # the lit pixels of the speckled boats, boat by boat in pixel order
+        speckled = np.flatnonzero(speckle > 0)
+        on = np.flatnonzero(flat_lit[speckled])
+        flat[speckled[on // pixels] * pixels + on % pixels] *= np.concatenate(factors)
+    if clutter_at:
+        at = np.concatenate(clutter_at)
+        flat[at] = np.maximum(flat[at], np.concatenate(clutter_level))
+    if noise_rows:
+        level[noise_rows] += noise[noise_rows, None].astype(np.float32) * np.stack(noise_fields)
+    np.clip(level, 0.0, 255.0, out=level)
+    return level.astype(np.uint8).reshape(b_count, rows, cols)
+
+
+def bernoulli_positions(g: np.random.Generator, n: int, p: float) -> NDArray[np.intp]:
+    """The indices i < ``n`` where independent Bernoulli(``p``) trials succeed, drawn as the
+    Geometric(``p``) gaps between successes (exactly the law of ``g.random(n) < p``, for
+    ``n · p`` numbers instead of ``n``). ``0 < p <= 1``."""
+    mean = n * p
+    chunk = int(mean + 6.0 * math.sqrt(mean) + 8.0)  # enough at once but in ~1e-9 of frames
+    pos = np.cumsum(g.geometric(p, chunk)) - 1
+    while pos[-1] < n:  # the chunk ended inside the image: draw on
+        pos = np.concatenate([pos, pos[-1] + np.cumsum(g.geometric(p, chunk))])
+    return pos[: np.searchsorted(pos, n)]
