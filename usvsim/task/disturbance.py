@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.special import ndtri
 
 from usvsim.task.scenario import BoatNoise
 
@@ -144,12 +145,14 @@ class BoatDisturbances:
         scale = np.broadcast_to(self.noise_scale[:, None], (normals.shape[0], gnss_index.size))
         drawing = np.flatnonzero(self.active & (self.outlier_p > 0))
         if drawing.size:
-            # one uniform per GNSS error entry, from the boat's own stream: every boat with
-            # outliers draws every period, so its draws do not depend on its neighbours
-            u = self._noise.for_boats(drawing).random((drawing.size, gnss_index.size))
+            # one draw per GNSS error entry, from the boat's own stream: every boat with
+            # outliers draws every period, so its draws do not depend on its neighbours. The
+            # draw is a standard normal z, an outlier where Φ(z) < p, i.e. z < Φ⁻¹(p) (Φ is
+            # monotone: one quantile per boat instead of Φ of every draw)
+            z = self._noise.for_boats(drawing).standard_normal((drawing.size, gnss_index.size))
             self._noise.for_boats(None)
             jump = np.zeros(scale.shape, dtype=bool)
-            jump[drawing] = u < self.outlier_p[drawing, None]
+            jump[drawing] = z < ndtri(self.outlier_p[drawing])[:, None]
             scale = np.where(jump, scale * self.outlier_scale[:, None], scale)
         out[:, gnss_index] = np.where(
             faulty[:, None], normals[:, gnss_index] * scale, normals[:, gnss_index]

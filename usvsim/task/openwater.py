@@ -349,10 +349,12 @@ def vessel_motion(
     the straight-line limit where |ω| t < 1e-9).
     """
     chi = course + turn * t_s
+    sin_chi, cos_chi = np.sin(chi), np.cos(chi)  # each once (a hot path of the open-water step)
+    sin0, cos0 = np.sin(course), np.cos(course)
     small = np.abs(turn * t_s) < 1e-9
     w = np.where(small, 1.0, turn)
-    dx = np.where(small, speed * t_s * np.cos(course), speed / w * (np.sin(chi) - np.sin(course)))
-    dy = np.where(small, speed * t_s * np.sin(course), speed / w * (np.cos(course) - np.cos(chi)))
+    dx = np.where(small, speed * t_s * cos0, speed / w * (sin_chi - sin0))
+    dy = np.where(small, speed * t_s * sin0, speed / w * (cos0 - cos_chi))
     pos = np.stack([p0[..., 0] + dx, p0[..., 1] + dy], axis=-1)
-    vel = np.stack([speed * np.cos(chi), speed * np.sin(chi)], axis=-1)
+    vel = np.stack([speed * cos_chi, speed * sin_chi], axis=-1)
     return pos, vel

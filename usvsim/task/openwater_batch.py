@@ -202,8 +202,22 @@ class OpenWaterBatch:
         self, pos: FloatArray, t_s: FloatArray, idx: Any = slice(None)
     ) -> tuple[FloatArray, NDArray[np.bool_]]:
         """Pole-equivalent distance (n, J, T) and collision flags from positions (n, T, 2)."""
-        centres, radii, _, ok = self._discs(t_s, idx)
-        h = np.hypot(pos[:, None, :, 0] - centres[..., 0], pos[:, None, :, 1] - centres[..., 1])
+        # statics broadcast over the T steps (no (n, k, T, 2) copy of their centres), then vessels
+        c = self.centres[idx]
+        vessels, _ = vessel_motion(
+            self.v_p0[idx][:, :, None, :], self.v_course[idx][:, :, None],
+            self.v_speed[idx][:, :, None], self.v_turn[idx][:, :, None], t_s[:, None, :],
+        )  # fmt: skip
+        x, y = pos[:, None, :, 0], pos[:, None, :, 1]
+        h = np.concatenate(
+            [
+                np.hypot(x - c[:, :, None, 0], y - c[:, :, None, 1]),
+                np.hypot(x - vessels[..., 0], y - vessels[..., 1]),
+            ],
+            axis=1,
+        )
+        radii = np.concatenate([self.radii[idx], self.v_radius[idx]], axis=1)
+        ok = np.concatenate([self.static_ok[idx], self.vessel_ok[idx]], axis=1)
         d = np.where(ok[..., None], h + (self._r_pole - radii)[..., None], np.inf)
         hit = ok[..., None] & (h < (radii + self._half_beam)[..., None])
         return d, hit

@@ -22,3 +22,21 @@ def test_open_water_figures_cover_one_pole_and_a_busy_scene(monkeypatch):
 def test_open_water_throughput_is_a_rate():
     rate = perf.open_water_throughput("radar+goal", 4, 2, 1, seconds=0.05)
     assert rate > 0 and rate == rate  # finite, not NaN
+
+
+def test_everything_set_throughput_is_a_rate():
+    rate = perf.stress_set_throughput("everything", "radar+goal", 4, seconds=0.05)
+    assert 0 < rate < float("inf")
+
+
+def test_profile_names_where_each_workload_spends_its_step():
+    result = perf.profile_steps(seconds=0.05, n_boats=4, top=5)
+    assert list(result) == [f"{label}, {kind}" for label, _, kind in perf.PROFILE_WORKLOADS]
+    for figures in result.values():
+        top = figures["top"]
+        assert len(top) == 5 and figures["ms_per_step"] > 0
+        shares = [row["share"] for row in top]
+        assert shares == sorted(shares, reverse=True) and 0 < sum(shares) <= 1.0 + 1e-9
+        assert sum(row["ms_per_step"] for row in top) <= figures["ms_per_step"] * 1.05
+    names = [row["function"] for f in result.values() for row in f["top"]]
+    assert any(name.startswith("usvsim/") for name in names)  # the package's own functions
