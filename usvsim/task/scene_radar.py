@@ -187,28 +187,36 @@ def _degrade(
     level = flat_lit.astype(np.float32) * np.float32(255.0)
     speckle, clutter = q.speckle[boats], q.clutter_probability[boats]
     noise = q.noise_amplitude[boats]
-    lit_counts = np.count_nonzero(flat_lit, axis=1).tolist()
-    factors, clutter_at, clutter_level, noise_rows, noise_fields = [], [], [], [], []
-    for b, g in enumerate(gens):
-        if speckle[b] > 0:  # one factor per lit pixel, in pixel order
-            factors.append(1.0 - speckle[b] * g.random(lit_counts[b], dtype=np.float32))
-        if clutter[b] > 0:
-            at = bernoulli_positions(g, pixels, float(clutter[b]))
+    lit_counts = np.count_nonzero(flat_lit, axis=1)
+    speckled, noisy = np.flatnonzero(speckle > 0), np.flatnonzero(noise > 0)
+    noise_fields = np.empty((noisy.size, pixels), dtype=np.float32)
+    # per boat, in this order: speckle factors, clutter positions and intensities, noise field
+    u_speckle, clutter_at, u_clutter = [], [], []
+    n_field = 0
+    for b, (g, sp, cl, no) in enumerate(
+        zip(gens, (speckle > 0).tolist(), clutter.tolist(), (noise > 0).tolist(), strict=True)
+    ):
+        if sp:  # one factor per lit pixel, in pixel order
+            u_speckle.append(g.random(int(lit_counts[b]), dtype=np.float32))
+        if cl > 0:
+            at = bernoulli_positions(g, pixels, cl)
             clutter_at.append(b * pixels + at)
-            clutter_level.append(255.0 * g.random(at.size, dtype=np.float32))
-        if noise[b] > 0:
-            noise_rows.append(b)
-            noise_fields.append(g.random(pixels, dtype=np.float32))
+            u_clutter.append(g.random(at.size, dtype=np.float32))
+        if no:
+            g.random(dtype=np.float32, out=noise_fields[n_field])
+            n_field += 1
     flat = level.reshape(-1)
-    if factors:  # the lit pixels of the speckled boats, boat by boat in pixel order
-        speckled = np.flatnonzero(speckle > 0)
+    if u_speckle:  # the lit pixels of the speckled boats, boat by boat in pixel order
         on = np.flatnonzero(flat_lit[speckled])
-        flat[speckled[on // pixels] * pixels + on % pixels] *= np.concatenate(factors)
+        factor = 1.0 - np.repeat(speckle[speckled], lit_counts[speckled]) * np.concatenate(
+            u_speckle
+        )
+        flat[speckled[on // pixels] * pixels + on % pixels] *= factor
     if clutter_at:
         at = np.concatenate(clutter_at)
-        flat[at] = np.maximum(flat[at], np.concatenate(clutter_level))
-    if noise_rows:
-        level[noise_rows] += noise[noise_rows, None].astype(np.float32) * np.stack(noise_fields)
+        flat[at] = np.maximum(flat[at], 255.0 * np.concatenate(u_clutter))
+    if noisy.size:
+        level[noisy] += noise[noisy, None].astype(np.float32) * noise_fields
     np.clip(level, 0.0, 255.0, out=level)
     return level.astype(np.uint8).reshape(b_count, rows, cols)
 
