@@ -8,6 +8,7 @@ held-out episodes (:mod:`learning.cli.evaluate`) and writes a Markdown table::
     python benchmarks/train_rl.py                       # all four setups
     python benchmarks/train_rl.py --setups rl-gaussian-positional --out /tmp/bench
     python benchmarks/train_rl.py --ship                # also copy the models to usvsim/models
+    python benchmarks/train_rl.py --ship-only --setups S --out DIR  # ship the ended run DIR/S
 
 Reported per setup: wall-clock, environment steps and iterations to the FIRST 15/15 validation
 (validation time included), the study's iterations to its best validation (Table 4.1,
@@ -103,6 +104,12 @@ def split_cell(result: dict[str, Any]) -> str:
     return " / ".join(f"{v:.2f}" for v in split.values()) if split else "—"
 
 
+def study_cell(result: dict[str, Any]) -> str:
+    """The study's iterations to its best validation, or — for a setup the study did not have."""
+    iterations = result["summary"]["study_iterations"]
+    return f"~{iterations}" if iterations else "—"
+
+
 def markdown_table(results: list[dict[str, Any]]) -> str:
     head = (
         "| setup | first 15/15: wall-clock | env steps | iterations | study iterations "
@@ -120,7 +127,7 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
             f_wall = f"{first['wall_time_s']:.0f} s"
             f_steps, f_it = f"{first['env_steps']:,}", str(first["iteration"])
         lines.append(
-            f"| {r['setup']} | {f_wall} | {f_steps} | {f_it} | ~{r['summary']['study_iterations']} "
+            f"| {r['setup']} | {f_wall} | {f_steps} | {f_it} | {study_cell(r)} "
             f"| {r['summary']['iterations']} / {r['summary']['wall_time_s']:.0f} s "
             f"| {split_cell(r)} | {val['successes']}/15 | {held['successes']}/200 "
             f"({100 * held['success_rate']:.1f} %) "
@@ -168,15 +175,25 @@ def main(argv: list[str] | None = None) -> int:
         __doc__.splitlines()[0], list(SETUPS), "usvsim-results/bench-train", threads=2
     )
     parser.add_argument("--ship", action="store_true", help="copy the models to usvsim/models")
+    parser.add_argument(
+        "--ship-only",
+        action="store_true",
+        help="ship the ended runs in --out as they are (their summary.json), training nothing",
+    )
     args = parser.parse_args(argv)
+    args.ship = args.ship or args.ship_only
     out = Path(args.out)
     results = []
     for name in args.setups:
         setup = get_setup(name)
         run_dir = out / name
-        summary = train_one(
-            name, args.seed, run_dir, args.threads, args.stop_after, args.time_budget_s, args.resume
-        )
+        if args.ship_only:
+            summary = json.loads((run_dir / "summary.json").read_text())
+        else:
+            summary = train_one(
+                name, args.seed, run_dir, args.threads, args.stop_after, args.time_budget_s,
+                args.resume,
+            )  # fmt: skip
         source = run_dir / "best.pt"
         if args.ship:
             ckpt = slim_copy(load_checkpoint(source), half=setup.observation != "positional")
