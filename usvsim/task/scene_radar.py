@@ -207,11 +207,9 @@ def _degrade(
             n_field += 1
     flat = level.reshape(-1)
     if u_speckle:  # the lit pixels of the speckled boats, boat by boat in pixel order
-        on = np.flatnonzero(flat_lit[speckled])
-        factor = 1.0 - np.repeat(speckle[speckled], lit_counts[speckled]) * np.concatenate(
-            u_speckle
-        )
-        flat[speckled[on // pixels] * pixels + on % pixels] *= factor
+        on = np.flatnonzero(flat_lit & (speckle > 0)[:, None])
+        u = np.concatenate(u_speckle)
+        flat[on] *= 1.0 - np.repeat(speckle[speckled], lit_counts[speckled]) * u
     if clutter_at:
         at = np.concatenate(clutter_at)
         flat[at] = np.maximum(flat[at], 255.0 * np.concatenate(u_clutter))
