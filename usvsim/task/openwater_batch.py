@@ -182,21 +182,31 @@ class OpenWaterBatch:
         self._t_goal[idx] = np.inf
         return self._observe(idx)
 
+    def _vessels(self, t_s: FloatArray, idx: Any) -> tuple[FloatArray, FloatArray]:
+        """Positions and velocities (n, M, T, 2) of the vessels of boats ``idx`` at episode
+        times ``t_s`` (n, T)."""
+        return vessel_motion(
+            self.v_p0[idx][:, :, None, :], self.v_course[idx][:, :, None],
+            self.v_speed[idx][:, :, None], self.v_turn[idx][:, :, None], t_s[:, None, :],
+        )  # fmt: skip
+
+    def _radii_valid(self, idx: Any) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Radii and validity (n, J) of every disc of boats ``idx``: statics, then vessels."""
+        radii = np.concatenate([self.radii[idx], self.v_radius[idx]], axis=1)
+        return radii, np.concatenate([self.static_ok[idx], self.vessel_ok[idx]], axis=1)
+
     def _discs(
         self, t_s: FloatArray, idx: Any = slice(None)
     ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
         """Every disc of boats ``idx`` at episode times ``t_s`` (n, T): centres (n, J, T, 2),
         radii (n, J), velocities (n, J, T, 2), valid (n, J); statics first, then vessels."""
-        c, r, ok = self.centres[idx], self.radii[idx], self.static_ok[idx]
+        c = self.centres[idx]
         n, k, steps = c.shape[0], c.shape[1], t_s.shape[1]
-        pos, vel = vessel_motion(
-            self.v_p0[idx][:, :, None, :], self.v_course[idx][:, :, None],
-            self.v_speed[idx][:, :, None], self.v_turn[idx][:, :, None], t_s[:, None, :],
-        )  # fmt: skip
+        pos, vel = self._vessels(t_s, idx)
         centres = np.concatenate([np.broadcast_to(c[:, :, None, :], (n, k, steps, 2)), pos], axis=1)
         velocity = np.concatenate([np.zeros((n, k, steps, 2)), vel], axis=1)
-        radii = np.concatenate([r, self.v_radius[idx]], axis=1)
-        return centres, radii, velocity, np.concatenate([ok, self.vessel_ok[idx]], axis=1)
+        radii, ok = self._radii_valid(idx)
+        return centres, radii, velocity, ok
 
     def _distances(
         self, pos: FloatArray, t_s: FloatArray, idx: Any = slice(None)
@@ -204,10 +214,7 @@ class OpenWaterBatch:
         """Pole-equivalent distance (n, J, T) and collision flags from positions (n, T, 2)."""
         # statics broadcast over the T steps (no (n, k, T, 2) copy of their centres), then vessels
         c = self.centres[idx]
-        vessels, _ = vessel_motion(
-            self.v_p0[idx][:, :, None, :], self.v_course[idx][:, :, None],
-            self.v_speed[idx][:, :, None], self.v_turn[idx][:, :, None], t_s[:, None, :],
-        )  # fmt: skip
+        vessels, _ = self._vessels(t_s, idx)
         x, y = pos[:, None, :, 0], pos[:, None, :, 1]
         h = np.concatenate(
             [
@@ -216,8 +223,7 @@ class OpenWaterBatch:
             ],
             axis=1,
         )
-        radii = np.concatenate([self.radii[idx], self.v_radius[idx]], axis=1)
-        ok = np.concatenate([self.static_ok[idx], self.vessel_ok[idx]], axis=1)
+        radii, ok = self._radii_valid(idx)
         d = np.where(ok[..., None], h + (self._r_pole - radii)[..., None], np.inf)
         hit = ok[..., None] & (h < (radii + self._half_beam)[..., None])
         return d, hit
