@@ -143,7 +143,10 @@ class ActorCritic:
             self.policy = make_policy(observation_space, action_space, config.network)
             self.critic = make_critic(observation_space, config.network).eval()
         self.normalizer = ObservationNormalizer(
-            observation_space, clip=config.obs_clip, enabled=config.normalize_observations
+            observation_space,
+            clip=config.obs_clip,
+            enabled=config.normalize_observations,
+            scaling=config.observation_scaling,
         )
         self.generator = torch.Generator().manual_seed(config.seed + 1)
         self.iteration = 0

@@ -7,6 +7,10 @@ observation part                       normalised as
                                        running statistics over every observation seen
 ``Box`` uint8 image (radar)            ``x / 255`` (a fixed scale: no statistics to drift)
 ``Dict``                               each key as above
+``Box`` scene vector, ``scaling="scene"``  fixed constants, empty slots all 0
+                                       (:func:`usvsim.task.observations.standardize_scene`):
+                                       a slot that is rarely filled has a tiny running σ, and
+                                       its first obstacle would read as ±clip
 =====================================  ===================================================
 
 The running statistics use the parallel update of Chan, Golub and LeVeque (1979), in float64,
@@ -26,7 +30,11 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-__all__ = ["ObservationNormalizer", "RunningMeanStd", "is_image_space"]
+from usvsim.task.observations import standardize_scene
+
+__all__ = ["SCALINGS", "ObservationNormalizer", "RunningMeanStd", "is_image_space"]
+
+SCALINGS = ("running", "scene")  # ObservationNormalizer scaling of vector parts
 
 Obs = NDArray[Any] | dict[str, NDArray[Any]]
 
@@ -92,10 +100,18 @@ class ObservationNormalizer:
     """
 
     def __init__(
-        self, space: spaces.Space, clip: float = 10.0, eps: float = 1e-8, enabled: bool = True
+        self,
+        space: spaces.Space,
+        clip: float = 10.0,
+        eps: float = 1e-8,
+        enabled: bool = True,
+        scaling: str = "running",
     ) -> None:
+        if scaling not in SCALINGS:
+            raise ValueError(f"observation scaling must be one of {SCALINGS}, got {scaling!r}")
         self.space = space
         self.clip, self.eps, self.enabled = clip, eps, enabled
+        self.fixed = scaling == "scene"
         parts = space.spaces if isinstance(space, spaces.Dict) else {"": space}
         self.stats: dict[str, RunningMeanStd] = {}
         for key, sub in parts.items():
@@ -103,7 +119,7 @@ class ObservationNormalizer:
                 raise TypeError(
                     f"observation part {key!r}: only Box spaces are supported, got {sub}"
                 )
-            if not is_image_space(sub):
+            if not is_image_space(sub) and not self.fixed:
                 self.stats[key] = RunningMeanStd(tuple(sub.shape))
 
     def _parts(self, obs: Obs) -> dict[str, NDArray[Any]]:
@@ -127,7 +143,9 @@ class ObservationNormalizer:
         """Normalised float32 copy of a batch of raw observations (same structure)."""
         out: dict[str, NDArray[np.float32]] = {}
         for key, x in self._parts(obs).items():
-            if key not in self.stats:
+            if self.fixed and x.dtype != np.uint8:
+                out[key] = np.clip(standardize_scene(x), -self.clip, self.clip)
+            elif key not in self.stats:
                 # one pass (cast inside the ufunc): the same float32 products, ~7x faster
                 out[key] = np.multiply(x, np.float32(1.0 / 255.0), dtype=np.float32)
             elif not self.enabled:

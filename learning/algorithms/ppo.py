@@ -96,6 +96,9 @@ class PPOConfig:
     target_kl: float | None = None  # stop the epochs once mean KL(π_old ‖ π) exceeds it, nats
     normalize_advantages: bool = True
     normalize_observations: bool = True
+    # vector observations: "running" mean/std, or "scene" (fixed constants, empty slots 0;
+    # usvsim.task.observations.standardize_scene) for the k-nearest scene form
+    observation_scaling: str = "running"
     obs_clip: float = 10.0  # normalised observations clipped to ±obs_clip
     critic_lr: float = 3e-4  # Adam (PPO, Table 3: one step size for both losses)
     critic_epochs: int = 10  # as the policy's K

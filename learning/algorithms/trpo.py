@@ -83,6 +83,9 @@ class TRPOConfig:
     line_search_decay: float = 0.5  # step fraction factor between trials
     normalize_advantages: bool = True
     normalize_observations: bool = True
+    # vector observations: "running" mean/std, or "scene" (fixed constants, empty slots 0;
+    # usvsim.task.observations.standardize_scene) for the k-nearest scene form
+    observation_scaling: str = "running"
     obs_clip: float = 10.0  # normalised observations clipped to ±obs_clip
     critic_lr: float = 1e-3  # Adam
     critic_epochs: int = 5

@@ -39,7 +39,8 @@ line says so, exit status 130; ``--resume`` continues from there. Bad options (r
 :class:`TrainArgs`), an unknown setup, an unwritable ``--out`` or an unusable ``--demos`` folder
 are one line and exit status 2 before any work starts (:mod:`usvsim.cli.main`).
 
-``--demos DIR`` (il-* only) trains from your own ``usvsim-demo/1`` files (``DIR/demo_*.csv``,
+``--demos DIR`` (il-* only) trains from your own ``usvsim-demo/1`` files (``-ow`` setups:
+``/2``; ``DIR/demo_*.csv``,
 format in :mod:`learning.imitation.demonstrations`) instead of the shipped ones; files that
 cannot be read or are physically implausible are skipped with a warning, and the run says how
 many it used (also in ``summary.json``).
@@ -63,7 +64,6 @@ from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
 from learning.experiments.train_rl import train_rl
 from learning.experiments.validation import RunResult
-from learning.imitation.demonstrations import DEMOS_DIR
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import check_writable_dir
 from usvsim.common.options import bounds
@@ -214,7 +214,7 @@ def _run_il(args: TrainArgs) -> int:
         lambda: train_il(
             setup,
             out,
-            demos_dir=args.demos or DEMOS_DIR,
+            demos_dir=args.demos or None,
             seed=args.seed,
             iterations=args.iterations or None,
             resume=args.resume,

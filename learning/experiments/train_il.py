@@ -34,8 +34,12 @@ from learning.experiments.checkpoint import (
 from learning.experiments.il_setups import ILSetup
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import setup_from_params
+from learning.experiments.train_rl import FAMILY_FIELDS
 from learning.experiments.validation import (
     RunResult,
+    family_passed,
+    family_records,
+    family_summary,
     finish_run,
     policy_records,
     validation_record,
@@ -48,6 +52,7 @@ from learning.imitation.demonstrations import (
     load_recordings,
     quality_check,
 )
+from learning.imitation.family_demos import FAMILY_DEMOS_DIR
 from learning.imitation.gail import GAILAgent, GAILStats, train_gail
 from learning.imitation.preprocess import ExpertData, check_observations, expert_data
 from usvsim.common.fileio import (
@@ -56,6 +61,7 @@ from usvsim.common.fileio import (
 )
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
+from usvsim.task.openwater_env import OpenWaterVectorEnv
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
@@ -77,6 +83,7 @@ IL_CSV_FIELDS = (
     "val_selection_successes",
     *TIME_FIELDS,
 )
+
 """Columns of an IL run's ``log.csv``: :class:`learning.imitation.gail.GAILStats` (``env_return``
 the handcrafted return of the finished training episodes, a diagnostic; ``mean_reward`` the mean
 imitation reward; ``disc_*``, ``*_accuracy``, ``mean_d_*`` the discriminator's last Adam step),
@@ -113,7 +120,8 @@ def validate_il(
     """The deterministic policy on ``specs`` (the 15 validation episodes):
     :func:`learning.experiments.validation.validation_summary` and the path distance to the
     expert (m); with ``extra_specs`` (run in the same batch) also ``selection_successes``, the
-    successes on ``specs`` and ``extra_specs`` together."""
+    successes on ``specs`` and ``extra_specs`` together; for an open-water setup also the
+    family set's ``family_*`` entries."""
     recs = policy_records(agent, setup, [*specs, *extra_specs])
     val = {
         **validation_summary(recs[: len(specs)]),
@@ -121,6 +129,8 @@ def validate_il(
     }
     if extra_specs:
         val["selection_successes"] = int(sum(r.success for r in recs))
+    if setup.task == "open-water":
+        val.update(family_summary(family_records(agent, setup)))
     return val
 
 
@@ -148,7 +158,7 @@ class _ILRun:
         self.time_budget_s = time_budget_s
         self.log = RunLog(
             out,
-            IL_CSV_FIELDS,
+            IL_CSV_FIELDS + (FAMILY_FIELDS if setup.task == "open-water" else ()),
             setup.name,
             rows,
             "env_return",
@@ -223,7 +233,7 @@ class _ILRun:
         with atomic_open(self.out / "latest.gail.pt", "wb") as handle:
             torch.save(agent.trainer.state_dict(), handle)
         self.log.write(plot=self.log.plot_due())
-        reason = self.milestones.stop_reason(self.stop_after)
+        reason = self.milestones.stop_reason(self.stop_after) if family_passed(val) else ""
         self.stop_reason = reason or self.stop_reason
         return bool(reason)
 
@@ -273,7 +283,7 @@ def train_il(
     time_budget_s: float = 0.0,
     quiet: bool = True,
     command: str = "",
-    demos_dir: str | Path = DEMOS_DIR,
+    demos_dir: str | Path | None = None,
     log: Callable[[str], None] = print,
 ) -> ILRunResult:
     """Train ``setup`` by GAIL, writing into ``out_dir`` the files of ``usvsim train``
@@ -295,6 +305,8 @@ def train_il(
     goes non-finite; nothing is saved after such a failure.
     """
     torch.set_num_threads(max(1, threads))
+    if demos_dir is None:
+        demos_dir = FAMILY_DEMOS_DIR if setup.task == "open-water" else DEMOS_DIR
     out = Path(out_dir)
     state: dict[str, Any] | None = None
     history: list[dict[str, Any]] = []
@@ -344,7 +356,9 @@ def train_il(
         advance(bar, s.mean_return, s.kl, run.history[-1] if run.history else None)
         return stop
 
-    def make_env(n: int) -> PoleAvoidanceVectorEnv:
+    def make_env(n: int) -> PoleAvoidanceVectorEnv | OpenWaterVectorEnv:
+        if setup.task == "open-water":
+            return OpenWaterVectorEnv(n, observation=setup.observation, action=setup.action)
         return PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
 
     run.start = time.perf_counter()  # the clock counts GAIL, warm start included
@@ -436,7 +450,12 @@ def _rank(rec: dict[str, Any]) -> tuple[int, int, float]:
     them; :func:`usvsim.evaluation.episodes.selection_episodes` says why 15 are too few to
     choose among many 15/15 checkpoints), then on the 15, then the most expert-like path (the
     point of IL). A record from before the selection set (a resumed older run) ranks as if it
-    had failed every extra episode."""
-    d = rec.get("path_distance_m", math.inf)
+    had failed every extra episode. An open-water run's record (``family_successes``) ranks by
+    the selection's and the family set's successes together, then the 15's, then the mean
+    return: never by likeness, which its closing comparison measures (issue 18)."""
     selection = int(rec.get("selection_successes", rec["successes"]))
+    if "family_successes" in rec:
+        total = selection + int(rec["family_successes"])
+        return total, int(rec["successes"]), float(rec["mean_return"])
+    d = rec.get("path_distance_m", math.inf)
     return selection, int(rec["successes"]), -d if math.isfinite(d) else -math.inf

@@ -30,10 +30,12 @@ On-disk format ``usvsim-demo/1`` (one UTF-8 text file per run, ``demo_NNN.csv``)
 Line 1 is the magic ``# usvsim-demo/1`` and the run's metadata as one JSON object (keys:
 :data:`REQUIRED_METADATA`; ``expert`` holds the helmsman's drawn traits, ground truth for
 analysis that preprocessing never reads). Line 2 is the header; the columns may come in any
-order, all of :data:`COLUMNS` must be there. Rows are sorted by time; per stream, times must be
-strictly increasing, and the cells a stream needs must be finite numbers (radar range and
-bearing may both be empty: a sweep without an echo). A reader of a later version must refuse
-``/1`` files only if it changes these rules.
+order, all of :data:`COLUMNS` must be there. ``usvsim-demo/2`` is the same with one more
+metadata key, ``scene``: the goal, obstacles and vessels of a run on the open-water family
+(:mod:`learning.imitation.demo_scene`; such a run's radar stream echoes the nearest obstacle).
+Rows are sorted by time; per stream, times must be strictly increasing, and the cells a stream needs
+must be finite numbers (radar range and bearing may both be empty: a sweep without an echo). A
+reader of a later version must refuse ``/1`` files only if it changes these rules.
 
 Physical plausibility (:class:`Plausibility`, checked by the loader too; a file breaking it is
 refused like a malformed one, naming file and line): metadata origin latitude in [-90, 90]° and
@@ -57,10 +59,11 @@ live in :mod:`learning.imitation.plausibility`).
 from __future__ import annotations
 
 import csv
+import gzip
 import io
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -70,6 +73,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.expert import ExpertParams, ExpertRun, run_expert
+from learning.imitation.demo_scene import FORMAT_SCENE, DemoScene
 from learning.imitation.plausibility import (
     PLAUSIBLE,
     DemoFormatError,
@@ -80,7 +84,7 @@ from learning.imitation.plausibility import (
 )
 from usvsim.common.angles import ssa
 from usvsim.common.errors import UserError
-from usvsim.common.fileio import atomic_write_text
+from usvsim.common.fileio import atomic_open, atomic_write_text
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned, ned_from_geodetic
 from usvsim.task.scenario import Scenario, draw_episodes
 
@@ -90,6 +94,7 @@ __all__ = [
     "DEMO_SEED",
     "FORMAT",
     "REQUIRED_METADATA",
+    "SITE_ORIGIN",
     "DemoFormatError",
     "LoadReport",
     "Plausibility",
@@ -97,6 +102,7 @@ __all__ = [
     "Recording",
     "load_recording",
     "load_recordings",
+    "log_run",
     "quality_check",
     "record_demonstrations",
     "recording_to_text",
@@ -165,6 +171,12 @@ class Recording:
         return np.asarray(self.meta["poles_ne"], dtype=float)[int(self.meta["pole_index"])]
 
     @property
+    def scene(self) -> DemoScene | None:
+        """The open-water scene of a ``usvsim-demo/2`` run (:mod:`learning.imitation.demo_scene`),
+        None for a ``/1`` run (one pole)."""
+        return DemoScene.from_meta(self.source, self.meta) if "scene" in self.meta else None
+
+    @property
     def gps_ne(self) -> FloatArray:
         """GPS fixes in the site's NED frame, (G, 2) m."""
         return ned_from_geodetic(self.gps_latlon_deg[:, 0], self.gps_latlon_deg[:, 1], self.origin)
@@ -182,9 +194,9 @@ def _sample_times(rng: np.random.Generator, rate_hz: float, t_end: float, jitter
     return np.sort(t[(t >= 0.0) & (t <= t_end)])
 
 
-def _pose_at(run: ExpertRun, t: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """True position (M, 2) and heading (M,) at times ``t``, linear in time (heading unwrapped)."""
-    tr = run.trajectory
+def _pose_at(tr: FloatArray, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """True position (M, 2) and heading (M,) at times ``t`` on the path ``tr`` (K, 4), linear in
+    time (heading unwrapped)."""
     pos = np.column_stack([np.interp(t, tr[:, 0], tr[:, 1]), np.interp(t, tr[:, 0], tr[:, 2])])
     return pos, np.asarray(ssa(np.interp(t, tr[:, 0], np.unwrap(tr[:, 3]))))
 
@@ -192,24 +204,6 @@ def _pose_at(run: ExpertRun, t: FloatArray) -> tuple[FloatArray, FloatArray]:
 def _record_run(
     run: ExpertRun, k: int, rng: np.random.Generator, p: RecorderParams, scenario: Scenario
 ) -> Recording:
-    t_end = float(run.trajectory[-1, 0])
-    t_gps = _sample_times(rng, p.gps_rate_hz, t_end, p.jitter_s)
-    if rng.random() < p.p_gps_outage:
-        start = rng.uniform(0.2 * t_end, 0.8 * t_end)
-        t_gps = t_gps[(t_gps < start) | (t_gps > start + rng.uniform(*p.gps_outage_range_s))]
-    pos, _ = _pose_at(run, t_gps)
-    pos = pos + rng.normal(0.0, p.gps_sigma_m, pos.shape)
-    t_cmp = _sample_times(rng, p.compass_rate_hz, t_end, p.jitter_s)
-    _, psi = _pose_at(run, t_cmp)
-    psi = np.mod(psi + rng.normal(0.0, p.compass_sigma_rad, psi.size), 2 * math.pi)
-    t_rad = _sample_times(rng, 1.0 / p.radar_period_s, t_end, p.jitter_s)
-    rpos, rpsi = _pose_at(run, t_rad)
-    d = run.pole_ne - rpos
-    rng_m = np.hypot(d[:, 0], d[:, 1]) + rng.normal(0.0, p.radar_range_sigma_m, t_rad.size)
-    brg = ssa(
-        np.arctan2(d[:, 1], d[:, 0]) - rpsi + rng.normal(0, p.radar_bearing_sigma_rad, t_rad.size)
-    )
-    seen = rng_m <= p.radar_max_range_m
     meta = {
         "format": FORMAT,
         "run": k,
@@ -221,6 +215,40 @@ def _record_run(
         "speed_mps": scenario.speed_mps,
         "expert": run.traits,
     }
+    return log_run(
+        run.trajectory, meta, lambda t, pos: np.broadcast_to(run.pole_ne, pos.shape), rng, p
+    )
+
+
+def log_run(
+    trajectory: FloatArray,
+    meta: dict[str, Any],
+    echo_ne: Callable[[FloatArray, FloatArray], FloatArray],
+    rng: np.random.Generator,
+    p: RecorderParams,
+) -> Recording:
+    """Log one run's true path ``trajectory`` (K, 4) = [t_s, x_N, y_E, ψ] as the recorder does
+    (module table) with the metadata ``meta``; ``echo_ne(t, pos)`` gives the position (S, 2) m
+    of the object whose radar echo a sweep at times ``t`` (S,) from positions ``pos`` (S, 2)
+    records (the pole; on the open-water family the nearest obstacle)."""
+    t_end = float(trajectory[-1, 0])
+    t_gps = _sample_times(rng, p.gps_rate_hz, t_end, p.jitter_s)
+    if rng.random() < p.p_gps_outage:
+        start = rng.uniform(0.2 * t_end, 0.8 * t_end)
+        t_gps = t_gps[(t_gps < start) | (t_gps > start + rng.uniform(*p.gps_outage_range_s))]
+    pos, _ = _pose_at(trajectory, t_gps)
+    pos = pos + rng.normal(0.0, p.gps_sigma_m, pos.shape)
+    t_cmp = _sample_times(rng, p.compass_rate_hz, t_end, p.jitter_s)
+    _, psi = _pose_at(trajectory, t_cmp)
+    psi = np.mod(psi + rng.normal(0.0, p.compass_sigma_rad, psi.size), 2 * math.pi)
+    t_rad = _sample_times(rng, 1.0 / p.radar_period_s, t_end, p.jitter_s)
+    rpos, rpsi = _pose_at(trajectory, t_rad)
+    d = echo_ne(t_rad, rpos) - rpos
+    rng_m = np.hypot(d[:, 0], d[:, 1]) + rng.normal(0.0, p.radar_range_sigma_m, t_rad.size)
+    brg = ssa(
+        np.arctan2(d[:, 1], d[:, 0]) - rpsi + rng.normal(0, p.radar_bearing_sigma_rad, t_rad.size)
+    )
+    seen = rng_m <= p.radar_max_range_m
     return Recording(
         meta=meta,
         gps_t_s=t_gps,
@@ -275,19 +303,29 @@ def recording_to_text(rec: Recording) -> str:
         rows.append((t, ["radar", f"{t:.4f}", "", "", "", _num(r, 2), _num(deg, 2)]))
     rows.sort(key=lambda row: row[0])
     out = io.StringIO()
-    out.write(f"# {FORMAT} {json.dumps(rec.meta, sort_keys=True)}\n")
+    magic = FORMAT_SCENE if "scene" in rec.meta else FORMAT
+    out.write(f"# {magic} {json.dumps(rec.meta, sort_keys=True)}\n")
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(COLUMNS)
     writer.writerows(cells for _, cells in rows)
     return out.getvalue()
 
 
-def save_recordings(recordings: Sequence[Recording], folder: str | Path) -> list[Path]:
-    """Write each recording to ``folder/demo_NNN.csv`` (atomically); returns the paths."""
+def save_recordings(
+    recordings: Sequence[Recording], folder: str | Path, *, compress: bool = False
+) -> list[Path]:
+    """Write each recording to ``folder/demo_NNN.csv`` (``compress``: ``demo_NNN.csv.gz``, the
+    same text gzipped), atomically; returns the paths."""
     paths = []
     for rec in recordings:
-        path = Path(folder) / f"demo_{int(rec.meta['run']):03d}.csv"
-        atomic_write_text(path, recording_to_text(rec))
+        path = Path(folder) / f"demo_{int(rec.meta['run']):03d}.csv{'.gz' if compress else ''}"
+        text = recording_to_text(rec)
+        if compress:
+            with atomic_open(path, "wb") as handle:
+                # mtime 0: the same recording gives the same bytes (reproducible files)
+                handle.write(gzip.compress(text.encode("utf-8"), mtime=0))
+        else:
+            atomic_write_text(path, text)
         paths.append(path)
     return paths
 
@@ -296,8 +334,10 @@ def _parse_header(path: str, lines: list[str]) -> tuple[dict[str, Any], dict[str
     if not lines or not lines[0].startswith("# "):
         raise DemoFormatError(f"{path}, line 1: missing the '# {FORMAT} {{...}}' metadata line")
     magic, _, payload = lines[0][2:].partition(" ")
-    if magic != FORMAT:
-        raise DemoFormatError(f"{path}, line 1: format {magic!r} is not {FORMAT!r}")
+    if magic not in (FORMAT, FORMAT_SCENE):
+        raise DemoFormatError(
+            f"{path}, line 1: format {magic!r} is not {FORMAT!r} or {FORMAT_SCENE!r}"
+        )
     try:
         meta = json.loads(payload)
     except json.JSONDecodeError as exc:
@@ -308,6 +348,13 @@ def _parse_header(path: str, lines: list[str]) -> tuple[dict[str, Any], dict[str
     if missing:
         raise DemoFormatError(f"{path}, line 1: metadata lacks {', '.join(missing)}")
     check_site(path, meta)
+    if (magic == FORMAT_SCENE) != ("scene" in meta):
+        raise DemoFormatError(
+            f"{path}, line 1: a {FORMAT_SCENE} file needs the metadata scene, a {FORMAT} file "
+            "has none"
+        )
+    if magic == FORMAT_SCENE:
+        DemoScene.from_meta(path, meta)
     n_poles = len(meta["poles_ne"])
     if not (isinstance(meta["pole_index"], int) and 0 <= meta["pole_index"] < n_poles):
         raise DemoFormatError(
@@ -396,12 +443,18 @@ def _parse_rows(
 
 
 def load_recording(path: str | Path) -> Recording:
-    """Read and validate one ``usvsim-demo/1`` file; :class:`DemoFormatError` if it is bad."""
+    """Read and validate one ``usvsim-demo/1`` or ``/2`` file (``.gz``: gzipped);
+    :class:`DemoFormatError` if it is bad."""
     name = str(path)
     try:
-        lines = Path(path).read_text(encoding="utf-8").splitlines()
+        raw = Path(path).read_bytes()
+        if name.endswith(".gz"):
+            raw = gzip.decompress(raw)
+        lines = raw.decode("utf-8").splitlines()
     except UnicodeDecodeError as exc:
         raise DemoFormatError(f"{name}: not UTF-8 text ({exc.reason})") from None
+    except (gzip.BadGzipFile, EOFError) as exc:
+        raise DemoFormatError(f"{name}: not a gzip file ({exc})") from None
     except OSError as exc:
         raise DemoFormatError(f"{name}: cannot read ({exc.strerror})") from None
     meta, col = _parse_header(name, lines)
@@ -434,11 +487,13 @@ class LoadReport:
 
 
 def load_recordings(folder: str | Path = DEMOS_DIR, pattern: str = "demo_*.csv") -> LoadReport:
-    """Load every file matching ``pattern`` in ``folder`` (sorted); bad files are reported in
-    :attr:`LoadReport.errors` (file → message) and skipped, never raised."""
+    """Load every file matching ``pattern`` (or ``pattern`` + ``.gz``) in ``folder`` (sorted);
+    bad files are reported in :attr:`LoadReport.errors` (file → message) and skipped, never
+    raised."""
     good: list[Recording] = []
     errors: dict[str, str] = {}
-    for path in sorted(Path(folder).glob(pattern)):
+    folder = Path(folder)
+    for path in sorted({*folder.glob(pattern), *folder.glob(pattern + ".gz")}):
         try:
             good.append(load_recording(path))
         except (DemoFormatError, OSError) as exc:
@@ -460,6 +515,8 @@ class QualityCriteria:
     min_pole_distance_m: float = 10.0  # m, the task's safety distance (GPS fixes)
     max_heading_change_rad: float = math.radians(30.0)  # rad per 2 s, the action bound
     min_past_pole_m: float = 40.0  # m, the run must end this far beyond the pole
+    max_goal_distance_m: float = 20.0  # m, a /2 run's last fix this close to its goal (10 m
+    # goal radius, up to 1 s between fixes at 5 m/s, GPS noise)
 
 
 def quality_check(rec: Recording, criteria: QualityCriteria | None = None) -> list[str]:
@@ -468,7 +525,9 @@ def quality_check(rec: Recording, criteria: QualityCriteria | None = None) -> li
     Rejects: a GPS or compass gap longer than the limit; a GPS fix closer to the pole than the
     safety distance (an unsafe or lucky pass is not a behaviour to imitate); a heading change
     over any 2 s larger than the action bound (the policy could not reproduce it); a run that
-    does not end well beyond the pole (aborted).
+    does not end well beyond the pole (aborted). A ``usvsim-demo/2`` run (a scene): a fix
+    closer than the safety distance to any obstacle where it was at that time, and a run that
+    does not end at its goal.
     """
     c = criteria or QualityCriteria()
     reasons = []
@@ -481,9 +540,11 @@ def quality_check(rec: Recording, criteria: QualityCriteria | None = None) -> li
             k = int(np.argmax(gaps))
             reasons.append(f"{name} gap of {gaps[k]:.1f} s at t = {t[k]:.1f} s (> {limit} s)")
     ne = rec.gps_ne
-    d_pole = np.hypot(*(ne - rec.pole_ne).T)
+    scene = rec.scene
+    d_pole = np.hypot(*(ne - rec.pole_ne).T) if scene is None else scene.distance_m(rec.gps_t_s, ne)
+    what = "the pole" if scene is None else "an obstacle (pole-equivalent)"
     if d_pole.min() < c.min_pole_distance_m:
-        reasons.append(f"passed {d_pole.min():.1f} m from the pole (< {c.min_pole_distance_m} m)")
+        reasons.append(f"passed {d_pole.min():.1f} m from {what} (< {c.min_pole_distance_m} m)")
     grid = np.arange(rec.compass_t_s[0], rec.compass_t_s[-1] - 2.0, 0.2)
     psi = np.interp(grid, rec.compass_t_s, np.unwrap(rec.compass_rad))
     psi_later = np.interp(grid + 2.0, rec.compass_t_s, np.unwrap(rec.compass_rad))
@@ -492,6 +553,11 @@ def quality_check(rec: Recording, criteria: QualityCriteria | None = None) -> li
             f"heading changed {math.degrees(np.abs(psi_later - psi).max()):.0f}° within 2 s "
             f"(> {math.degrees(c.max_heading_change_rad):.0f}°)"
         )
+    if scene is not None:
+        d_goal = float(np.hypot(*(ne[-1] - scene.goal_ne)))
+        if d_goal > c.max_goal_distance_m:
+            reasons.append(f"ended {d_goal:.0f} m from the goal (> {c.max_goal_distance_m} m)")
+        return reasons
     course = ne[-1] - ne[0]
     past = float((ne[-1] - rec.pole_ne) @ course / max(float(np.linalg.norm(course)), 1e-9))
     if past < c.min_past_pole_m:

@@ -22,7 +22,14 @@ from learning.algorithms.networks import NetworkConfig, make_trunk
 from learning.algorithms.rollout import Obs, RolloutBatch, flatten_obs
 from learning.imitation.preprocess import ExpertData
 from usvsim.task.batch import N_CATEGORIES
-from usvsim.task.observations import POSITIONAL_STANDARDIZATION
+from usvsim.task.observations import (
+    POSITIONAL_STANDARDIZATION,
+    SCENE_FEATURES,
+    SCENE_K,
+    standardize_scene,
+)
+
+SCENE_WIDTH = 4 + SCENE_FEATURES * SCENE_K  # floats of a scene observation (its standardisation)
 
 __all__ = [
     "N_ABSORBING",
@@ -172,6 +179,8 @@ class GAILTrainer:
             }
         if obs.dtype == np.uint8:
             return {"image": torch.as_tensor(obs, dtype=torch.float32) / 255.0}
+        if obs.shape[-1] == SCENE_WIDTH:
+            return torch.as_tensor(standardize_scene(obs))
         return torch.as_tensor(POSITIONAL_STANDARDIZATION.apply(obs))
 
     @staticmethod

@@ -27,6 +27,7 @@ Discriminator inputs (the study's Sect. "Networks", with its suspected flaw fixe
 part                fed as
 ==================  =========================================================================
 positional s        ``POSITIONAL_STANDARDIZATION`` (fixed constants) ⊕ a ⊕ z → MLP 400-300
+scene s             ``standardize_scene`` (fixed constants, empty slots 0) ⊕ a ⊕ z → MLP
 radar+goal s        image / 255 → the study's CNN; goal (already standardised) ⊕ a ⊕ z join
                     after the convolution ("late"), → FC 400-300
 action a            NORMALISED: the heading change as a fraction of the ±30° bound, in [-1, 1]

@@ -9,10 +9,15 @@ Steps (Vedeler 2019, Sect. 3.5.1; ``shared/reference/table-4-1.md``, "Expert dem
    covered by both sensors (:func:`decision_track`).
 3. **Action** ``Δψ_k = ssa(ψ_{k+1} − ψ_k)`` (next heading − current heading, wrapped), clipped to
    the ±30° action bound (the quality filter already rejects runs that exceed it).
-4. **Goal** = the run's last position (the last GPS fix); the pole = the metadata's pole.
+4. **Goal** = the run's last position (the last GPS fix); the pole = the metadata's pole. A run
+   on the open-water family (``usvsim-demo/2``, :mod:`learning.imitation.demo_scene`): the
+   scene's goal, and its obstacles and vessels where they were at t_k.
 5. **Observations regenerated** by the environment's own builder
    (:func:`usvsim.task.observations.build_observation`) from (p_k, ψ_k, pole, goal): ``positional``,
-   ``radar`` or ``radar+goal`` exactly as a policy sees them in the simulator.
+   ``radar`` or ``radar+goal`` exactly as a policy sees them in the simulator. For a scene run,
+   the open-water step's builder (:func:`usvsim.task.openwater_batch.observe_scene`, also
+   ``scene``; a clean radar image) with the velocity over ground v_k the least-squares slope of
+   the GPS fixes within ±2 s of t_k (about 0.5 m/s of noise per axis from 1.5 m fixes at 1 Hz).
 6. **Actions in the env's format** (:func:`encode_actions`): Gaussian ``a = Δψ / 30°`` in
    [-1, 1]; categorical ``k = round(Δψ / 1.5°) + 20`` in 0..40 (the study's 41 bins).
 
@@ -37,6 +42,7 @@ log has no ATTITUDE), all on the vehicle's boot clock (``time_boot_ms``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -46,6 +52,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from learning.imitation.demo_scene import DemoScene
 from learning.imitation.demonstrations import FORMAT, DemoFormatError, Recording
 from usvsim.common.angles import ssa
 from usvsim.mavlink.link import read_tlog
@@ -53,6 +60,7 @@ from usvsim.mavlink.messages import Attitude, GlobalPosition, VfrHud
 from usvsim.nav.geo import GeoOrigin
 from usvsim.task.batch import N_CATEGORIES, ActionKind
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
+from usvsim.task.openwater_batch import SceneDiscs, observe_scene
 from usvsim.task.radar import RadarConfig
 
 __all__ = [
@@ -69,6 +77,7 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 MAX_CHANGE_RAD = math.radians(30.0)  # rad, the action bound (study)
+VELOCITY_WINDOW_S = 2.0  # s, half-width of the GPS fit that gives a scene run's velocity
 
 
 def interpolate_position(t_s: FloatArray, fix_t_s: FloatArray, fix_ne: FloatArray) -> FloatArray:
@@ -171,20 +180,75 @@ def expert_data(
     period_s: float = 2.0,
     radar: RadarConfig | None = None,
 ) -> ExpertData:
-    """Steps 1-6 for every recording: the expert dataset of one setup."""
+    """Steps 1-6 for every recording: the expert dataset of one setup.
+
+    Raises ``ValueError`` if ``recordings`` mix one-pole (``/1``) and scene (``/2``) runs, or
+    ask one-pole runs for the ``scene`` observation."""
+    scenes = [r.scene for r in recordings]
+    with_scene = [s for s in scenes if s is not None]
+    if with_scene and len(with_scene) != len(scenes):
+        raise ValueError("demonstrations mix one-pole (usvsim-demo/1) and scene (/2) runs")
     tracks = tuple(decision_track(r, period_s) for r in recordings)
+    if with_scene:
+        tracks = tuple(
+            dataclasses.replace(tr, goal_ne=s.goal_ne)
+            for tr, s in zip(tracks, with_scene, strict=True)
+        )
     pos = np.concatenate([tr.pos_ne[:-1] for tr in tracks])
     psi = np.concatenate([tr.psi_rad[:-1] for tr in tracks])
     n = [tr.heading_change_rad.size for tr in tracks]
     pole = np.repeat(np.stack([tr.pole_ne for tr in tracks]), n, axis=0)
     goal = np.repeat(np.stack([tr.goal_ne for tr in tracks]), n, axis=0)
     radius = tracks[0].pole_radius_m if tracks else 1.0
-    obs = build_observation(observation, pos, psi, pole, goal, radius, radar)
+    if with_scene:
+        obs = observe_scene(
+            observation, pos, psi, _velocities(recordings, tracks), goal,
+            _scene_discs(with_scene, tracks), radar,
+        )  # fmt: skip
+    elif observation == "scene":
+        raise ValueError("the scene observation needs scene demonstrations (usvsim-demo/2)")
+    else:
+        obs = build_observation(observation, pos, psi, pole, goal, radius, radar)
     dpsi = np.concatenate([tr.heading_change_rad for tr in tracks])
     episode = np.repeat(np.arange(len(tracks)), n)
     last = np.zeros(dpsi.size, dtype=bool)
     last[np.cumsum(n) - 1] = True
     return ExpertData(obs, encode_actions(dpsi, action), dpsi, episode, last, tracks)
+
+
+def _velocities(recordings: Sequence[Recording], tracks: Sequence[DecisionTrack]) -> FloatArray:
+    """Velocity over ground (M, 2) m/s at every decision: the least-squares slope of the GPS
+    fixes within ±:data:`VELOCITY_WINDOW_S` of it (step 5 of the module docstring); 0 where the
+    window holds fewer than two fixes (an outage)."""
+    out = []
+    for rec, tr in zip(recordings, tracks, strict=True):
+        dt = rec.gps_t_s[None, :] - tr.t_s[:-1, None]  # (K, G) s
+        w = (np.abs(dt) <= VELOCITY_WINDOW_S).astype(float)
+        count = w.sum(axis=1, keepdims=True)
+        mean_t = (w * dt).sum(axis=1, keepdims=True) / np.maximum(count, 1.0)
+        x = w * (dt - mean_t)
+        ne = rec.gps_ne
+        sxx = (x * (dt - mean_t)).sum(axis=1)
+        out.append(
+            np.where((count[:, 0] >= 2)[:, None], (x @ ne) / np.maximum(sxx, 1e-9)[:, None], 0.0)
+        )
+    return np.concatenate(out) if out else np.zeros((0, 2))
+
+
+def _scene_discs(scenes: Sequence[DemoScene], tracks: Sequence[DecisionTrack]) -> SceneDiscs:
+    """Every run's discs at its decisions, padded to the most discs of any run (M, J, ...)."""
+    j = max((s.n_discs for s in scenes), default=0)
+    parts: list[tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]] = []
+    for s, tr in zip(scenes, tracks, strict=True):
+        k, m = tr.t_s.size - 1, s.n_discs
+        centres, velocity = s.discs(tr.t_s[:-1])
+        pad = ((0, 0), (0, j - m), (0, 0))
+        parts.append((
+            np.pad(centres, pad),
+            np.pad(np.broadcast_to(s.radii_m(), (k, m)), ((0, 0), (0, j - m))),
+            np.pad(velocity, pad), np.arange(j)[None, :].repeat(k, 0) < m,
+        ))  # fmt: skip
+    return SceneDiscs(*(np.concatenate(p) for p in zip(*parts, strict=True)))
 
 
 def check_observations(data: ExpertData, observation: ObservationKind) -> None:

@@ -49,7 +49,9 @@ from usvsim.task.scenario import EpisodeSpec, Scenario
 __all__ = [
     "ExpertReference",
     "Likeness",
+    "chamfer_m",
     "expert_reference",
+    "heading_changes",
     "helmsman_likeness",
     "likeness",
     "pass_side",
@@ -118,7 +120,7 @@ def expert_reference(
     return ExpertReference(specs, tuple(paths), tuple(sides), np.concatenate(changes))
 
 
-def _chamfer(a: FloatArray, b: FloatArray) -> float:
+def chamfer_m(a: FloatArray, b: FloatArray) -> float:
     """½ (mean_a d(a, B) + mean_b d(b, A)) for point sets (n, 2), (m, 2)."""
     da, _ = cKDTree(b).query(a)
     db, _ = cKDTree(a).query(b)
@@ -132,7 +134,7 @@ def likeness(records: Sequence[EpisodeRecord], reference: ExpertReference) -> Li
     dist, agree, changes = [], [], []
     for rec, paths, sides in zip(records, reference.paths, reference.sides, strict=True):
         path = rec.trajectory
-        dist.append(min(_chamfer(path[:, :2], e[:, :2]) for e in paths))
+        dist.append(min(chamfer_m(path[:, :2], e[:, :2]) for e in paths))
         agree.append(float(np.mean(sides == pass_side(path, rec.pole_ne))))
         changes.append(heading_changes(path))
     w = wasserstein_distance(

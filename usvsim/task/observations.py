@@ -51,6 +51,7 @@ __all__ = [
     "POSITIONAL_STANDARDIZATION",
     "SCENE_FEATURES",
     "SCENE_K",
+    "SCENE_STANDARDIZATION",
     "ObservationKind",
     "Standardization",
     "build_observation",
@@ -58,6 +59,7 @@ __all__ = [
     "parse_observation_kind",
     "relative_polar",
     "scene_observation",
+    "standardize_scene",
 ]
 
 ObservationKind = Literal["positional", "radar", "radar+goal", "scene"]
@@ -89,6 +91,25 @@ POSITIONAL_STANDARDIZATION = Standardization(
     mean=(50.0, 0.0, 110.0, 0.0),
     std=(100.0 / math.sqrt(12.0), _BEARING_STD, 220.0 / math.sqrt(12.0), _BEARING_STD),
 )
+# scene: the goal as above; u, v over U[-3, 3] m/s·√3 (the study's 3 m/s cruise, sway small);
+# per slot r as the pole's range, φ as a bearing, R over [0, 30] m (poles to islets), relative
+# velocity over [-6, 6] m/s (two boats at 3 m/s), valid as is. Usvsim's choice, not fitted
+_SLOT_MEAN = (50.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+_SLOT_STD = (100.0 / math.sqrt(12.0), _BEARING_STD, 30.0 / math.sqrt(12.0), 12.0 / math.sqrt(12.0),
+             12.0 / math.sqrt(12.0), 1.0)  # fmt: skip
+SCENE_STANDARDIZATION = Standardization(
+    mean=(110.0, 0.0, 0.0, 0.0, *_SLOT_MEAN * SCENE_K),
+    std=(220.0 / math.sqrt(12.0), _BEARING_STD, 3.0, 3.0, *_SLOT_STD * SCENE_K),
+)
+
+
+def standardize_scene(obs: NDArray[np.floating]) -> NDArray[np.float32]:
+    """``scene`` observations (..., 4 + 6 k) under :data:`SCENE_STANDARDIZATION`, every empty
+    slot all zeros (so an empty slot never reads as an obstacle at range 0)."""
+    x = SCENE_STANDARDIZATION.apply(obs)
+    slots = x[..., 4:].reshape(*x.shape[:-1], SCENE_K, SCENE_FEATURES)
+    slots *= np.asarray(obs)[..., 4:].reshape(slots.shape)[..., 5:6] > 0.5
+    return x
 
 
 def relative_polar(

@@ -45,10 +45,11 @@ from usvsim.task.scenario import Scenario
 from usvsim.task.scene_radar import RadarDegradation, RadarStreams, render_scene
 from usvsim.vessel.plant import Plant
 
-__all__ = ["OpenWaterBatch", "OpenWaterStep"]
+__all__ = ["NO_OBSTACLE_RANGE_M", "OpenWaterBatch", "OpenWaterStep", "SceneDiscs", "observe_scene"]
 
 FloatArray = NDArray[np.float64]
 NO_OBSTACLE_RANGE_M = 1000.0  # m, the positional observation's pole when nothing is around
+_R_POLE = 1.0  # m, the study's pole: ranges are pole-equivalent (usvsim.task.openwater)
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,10 @@ class OpenWaterBatch:
         Shared plant; default ``Plant("default")``.
     radar : RadarConfig, optional
         Image geometry (degradation comes from each episode).
+    scenario : Scenario, optional
+        Decision period, plant step and action bound (default the study's: 2 s, 0.1 s, ±30°);
+        a shorter period lets a helmsman steer more often (the human-like expert, 0.2 s). The
+        episodes bring everything else.
     """
 
     def __init__(
@@ -94,12 +99,13 @@ class OpenWaterBatch:
         plant: Plant | None = None,
         radar: RadarConfig | None = None,
         backend: Literal["auto", "compiled", "casadi"] = "auto",
+        scenario: Scenario | None = None,
     ) -> None:
         self.n_boats = n_boats
         self.observation_kind = observation
         self.single_observation_space = observation_space(observation, radar)
         self.radar = radar or RadarConfig()
-        self.base = Scenario(area_radius_m=1e9)
+        self.base = replace(scenario or Scenario(), area_radius_m=1e9)
         self.inner = PoleAvoidanceBatch(
             n_boats, observation="positional", action=action, scenario=self.base, plant=plant,
             backend=backend,
@@ -208,6 +214,14 @@ class OpenWaterBatch:
         radii, ok = self._radii_valid(idx)
         return centres, radii, velocity, ok
 
+    def scene_at(
+        self, t_s: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+        """Every boat's discs at its own episode time ``t_s`` (N,) s: centres (N, J, 2) m, radii
+        (N, J) m, velocities over ground (N, J, 2) m/s, valid (N, J); statics, then vessels."""
+        centres, radii, velocity, ok = self._discs(np.asarray(t_s, dtype=float)[:, None])
+        return centres[:, :, 0], radii, velocity[:, :, 0], ok
+
     def _distances(
         self, pos: FloatArray, t_s: FloatArray, idx: Any = slice(None)
     ) -> tuple[FloatArray, NDArray[np.bool_]]:
@@ -231,39 +245,18 @@ class OpenWaterBatch:
     def _observe(self, idx: NDArray[np.intp] | None = None) -> Any:
         sl: Any = slice(None) if idx is None else idx
         pos, psi = self.inner.estimate
-        pos, psi = pos[sl], psi[sl]
-        vel = self.inner.estimated_velocity[sl]
         t = (self._n_dec[sl] * self.base.decision_period_s).astype(float)[:, None]
         centres, radii, velocity, ok = self._discs(t, sl)
-        centres, velocity = centres[:, :, 0], velocity[:, :, 0]
-        goal = self.goal_ne[sl]
-        kind = self.observation_kind
-        if kind == "scene":
-            return scene_observation(pos, psi, vel, goal, centres, radii, velocity, ok)
-        if kind == "positional":
-            r, b = relative_polar(pos, psi, centres)
-            r_eq = np.where(ok, r + (self._r_pole - radii), np.inf)
-            j = np.argmin(r_eq, axis=1) if r_eq.shape[1] else np.zeros(len(pos), dtype=np.intp)
-            rows = np.arange(len(pos))
-            none = ~np.isfinite(r_eq[rows, j]) if r_eq.shape[1] else np.ones(len(pos), dtype=bool)
-            r_g, b_g = relative_polar(pos, psi, goal)
-            out = np.empty((len(pos), 4), dtype=np.float32)
-            out[:, 0] = np.where(none, NO_OBSTACLE_RANGE_M, r_eq[rows, j] if r.shape[1] else 0.0)
-            out[:, 1] = np.where(none, -math.pi, b[rows, j] if r.shape[1] else 0.0)
-            out[:, 2], out[:, 3] = r_g, b_g
-            return out
-        r, b = relative_polar(pos, psi, centres)
         q = self.degradation
         degr = RadarDegradation(
             q.clutter_probability[sl], q.speckle[sl], q.missed_probability[sl],
             q.noise_amplitude[sl],
         )  # fmt: skip
-        streams = self._radar_streams.rows(np.arange(self.n_boats)[sl])
-        image = render_scene(r, b, radii, ok, self.radar, degr, streams)
-        if kind == "radar":
-            return image
-        r_g, b_g = relative_polar(pos, psi, goal)
-        return {"radar": image, "goal": GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], -1))}
+        return observe_scene(
+            self.observation_kind, pos[sl], psi[sl], self.inner.estimated_velocity[sl],
+            self.goal_ne[sl], SceneDiscs(centres[:, :, 0], radii, velocity[:, :, 0], ok),
+            self.radar, degr, self._radar_streams.rows(np.arange(self.n_boats)[sl]),
+        )  # fmt: skip
 
     def step(self, actions: Any) -> OpenWaterStep:
         """One decision step of every boat (module docstring)."""
@@ -307,6 +300,60 @@ class OpenWaterBatch:
             trajectory=traj,
             end_step=end + 1,
         )
+
+
+@dataclass(frozen=True)
+class SceneDiscs:
+    """What N boats have around them at one time: centres (N, J, 2) m, radii (N, J) m, velocities
+    over ground (N, J, 2) m/s, valid (N, J)."""
+
+    centres_ne: FloatArray
+    radii_m: FloatArray
+    velocity_ne: FloatArray
+    valid: NDArray[np.bool_]
+
+
+def observe_scene(
+    kind: ObservationKind,
+    pos_ne: FloatArray,
+    psi_rad: FloatArray,
+    velocity_ne: FloatArray,
+    goal_ne: FloatArray,
+    discs: SceneDiscs,
+    radar: RadarConfig | None = None,
+    degradation: RadarDegradation | None = None,
+    streams: Sequence[np.random.Generator | None] | None = None,
+) -> Any:
+    """The ``kind`` observation of N boats at poses ``pos_ne`` (N, 2), ``psi_rad`` (N,) with
+    velocity over ground (N, 2) m/s, goals (N, 2) and ``discs`` around them: ``scene`` (the
+    k-nearest form), ``positional`` (the nearest disc, pole-equivalent range, in the pole's
+    slot; :data:`NO_OBSTACLE_RANGE_M` without one), ``radar`` or ``radar+goal`` (every disc,
+    ``degradation`` drawing from ``streams``; :func:`usvsim.task.scene_radar.render_scene`). The
+    open-water step's observation, and the demonstrations' (:mod:`learning.imitation.preprocess`).
+    """
+    c, radii, ok = discs.centres_ne, discs.radii_m, discs.valid
+    if kind == "scene":
+        return scene_observation(
+            pos_ne, psi_rad, velocity_ne, goal_ne, c, radii, discs.velocity_ne, ok
+        )
+    r, b = relative_polar(pos_ne, psi_rad, c)
+    if kind == "positional":
+        n = len(pos_ne)
+        r_eq = np.where(ok, r + (_R_POLE - radii), np.inf)
+        j = np.argmin(r_eq, axis=1) if r_eq.shape[1] else np.zeros(n, dtype=np.intp)
+        rows = np.arange(n)
+        none = ~np.isfinite(r_eq[rows, j]) if r_eq.shape[1] else np.ones(n, dtype=bool)
+        r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
+        out = np.empty((n, 4), dtype=np.float32)
+        out[:, 0] = np.where(none, NO_OBSTACLE_RANGE_M, r_eq[rows, j] if r.shape[1] else 0.0)
+        out[:, 1] = np.where(none, -math.pi, b[rows, j] if r.shape[1] else 0.0)
+        out[:, 2], out[:, 3] = r_g, b_g
+        return out
+    image = render_scene(r, b, radii, ok, radar, degradation, streams)
+    if kind == "radar":
+        return image
+    r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
+    return {"radar": image, "goal": GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], -1))}
 
 
 def _pad(a: NDArray[Any], width: int) -> NDArray[Any]:

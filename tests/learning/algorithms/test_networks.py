@@ -200,3 +200,26 @@ def test_observation_normalizer_dict_and_round_trip() -> None:
 def test_space_spec_round_trip() -> None:
     for space in (POSITIONAL, GAUSSIAN, CATEGORICAL, _radar_goal()):
         assert space_from_spec(space_to_spec(space)) == space
+
+
+def test_scene_scaling_is_fixed_and_zeroes_empty_slots() -> None:
+    """``scaling="scene"``: no statistics to drift, an empty slot all zeros, a rarely filled
+    slot's obstacle on the same scale as the first slot's (running stats would blow it up)."""
+    from learning.algorithms.normalization import ObservationNormalizer
+    from usvsim.task.observations import SCENE_FEATURES, observation_space
+
+    space = observation_space("scene")
+    norm = ObservationNormalizer(space, scaling="scene")
+    running = ObservationNormalizer(space)
+    obs = np.zeros((200, 52), dtype=np.float32)
+    obs[:, 0], obs[:, 4:10] = 100.0, [30.0, 0.5, 1.0, -3.0, 0.0, 1.0]
+    obs[0, 4 + SCENE_FEATURES * 7 : 4 + SCENE_FEATURES * 8] = [30.0, 0.5, 1.0, -3.0, 0.0, 1.0]
+    norm.update(obs)
+    running.update(obs)
+    z, zr = norm(obs), running(obs)
+    assert norm.state_dict() == {}
+    assert np.array_equal(z[0, 4:10], z[0, -6:])  # the same obstacle, the same inputs
+    assert np.all(z[1, -6:] == 0.0)  # an empty slot
+    assert np.abs(zr[0, -6:]).max() == 10.0  # running statistics: clipped at ±10
+    with pytest.raises(ValueError, match="observation scaling must be one of"):
+        ObservationNormalizer(space, scaling="minmax")

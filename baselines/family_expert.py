@@ -1,0 +1,210 @@
+"""The human-like expert on the open-water family: the ``vo`` helmsman's decisions, steered by a
+person with the imperfections of :mod:`baselines.expert`.
+
+The study's expert (:mod:`baselines.expert`) knows one pole straight ahead. On the family (many,
+large and moving obstacles, goals anywhere; :mod:`usvsim.task.openwater`) a person still looks
+out, picks a course that clears what is around and heads for the goal; here that judgement is the
+velocity-obstacle rule of :mod:`baselines.velocity_obstacle` (Kuwata et al. 2014), and the hand
+on the wheel is the study expert's:
+
+=======================  =====================================================================
+what                     model (traits drawn per run, :class:`FamilyExpertTraits`)
+=======================  =====================================================================
+what the helmsman sees   the TRUE scene as it was ``reaction_delay_s`` ago (delay drawn per run
+                         from :attr:`ExpertParams.reaction_delay_range_s`): own pose, velocity
+                         over ground (from the last tick's motion), goal, every obstacle and
+                         vessel; bearings with :attr:`ExpertParams.bearing_noise_rad` noise
+caution                  every obstacle looks ``caution_m`` larger than it is (drawn from
+                         :attr:`FamilyExpertParams.caution_range_m`): wider or closer passes
+decision                 the ``vo`` course θ* (:func:`baselines.velocity_obstacle.vo_course`)
+                         on that perceived ``scene`` observation, every tick (0.2 s), with its
+                         hysteresis; the heading to steer is ψ + ssa(θ* − β), β the crab angle
+hand                     an Ornstein-Uhlenbeck wobble on the heading to steer, swung at most
+                         :attr:`ExpertParams.max_turn_rate_radps` (the study expert's hand)
+=======================  =====================================================================
+
+:func:`run_family_expert` drives N family episodes in one simulator batch
+(:class:`usvsim.task.openwater_batch.OpenWaterBatch` with the heading reference updated every
+``tick_s`` instead of every 2 s: plant, autopilot, navigation filter, currents and sensor faults
+of each episode). A run ends as the task's episodes do: at the goal (10 m), at a collision, out
+of the area or at the time limit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from baselines.expert import ExpertParams
+from baselines.velocity_obstacle import VOConfig, vo_course
+from usvsim.common.angles import ssa
+from usvsim.task.observations import scene_observation
+from usvsim.task.openwater import OpenWaterEpisode
+from usvsim.task.openwater_batch import OpenWaterBatch
+from usvsim.task.scenario import Scenario
+
+__all__ = [
+    "FamilyExpertParams",
+    "FamilyExpertRun",
+    "FamilyExpertTraits",
+    "draw_family_traits",
+    "run_family_expert",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class FamilyExpertParams:
+    """The family expert: the study expert's hand and eyes (``human``), the ``vo`` judgement
+    (``vo``) and how cautious a run is (usvsim's model; no study gives one)."""
+
+    human: ExpertParams = field(default_factory=ExpertParams)
+    vo: VOConfig = field(default_factory=VOConfig)
+    # m, added to every obstacle's radius as the helmsman judges it. 0-8 m: from vo's own passes
+    # (9 m of clear water at least, the success rule) to wider ones
+    caution_range_m: tuple[float, float] = (0.0, 8.0)
+
+    def __post_init__(self) -> None:
+        lo, hi = self.caution_range_m
+        if not (0.0 <= lo <= hi):
+            raise ValueError(
+                f"caution_range_m must be 0 <= low <= high m, got {self.caution_range_m}"
+            )
+
+
+@dataclass(frozen=True)
+class FamilyExpertTraits:
+    """One batch's draws, (N,) arrays: reaction delay (s) and caution (m)."""
+
+    reaction_delay_s: FloatArray
+    caution_m: FloatArray
+
+    def row(self, i: int) -> dict[str, float]:
+        """Run ``i``'s traits as plain numbers (for metadata files)."""
+        return {f.name: float(getattr(self, f.name)[i]) for f in dataclasses.fields(self)}
+
+
+def draw_family_traits(
+    rng: np.random.Generator, n: int, p: FamilyExpertParams
+) -> FamilyExpertTraits:
+    """Draw the traits of ``n`` runs (module table)."""
+    return FamilyExpertTraits(
+        reaction_delay_s=rng.uniform(*p.human.reaction_delay_range_s, n),
+        caution_m=rng.uniform(*p.caution_range_m, n),
+    )
+
+
+@dataclass(frozen=True)
+class FamilyExpertRun:
+    """One run: true path ``trajectory`` (K, 4) = [t_s, x_N, y_E, ψ] every plant step (0.1 s)
+    from t = 0, the episode, the run's traits, and how it ended."""
+
+    episode: OpenWaterEpisode
+    trajectory: FloatArray
+    traits: dict[str, float]
+    success: bool  # at the goal, never closer than the safety distance to any obstacle
+    collision: bool
+    min_distance_m: float  # pole-equivalent closest approach over the run (m)
+
+
+class _Eyes:
+    """What each helmsman perceives: the true pose ``lag`` ticks ago (per boat)."""
+
+    def __init__(self, lag_ticks: NDArray[np.int64]) -> None:
+        self.lag = lag_ticks
+        self.history: list[FloatArray] = []  # [x_N, y_E, ψ] (N, 3) per tick, oldest first
+
+    def look(self, eta: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+        """Perceived pose (N, 3), the pose one tick before it (N, 3), and the lag (N,) ticks."""
+        self.history.append(eta.copy())
+        h = np.stack(self.history)  # (L, N, 3)
+        rows = np.arange(eta.shape[0])
+        lag = np.minimum(self.lag, h.shape[0] - 1)
+        seen = h[h.shape[0] - 1 - lag, rows]
+        before = h[np.maximum(h.shape[0] - 2 - lag, 0), rows]
+        del self.history[: -2 - int(self.lag.max())]  # keep what a delay can reach
+        return seen, before, lag
+
+
+def run_family_expert(
+    episodes: Sequence[OpenWaterEpisode],
+    *,
+    seed: int,
+    params: FamilyExpertParams | None = None,
+) -> list[FamilyExpertRun]:
+    """Run the family expert on every episode in one batch (module docstring).
+
+    The traits, perception noise and wobble come from ``numpy.random.default_rng(seed)``; each
+    episode's sensor noise and disturbances from the episode itself. Returns one
+    :class:`FamilyExpertRun` per episode, cut at the end of its episode.
+    """
+    p = params or FamilyExpertParams()
+    h = p.human
+    rng = np.random.default_rng(seed)
+    n = len(episodes)
+    fine = Scenario(decision_period_s=h.tick_s, max_heading_change_rad=h.max_change_per_tick_rad)
+    sim = OpenWaterBatch(n, observation="scene", action="gaussian", scenario=fine)
+    sim.reset(None, list(episodes))
+    traits = draw_family_traits(rng, n, p)
+    eyes = _Eyes(np.round(traits.reaction_delay_s / h.tick_s).astype(np.int64))
+    wobble = rng.normal(0.0, h.wobble_sigma_rad, n)
+    a = math.exp(-h.tick_s / h.wobble_tau_s)
+    hand = h.max_turn_rate_radps * h.tick_s  # rad per tick, the most the hand swings
+    prev_from_goal = np.full(n, np.nan)
+    cmd = sim.inner.state.eta[:, 2].copy()
+    chunks: list[list[FloatArray]] = [
+        [np.concatenate([[0.0], e])[None]] for e in sim.inner.state.eta
+    ]
+    active = np.ones(n, dtype=bool)
+    last: dict[str, NDArray[np.generic]] = {}
+    limit = max(e.time_limit_s for e in episodes)
+    for k in range(math.ceil(limit / h.tick_s + 1e-9)):
+        seen, before, lag = eyes.look(sim.inner.state.eta)
+        vel = (seen[:, :2] - before[:, :2]) / h.tick_s
+        t_seen = np.maximum(k - lag, 0) * h.tick_s
+        centres, radii, velocity, ok = sim.scene_at(t_seen)
+        obs = scene_observation(
+            seen[:, :2], seen[:, 2], vel, sim.goal_ne, centres, radii + traits.caution_m[:, None],
+            velocity, ok,
+        ).astype(np.float64)  # fmt: skip
+        slots = obs[:, 4:].reshape(n, -1, 6)
+        obs[:, 1] += rng.normal(0.0, h.bearing_noise_rad, n)
+        slots[..., 1] += rng.normal(0.0, h.bearing_noise_rad, slots.shape[:2]) * slots[..., 5]
+        previous = np.where(np.isnan(prev_from_goal), np.nan, ssa(prev_from_goal + obs[:, 1]))
+        course, avoiding = vo_course(p.vo, obs, previous)
+        prev_from_goal = np.where(avoiding, ssa(course - obs[:, 1]), np.nan)
+        crab = np.where(np.hypot(obs[:, 2], obs[:, 3]) > 0.3, np.arctan2(obs[:, 3], obs[:, 2]), 0.0)
+        wobble = a * wobble + math.sqrt(1 - a * a) * rng.normal(0.0, h.wobble_sigma_rad, n)
+        target = seen[:, 2] + ssa(course - crab) + wobble
+        cmd = np.asarray(ssa(cmd + np.clip(ssa(target - cmd), -hand, hand)))
+        _, psi_hat = sim.inner.estimate
+        dpsi = np.clip(ssa(cmd - psi_hat), -h.max_change_per_tick_rad, h.max_change_per_tick_rad)
+        res = sim.step((dpsi / h.max_change_per_tick_rad)[:, None].astype(np.float32))
+        t = (k * fine.steps_per_decision + np.arange(1, fine.steps_per_decision + 1)) * fine.dt_s
+        ended = res.terminated | res.truncated
+        for i in np.flatnonzero(active):
+            stop = int(res.end_step[i]) if ended[i] else fine.steps_per_decision
+            chunks[i].append(np.column_stack([t[:stop], res.trajectory[i, :stop, 0:3]]))
+        for name in ("is_success", "collision", "min_distance_m"):
+            value = getattr(res, name)
+            last[name] = np.where(active, value, last.get(name, value))
+        active &= ~ended
+        if not active.any():
+            break
+    return [
+        FamilyExpertRun(
+            episode=episodes[i],
+            trajectory=np.concatenate(chunks[i]),
+            traits=traits.row(i),
+            success=bool(last["is_success"][i]),
+            collision=bool(last["collision"][i]),
+            min_distance_m=float(last["min_distance_m"][i]),
+        )
+        for i in range(n)
+    ]
