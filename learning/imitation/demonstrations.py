@@ -107,6 +107,7 @@ __all__ = [
     "record_demonstrations",
     "recording_to_text",
     "save_recordings",
+    "write_demo_set",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -574,7 +575,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     import sys
 
-    from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries, staged_dir
+    from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries
 
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 1 or args[0].startswith("-"):
@@ -590,16 +591,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"learning.imitation.demonstrations: {err}", file=sys.stderr)
         return 2
     remove_stale_temporaries(folder)  # what a killed earlier run left
-    recs = record_demonstrations()
-    # the 46 files as one set: a kill leaves the previous set, never a mix of two
-    with staged_dir(folder, "demos", replaces=["demo_*.csv"]) as staging:
-        save_recordings(recs, staging)
+    write_demo_set(record_demonstrations(), folder)
+    return 0
+
+
+def write_demo_set(recs: Sequence[Recording], folder: Path, *, compress: bool = False) -> None:
+    """Write ``recs`` into ``folder`` as one set (a kill leaves the previous set, never a mix of
+    two; every earlier ``demo_*`` file goes) and print what the quality filter says of each."""
+    from usvsim.common.fileio import staged_dir
+
+    with staged_dir(folder, "demos", replaces=["demo_*.csv", "demo_*.csv.gz"]) as staging:
+        save_recordings(recs, staging, compress=compress)
     kept = [r for r in recs if not quality_check(r)]
     print(f"recorded {len(recs)} runs into {folder}; {len(kept)} pass the quality filter")
     for r in recs:
         for why in quality_check(r):
             print(f"  run {r.meta['run']:3d}: {why}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -32,11 +32,10 @@ from learning.imitation.demonstrations import (
     RecorderParams,
     Recording,
     log_run,
-    quality_check,
-    save_recordings,
+    write_demo_set,
 )
 from usvsim.common.errors import UserError
-from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries, staged_dir
+from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries
 from usvsim.task.openwater_env import OPEN_WATER_FAMILY, ScenarioMixture, draw_family
 
 __all__ = [
@@ -121,14 +120,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"learning.imitation.family_demos: {err}", file=sys.stderr)
         return 2
     remove_stale_temporaries(folder)
-    recs = record_family_demonstrations()
-    with staged_dir(folder, "demos", replaces=["demo_*.csv", "demo_*.csv.gz"]) as staging:
-        save_recordings(recs, staging, compress=True)  # 2.2 MB instead of 7.6 MB
-    kept = [r for r in recs if not quality_check(r)]
-    print(f"recorded {len(recs)} family runs into {folder}; {len(kept)} pass the quality filter")
-    for r in recs:
-        for why in quality_check(r):
-            print(f"  run {r.meta['run']:3d}: {why}")
+    # gzipped: 3.1 MB on disk instead of 7.6 MB
+    write_demo_set(record_family_demonstrations(), folder, compress=True)
     return 0
 
 
