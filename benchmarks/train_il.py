@@ -95,10 +95,15 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
         val, held = r["evaluation"]["validation"], r["evaluation"]["held-out"]
         best = s["best"] or {"successes": 0}
         study = round(s["study_success"] * VALIDATION_EPISODES)
+        study_cell = (
+            f"{study}/15 ({100 * s['study_success']:.1f} %) / ~{s['study_iterations']}"
+            if s["study_iterations"]
+            else "—"  # a setup the study did not have (the -ow ones)
+        )
         lines.append(
             f"| {r['setup']} | {_when(s['first_14_of_15'])} | {_when(s['first_15_of_15'])} "
             f"| {best['successes']}/15 | {_when(s['best'])} "
-            f"| {study}/15 ({100 * s['study_success']:.1f} %) / ~{s['study_iterations']} "
+            f"| {study_cell} "
             f"| {s['iterations']} / {s['wall_time_s']:.0f} s | {s['stop_reason']} "
             f"| {split_cell(r)} "
             f"| {val['successes']}/15 | {held['successes']}/200 "
@@ -142,7 +147,7 @@ def main(argv: list[str] | None = None) -> int:
             summary = train_one(train_args)
         best = run_dir / "best.pt"
         if args.ship:
-            radar = IL_SETUPS[name].observation != "positional"
+            radar = IL_SETUPS[name].observation.startswith("radar")
             save_checkpoint(slim_copy(load_checkpoint(best), half=radar), MODELS_DIR / f"{name}.pt")
             best = MODELS_DIR / f"{name}.pt"
         results.append(

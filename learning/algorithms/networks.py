@@ -32,6 +32,15 @@ rl-categorical-radar went from 80 iterations to 15; behavioural cloning of the r
 The hidden activation of the fully connected layers is tanh for both trunks (the study gives it
 for the MLP only).
 
+Set encoder (``NetworkConfig.set_encoder``, a departure from the study for the k-nearest ``scene``
+form; Zaheer et al. 2017, "Deep Sets"): the vector is read as ``set_layout = (own, slot)`` own
+features followed by slots of ``slot`` features whose last one is the validity flag (1 for an
+obstacle; an empty slot all zeros, as the ``scene`` scaling leaves it). One shared MLP
+``set_encoder`` maps each slot, its outputs are pooled over the valid slots (mean and max; zeros
+without one) and joined to the own features before the MLP 400-300. The input order of the
+obstacles no longer matters, and an obstacle moving from slot 3 to slot 2 as the ranges change
+is the same input (to a plain MLP it is a jump).
+
 Heads (:func:`make_policy`, :func:`make_critic`):
 
 - Gaussian (``Box`` actions, shape (A,)): mean = c + h · tanh(W f + b) with c, h the centre and
@@ -99,6 +108,10 @@ class NetworkConfig:
     # late fusion with the vector parts scaled by sqrt(conv features / vector features), so that
     # both parts carry the same input variance into FC 1 (module docstring, "Balanced fusion")
     balanced_fusion: bool = False
+    # vector observations: a Deep Sets encoder over slots (module docstring, "Set encoder");
+    # () is the study's plain MLP
+    set_encoder: tuple[int, ...] = ()
+    set_layout: tuple[int, int] = (4, 6)  # own features, features per slot (the scene form)
 
 
 def _mlp(in_features: int, hidden: Sequence[int]) -> nn.Sequential:
@@ -123,6 +136,35 @@ class MLPTrunk(nn.Module):
     def forward(self, obs: TensorObs) -> Tensor:
         assert isinstance(obs, Tensor)
         return self.body(obs)
+
+
+class SetTrunk(nn.Module):
+    """(B, own + slot · k) → (B, hidden[-1]) through a per-slot encoder and pooling (module
+    docstring, "Set encoder")."""
+
+    def __init__(self, in_features: int, cfg: NetworkConfig) -> None:
+        super().__init__()
+        own, slot = cfg.set_layout
+        if (in_features - own) % slot or in_features <= own:
+            raise ValueError(
+                f"set_layout {cfg.set_layout} does not divide an observation of {in_features}"
+            )
+        self.own, self.slot = own, slot
+        self.encoder = _mlp(slot, cfg.set_encoder)
+        width = cfg.set_encoder[-1]
+        self.body = _mlp(own + 2 * width, cfg.hidden)
+        self.out_features = cfg.hidden[-1] if cfg.hidden else own + 2 * width
+
+    def forward(self, obs: TensorObs) -> Tensor:
+        assert isinstance(obs, Tensor)
+        slots = obs[:, self.own :].reshape(obs.shape[0], -1, self.slot)  # (B, k, slot)
+        valid = (slots[..., -1:] > 0.5).to(obs.dtype)  # (B, k, 1)
+        h = self.encoder(slots) * valid
+        count = valid.sum(dim=1)
+        mean = h.sum(dim=1) / count.clamp(min=1.0)
+        peak = torch.where(valid > 0, h, torch.full_like(h, -torch.inf)).amax(dim=1)
+        peak = torch.where(count > 0, peak, torch.zeros_like(peak))
+        return self.body(torch.cat([obs[:, : self.own], mean, peak], dim=-1))
 
 
 class CNNTrunk(nn.Module):
@@ -170,11 +212,13 @@ class CNNTrunk(nn.Module):
         return self.fc(x)
 
 
-def make_trunk(space: spaces.Space, cfg: NetworkConfig) -> MLPTrunk | CNNTrunk:
+def make_trunk(space: spaces.Space, cfg: NetworkConfig) -> MLPTrunk | CNNTrunk | SetTrunk:
     """The trunk for one observation ``space`` (see the module table)."""
     if isinstance(space, spaces.Box) and is_image_space(space):
         shape = (int(space.shape[0]), int(space.shape[1]), int(space.shape[2]))
         return CNNTrunk(shape, None, [], 0, cfg)
+    if isinstance(space, spaces.Box) and cfg.set_encoder:
+        return SetTrunk(int(np.prod(space.shape)), cfg)
     if isinstance(space, spaces.Box):
         return MLPTrunk(int(np.prod(space.shape)), cfg.hidden)
     if isinstance(space, spaces.Dict):
@@ -197,7 +241,10 @@ class Policy(nn.Module):
     """π(a|s): trunk + Gaussian or categorical head; ``forward`` returns the distribution."""
 
     def __init__(
-        self, trunk: MLPTrunk | CNNTrunk, action_space: spaces.Space, cfg: NetworkConfig
+        self,
+        trunk: MLPTrunk | CNNTrunk | SetTrunk,
+        action_space: spaces.Space,
+        cfg: NetworkConfig,
     ) -> None:
         super().__init__()
         self.trunk = trunk
@@ -233,7 +280,7 @@ class Policy(nn.Module):
 class Critic(nn.Module):
     """V(s): trunk + one linear output; ``forward`` returns (B,)."""
 
-    def __init__(self, trunk: MLPTrunk | CNNTrunk) -> None:
+    def __init__(self, trunk: MLPTrunk | CNNTrunk | SetTrunk) -> None:
         super().__init__()
         self.trunk = trunk
         self.head = nn.Linear(trunk.out_features, 1)

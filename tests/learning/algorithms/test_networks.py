@@ -223,3 +223,29 @@ def test_scene_scaling_is_fixed_and_zeroes_empty_slots() -> None:
     assert np.abs(zr[0, -6:]).max() == 10.0  # running statistics: clipped at ±10
     with pytest.raises(ValueError, match="observation scaling must be one of"):
         ObservationNormalizer(space, scaling="minmax")
+
+
+def test_set_encoder_ignores_slot_order_and_empty_slots() -> None:
+    """Deep Sets trunk: permuting the valid slots, or what an empty slot holds, changes nothing;
+    changing an obstacle does."""
+    from learning.algorithms.networks import NetworkConfig, SetTrunk, make_trunk
+    from usvsim.task.observations import observation_space
+
+    cfg = NetworkConfig(set_encoder=(32, 32))
+    trunk = make_trunk(observation_space("scene"), cfg)
+    assert isinstance(trunk, SetTrunk)
+    g = torch.Generator().manual_seed(0)
+    obs = torch.randn(5, 52, generator=g)
+    slots = obs[:, 4:].reshape(5, 8, 6)
+    slots[:, :3, 5], slots[:, 3:, 5] = 1.0, 0.0  # three obstacles, five empty slots
+    base = trunk(obs)
+    swapped = slots[:, [2, 0, 1, 3, 4, 5, 6, 7]].reshape(5, -1)
+    assert torch.allclose(trunk(torch.cat([obs[:, :4], swapped], 1)), base, atol=1e-6)
+    junk = slots.clone()
+    junk[:, 3:, :5] = 99.0  # an empty slot's other entries do not count
+    assert torch.allclose(trunk(torch.cat([obs[:, :4], junk.reshape(5, -1)], 1)), base, atol=1e-6)
+    moved = slots.clone()
+    moved[:, 0, 0] += 1.0
+    assert not torch.allclose(trunk(torch.cat([obs[:, :4], moved.reshape(5, -1)], 1)), base)
+    with pytest.raises(ValueError, match="set_layout"):
+        SetTrunk(51, cfg)
