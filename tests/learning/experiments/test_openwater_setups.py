@@ -150,3 +150,40 @@ def test_usvsim_train_scene_ow_end_to_end(tmp_path: Path) -> None:
     assert helm.observation == "scene"
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["setup"] == "rl-gaussian-scene-ow" and summary["iterations"] == 2
+
+
+def test_il_open_water_setups_train_on_the_family_from_scene_demonstrations() -> None:
+    from learning.experiments.il_setups import IL_SETUPS
+
+    ow = [s for s in IL_SETUPS.values() if s.name.endswith("-ow")]
+    assert {s.observation for s in ow} == {"scene", "radar+goal"} and len(ow) == 4
+    assert all(s.task == "open-water" for s in ow)
+    assert all(s.task == "pole" for s in IL_SETUPS.values() if not s.name.endswith("-ow"))
+
+
+@pytest.mark.slow
+def test_usvsim_train_il_scene_ow_end_to_end(tmp_path: Path) -> None:
+    """GAIL on the family: the shipped usvsim-demo/2 runs, family validation in log.csv and
+    best.pt, and best.pt ranked by successes, not by likeness."""
+    from learning.cli.train import TrainArgs, run
+
+    args = TrainArgs(
+        setup="il-gaussian-scene-ow", iterations=2, validate_every=1, n_envs=4,
+        out=str(tmp_path), quiet=True, threads=1,
+    )  # fmt: skip
+    assert run(args) == 0
+    rows = _csv(tmp_path / "log.csv")
+    assert [r["val_family_n_episodes"] for r in rows if r["val_successes"]] == ["100", "100"]
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["demonstrations"] == 395
+    best = summary["best"]
+    assert best["family_n_episodes"] == 100
+    ranked = sorted(
+        (r for r in rows if r["val_successes"]),
+        key=lambda r: (
+            int(r["val_selection_successes"]) + int(r["val_family_successes"]),
+            int(r["val_successes"]),
+            float(r["val_mean_return"]),
+        ),
+    )
+    assert int(ranked[-1]["iteration"]) == best["iteration"]
