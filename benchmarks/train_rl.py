@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
             )  # fmt: skip
         source = run_dir / "best.pt"
         if args.ship:
-            ckpt = slim_copy(load_checkpoint(source), half=setup.observation != "positional")
+            ckpt = slim_copy(load_checkpoint(source), half=setup.observation.startswith("radar"))
             target = MODELS_DIR / f"{name}.pt"
             save_checkpoint(ckpt, target)
             source = target
