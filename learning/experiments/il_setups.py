@@ -11,12 +11,14 @@ setup                         observation  action       networks (policy, critic
 ``il-categorical-radar``      radar+goal   categorical  as above, 41 logits
 ============================  ===========  ===========  ===========================================
 
-Setups on the open-water family (issue 18; ``-ow``, ``task="open-water"``): the same GAIL and
-networks, trained on :class:`usvsim.task.openwater_env.OpenWaterVectorEnv` from the family
-expert's demonstrations (:mod:`learning.imitation.family_demos`, ``usvsim-demo/2``):
+Setups on the open-water family (issue 18; ``-ow``, ``task="open-water"``): the same GAIL (the
+scene policies and critics with the Deep Sets encoder of the RL scene setups), trained on
+:class:`usvsim.task.openwater_env.OpenWaterVectorEnv` from the family expert's demonstrations
+(:mod:`learning.imitation.family_demos`, ``usvsim-demo/2``):
 
 ============================  ===========  ===========  ===========================================
-``il-gaussian-scene-ow``      scene        gaussian     MLP 400-300 tanh on the 52 floats
+``il-gaussian-scene-ow``      scene        gaussian     Deep Sets 64-64 per slot, MLP 400-300 (D:
+                                                        the study's MLP on the scaled 52 floats)
 ``il-categorical-scene-ow``   scene        categorical  as above, 41 logits
 ``il-gaussian-radar-ow``      radar+goal   gaussian     as il-gaussian-radar
 ``il-categorical-radar-ow``   radar+goal   categorical  as il-categorical-radar
@@ -24,8 +26,9 @@ expert's demonstrations (:mod:`learning.imitation.family_demos`, ``usvsim-demo/2
 
 Their runs are validated on the study's 15 episodes and the family set
 (:func:`learning.experiments.validation.family_validation_episodes`); ``best.pt`` is chosen by
-successes there (:func:`learning.experiments.validation.selection_key`), never by likeness to the
-expert, so the likeness of the shipped file is a measurement, not a selection.
+successes there and on the 60 selection episodes (:func:`learning.experiments.train_il.train_il`),
+never by likeness to the expert, so the likeness of the shipped file is a measurement, not a
+selection.
 
 "radar" means ``radar+goal`` as in :mod:`learning.experiments.setups` (the image alone hides the
 goal once the pole is passed). Each setup is a frozen dataclass holding the policy algorithm's

@@ -17,8 +17,8 @@ reward on the nearest obstacle's pole-equivalent distance, the same fixed horizo
 =============================  ===========  ===========  =====================================
 setup                          observation  action       network
 =============================  ===========  ===========  =====================================
-``rl-gaussian-scene-ow``       scene        gaussian     MLP 400-300 tanh on the 52 floats
-``rl-categorical-scene-ow``    scene        categorical  MLP 400-300 tanh, 41 logits
+``rl-gaussian-scene-ow``       scene        gaussian     Deep Sets 64-64 per slot, MLP 400-300
+``rl-categorical-scene-ow``    scene        categorical  as above, 41 logits
 ``rl-gaussian-radar-ow``       radar+goal   gaussian     CNN, balanced late goal fusion
 ``rl-categorical-radar-ow``    radar+goal   categorical  CNN, balanced late goal fusion
 =============================  ===========  ===========  =====================================

@@ -46,11 +46,14 @@ SETUP_GROUPS: dict[str, tuple[str, ...]] = {
     ),
     # the study's four RL setups (not the PPO variants, not the open-water ``-ow`` setups)
     "rl": tuple(n for n, s in SETUPS.items() if not n.endswith("-ppo") and s.task == "pole"),
-    "il": tuple(IL_SETUPS),
-    "open-water": tuple(n for n, s in SETUPS.items() if s.task == "open-water"),
+    "il": tuple(n for n, s in IL_SETUPS.items() if s.task == "pole"),
+    "open-water": (
+        *(n for n, s in SETUPS.items() if s.task == "open-water"),
+        *(n for n, s in IL_SETUPS.items() if s.task == "open-water"),
+    ),
 }
 # fields of a setup that name it rather than tune it
-_FIXED_FIELDS = {"name", "observation", "action", "study_iterations", "study_success"}
+_FIXED_FIELDS = {"name", "observation", "action", "study_iterations", "study_success", "task"}
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import torch
 
+from learning.algorithms.networks import SetTrunk
 from learning.algorithms.registry import get_algorithm
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params, setup_params
 from learning.experiments.train_rl import FAMILY_FIELDS, csv_fields
@@ -75,8 +76,11 @@ def test_policy_takes_the_52_float_scene_observation(name):
     env = setup.make_vector_env(5)
     obs, _ = env.reset(seed=0)
     assert obs.shape == (5, 52)
-    first = agent.policy.trunk.body[0]
-    assert isinstance(first, torch.nn.Linear) and first.in_features == 52
+    trunk = agent.policy.trunk
+    assert isinstance(trunk, SetTrunk)  # the Deep Sets encoder: 6 features per slot, 8 slots
+    slot_in = trunk.encoder[0]
+    assert isinstance(slot_in, torch.nn.Linear) and slot_in.in_features == 6
+    assert trunk.own + 8 * trunk.slot == 52
     actions = agent.act(obs, deterministic=True)
     assert env.action_space.contains(actions.astype(env.action_space.dtype))
 
