@@ -158,13 +158,14 @@ def run_family_expert(
     hand = h.max_turn_rate_radps * h.tick_s  # rad per tick, the most the hand swings
     prev_from_goal = np.full(n, np.nan)
     cmd = sim.inner.state.eta[:, 2].copy()
-    chunks: list[list[FloatArray]] = [
-        [np.concatenate([[0.0], e])[None]] for e in sim.inner.state.eta
-    ]
+    steps = fine.steps_per_decision
+    ticks = math.ceil(max(e.time_limit_s for e in episodes) / h.tick_s - 1e-9)
+    path = np.empty((n, ticks * steps + 1, 3))  # [x_N, y_E, ψ] every plant step, all boats
+    path[:, 0] = sim.inner.state.eta
+    n_steps = np.full(n, ticks * steps)  # plant steps of each run (cut at its end)
     active = np.ones(n, dtype=bool)
     last: dict[str, NDArray[np.generic]] = {}
-    limit = max(e.time_limit_s for e in episodes)
-    for k in range(math.ceil(limit / h.tick_s + 1e-9)):
+    for k in range(ticks):
         seen, before, lag = eyes.look(sim.inner.state.eta)
         vel = (seen[:, :2] - before[:, :2]) / h.tick_s
         t_seen = np.maximum(k - lag, 0) * h.tick_s
@@ -186,21 +187,20 @@ def run_family_expert(
         _, psi_hat = sim.inner.estimate
         dpsi = np.clip(ssa(cmd - psi_hat), -h.max_change_per_tick_rad, h.max_change_per_tick_rad)
         res = sim.step((dpsi / h.max_change_per_tick_rad)[:, None].astype(np.float32))
-        t = (k * fine.steps_per_decision + np.arange(1, fine.steps_per_decision + 1)) * fine.dt_s
-        ended = res.terminated | res.truncated
-        for i in np.flatnonzero(active):
-            stop = int(res.end_step[i]) if ended[i] else fine.steps_per_decision
-            chunks[i].append(np.column_stack([t[:stop], res.trajectory[i, :stop, 0:3]]))
+        path[:, 1 + k * steps : 1 + (k + 1) * steps] = res.trajectory[:, :, 0:3]
+        ended = active & (res.terminated | res.truncated)
+        n_steps[ended] = k * steps + res.end_step[ended]
         for name in ("is_success", "collision", "min_distance_m"):
             value = getattr(res, name)
             last[name] = np.where(active, value, last.get(name, value))
         active &= ~ended
         if not active.any():
             break
+    t = np.arange(path.shape[1]) * fine.dt_s
     return [
         FamilyExpertRun(
             episode=episodes[i],
-            trajectory=np.concatenate(chunks[i]),
+            trajectory=np.column_stack([t, path[i]])[: n_steps[i] + 1],
             traits=traits.row(i),
             success=bool(last["is_success"][i]),
             collision=bool(last["collision"][i]),
