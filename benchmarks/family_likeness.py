@@ -19,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+from usvsim.common.fileio import atomic_write_text
 from usvsim.evaluation.family_likeness import family_likeness, family_reference
 from usvsim.evaluation.openwater import evaluate_open_water
 from usvsim.evaluation.stats import wilson_interval
@@ -26,7 +27,7 @@ from usvsim.helm.registry import helmsman_kinds, make_helmsman
 
 
 def main(names: list[str], out: str = "usvsim-results/family_likeness.json") -> int:
-    if not names:
+    if not names or any(n.startswith("-") for n in names):
         print(
             "usage: python benchmarks/family_likeness.py HELMSMAN [HELMSMAN ...]", file=sys.stderr
         )
@@ -55,7 +56,7 @@ def main(names: list[str], out: str = "usvsim-results/family_likeness.json") -> 
             flush=True,
         )
     Path(out).parent.mkdir(parents=True, exist_ok=True)
-    Path(out).write_text(json.dumps(results, indent=2) + "\n")
+    atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     print(f"{time.perf_counter() - start:.0f} s; {out}")
     return 0
 

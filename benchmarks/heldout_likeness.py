@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from usvsim.common.fileio import atomic_write_text
 from usvsim.evaluation.episodes import heldout_episodes
 from usvsim.evaluation.likeness import expert_reference, helmsman_likeness
 from usvsim.helm.registry import helmsman_kinds, make_helmsman
@@ -43,7 +44,7 @@ def main(out: str = "usvsim-results/heldout_likeness.json") -> int:
                 flush=True,
             )
     Path(out).parent.mkdir(parents=True, exist_ok=True)
-    Path(out).write_text(json.dumps(results, indent=2) + "\n")
+    atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     print(f"{time.perf_counter() - start:.0f} s; {out}")
     return 0
 

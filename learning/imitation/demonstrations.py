@@ -100,6 +100,7 @@ __all__ = [
     "Plausibility",
     "RecorderParams",
     "Recording",
+    "demo_folder",
     "load_recording",
     "load_recordings",
     "log_run",
@@ -573,26 +574,36 @@ def main(argv: Sequence[str] | None = None) -> int:
     regenerate the shipped ones, name ``usvsim/demos`` of a source checkout). Exit status 2
     with a one-line message when FOLDER is missing or cannot be written.
     """
+    folder = demo_folder(
+        argv,
+        "learning.imitation.demonstrations",
+        "records the 46 expert runs into FOLDER/demo_NNN.csv",
+    )
+    if folder is None:
+        return 2
+    write_demo_set(record_demonstrations(), folder)
+    return 0
+
+
+def demo_folder(argv: Sequence[str] | None, prog: str, what: str) -> Path | None:
+    """The one FOLDER argument of a recorder's command line (``argv``, default ``sys.argv``),
+    writable and cleared of a killed earlier run's temporaries; None after printing a one-line
+    usage or error to stderr (exit status 2)."""
     import sys
 
     from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries
 
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 1 or args[0].startswith("-"):
-        print(
-            "usage: python -m learning.imitation.demonstrations FOLDER  (records the 46 "
-            "expert runs into FOLDER/demo_NNN.csv; FOLDER is required)",
-            file=sys.stderr,
-        )
-        return 2
+        print(f"usage: python -m {prog} FOLDER  ({what}; FOLDER is required)", file=sys.stderr)
+        return None
     try:
         folder = check_writable_dir(args[0], "FOLDER")
     except UserError as err:
-        print(f"learning.imitation.demonstrations: {err}", file=sys.stderr)
-        return 2
+        print(f"{prog}: {err}", file=sys.stderr)
+        return None
     remove_stale_temporaries(folder)  # what a killed earlier run left
-    write_demo_set(record_demonstrations(), folder)
-    return 0
+    return folder
 
 
 def write_demo_set(recs: Sequence[Recording], folder: Path, *, compress: bool = False) -> None:

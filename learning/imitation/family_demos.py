@@ -18,7 +18,6 @@ reads both).
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
@@ -31,11 +30,10 @@ from learning.imitation.demonstrations import (
     SITE_ORIGIN,
     RecorderParams,
     Recording,
+    demo_folder,
     log_run,
     write_demo_set,
 )
-from usvsim.common.errors import UserError
-from usvsim.common.fileio import check_writable_dir, remove_stale_temporaries
 from usvsim.task.openwater_env import OPEN_WATER_FAMILY, ScenarioMixture, draw_family
 
 __all__ = [
@@ -106,20 +104,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     Exit status 2 with a one-line message when FOLDER is missing or cannot be written; the
     files are written as one set (a kill leaves the previous set, never a mix of two).
     """
-    args = list(sys.argv[1:] if argv is None else argv)
-    if len(args) != 1 or args[0].startswith("-"):
-        print(
-            f"usage: python -m learning.imitation.family_demos FOLDER  (records the "
-            f"{FAMILY_DEMO_RUNS} family runs into FOLDER/demo_NNN.csv.gz; FOLDER is required)",
-            file=sys.stderr,
-        )
+    folder = demo_folder(
+        argv,
+        "learning.imitation.family_demos",
+        f"records the {FAMILY_DEMO_RUNS} family runs into FOLDER/demo_NNN.csv.gz",
+    )
+    if folder is None:
         return 2
-    try:
-        folder = check_writable_dir(args[0], "FOLDER")
-    except UserError as err:
-        print(f"learning.imitation.family_demos: {err}", file=sys.stderr)
-        return 2
-    remove_stale_temporaries(folder)
     # gzipped: 3.1 MB on disk instead of 7.6 MB
     write_demo_set(record_family_demonstrations(), folder, compress=True)
     return 0
