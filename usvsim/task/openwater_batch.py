@@ -255,7 +255,7 @@ class OpenWaterBatch:
         return observe_scene(
             self.observation_kind, pos[sl], psi[sl], self.inner.estimated_velocity[sl],
             self.goal_ne[sl], SceneDiscs(centres[:, :, 0], radii, velocity[:, :, 0], ok),
-            self.radar, degr, self._radar_streams.rows(np.arange(self.n_boats)[sl]),
+            self.radar, degr, self._radar_streams.frame_keys(sl),
         )  # fmt: skip
 
     def step(self, actions: Any) -> OpenWaterStep:
@@ -322,14 +322,15 @@ def observe_scene(
     discs: SceneDiscs,
     radar: RadarConfig | None = None,
     degradation: RadarDegradation | None = None,
-    streams: Sequence[np.random.Generator | None] | None = None,
+    keys: NDArray[np.uint64] | None = None,
 ) -> Any:
     """The ``kind`` observation of N boats at poses ``pos_ne`` (N, 2), ``psi_rad`` (N,) with
     velocity over ground (N, 2) m/s, goals (N, 2) and ``discs`` around them: ``scene`` (the
     k-nearest form), ``positional`` (the nearest disc, pole-equivalent range, in the pole's
     slot; :data:`NO_OBSTACLE_RANGE_M` without one), ``radar`` or ``radar+goal`` (every disc,
-    ``degradation`` drawing from ``streams``; :func:`usvsim.task.scene_radar.render_scene`). The
-    open-water step's observation, and the demonstrations' (:mod:`learning.imitation.preprocess`).
+    ``degradation`` drawing from the boats' frame ``keys``;
+    :func:`usvsim.task.scene_radar.render_scene`). The open-water step's observation, and the
+    demonstrations' (:mod:`learning.imitation.preprocess`).
     """
     c, radii, ok = discs.centres_ne, discs.radii_m, discs.valid
     if kind == "scene":
@@ -349,7 +350,7 @@ def observe_scene(
         out[:, 1] = np.where(none, -math.pi, b[rows, j] if r.shape[1] else 0.0)
         out[:, 2], out[:, 3] = r_g, b_g
         return out
-    image = render_scene(r, b, radii, ok, radar, degradation, streams)
+    image = render_scene(r, b, radii, ok, radar, degradation, keys)
     if kind == "radar":
         return image
     r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)

@@ -18,31 +18,68 @@ column set itself is the bounding-box one (half-width asin(R/ρ), exact for a di
 Per-boat degradation (:class:`usvsim.task.openwater.RadarQuality` as arrays, each (N,)):
 missed returns (each disc's return missing in a frame with probability p_miss), clutter (a pixel
 lit at a uniform random intensity with probability p_clutter), speckle (a lit pixel's intensity
-times U[1 − s, 1]) and uniform additive noise (+ a · U[0, 1) on every pixel). Draws come from each
-boat's own generator (:class:`RadarStreams`), so a boat's image does not depend on its
-neighbours, and only as many as the frame needs: :data:`MAX_DISCS` uniforms for the misses; for
-clutter the positions of P Bernoulli(p_clutter) trials drawn as their geometric gaps
-(:func:`bernoulli_positions`) and one intensity per clutter pixel; one speckle factor per lit
-pixel; P noise values only where a > 0. A frame with ~6 clutter pixels thus needs ~50 numbers, not
-the 3 P + 32 = 17,882 of one uniform per pixel and effect.
+times U[1 − s, 1]) and uniform additive noise (+ a · U[0, 1) on every pixel), applied in that
+order and clipped to 0..255 (truncated to an integer).
+
+Random draws are counter-based: draw i of a boat's frame is ``mix64(key + G (i + 1))``, the
+SplitMix64 sequence (Steele, Lea & Flood 2014, G = 0x9E3779B97F4A7C15) started at the frame's
+key, so a boat's image depends on its own key only (a batch of N boats equals N single boats),
+and every pixel's draws are computed independently of the others (vectorised, in C or NumPy).
+:class:`RadarStreams` gives frame f of a boat seeded with s the key ``mix64(s) + G f 2²²``: the
+frames tile one SplitMix64 sequence per boat without overlap. Draws ``0 .. P − 1`` are the P
+pixels', one 64-bit number each, split into independent uniforms: bits 0–19 the clutter trial
+(clutter where ``u < p_clutter``; p is thus rounded up to a multiple of 2⁻²⁰), bits 20–35 the
+noise value (16 bits), 36–49 the clutter intensity and 50–63 the speckle factor (14 bits each;
+the image keeps 8). Draw ``P + j`` (top 24 bits) decides disc j's missed return.
+
+:func:`render_scene` runs the compiled kernel (:mod:`usvsim.task.scene_radar_kernel`, the same
+arithmetic in C, OpenMP over boats) where it builds, else this module's NumPy path.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
 from usvsim.task.radar import RadarConfig
+from usvsim.task.scene_radar_kernel import load_kernel
 
-__all__ = ["MAX_DISCS", "RadarDegradation", "RadarStreams", "bernoulli_positions", "render_scene"]
+__all__ = [
+    "FRAME_DRAWS",
+    "GOLDEN",
+    "MAX_DISCS",
+    "RadarDegradation",
+    "RadarStreams",
+    "frame_draws",
+    "mix64",
+    "render_scene",
+    "stream_keys",
+]
 
 FloatArray = NDArray[np.float64]
 MAX_DISCS = 32  # discs a scene may hold (missed-return draws per frame)
+GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment
+FRAME_DRAWS = 1 << 22  # draws reserved per frame: pixels + MAX_DISCS must fit
+_KERNEL = load_kernel()
+
+
+def mix64(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
+    """SplitMix64's output function of each uint64 (Steele, Lea & Flood 2014; wraps mod 2⁶⁴)."""
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def frame_draws(keys: NDArray[np.uint64], start: int, count: int) -> NDArray[np.uint64]:
+    """Draws ``start .. start + count − 1`` of each frame key (N,): (N, count) uint64."""
+    i = np.arange(start + 1, start + count + 1, dtype=np.uint64)
+    return mix64(np.asarray(keys, dtype=np.uint64)[:, None] + GOLDEN * i[None, :])
 
 
 @dataclass(frozen=True)
@@ -65,24 +102,50 @@ class RadarDegradation:
         )
 
 
-class RadarStreams:
-    """One radar random generator per boat (PCG64), restarted from each episode's radar seed.
+def stream_keys(seeds: Sequence[int], frames: NDArray[np.integer]) -> NDArray[np.uint64]:
+    """The frame keys ``mix64(seed) + G frame 2²²`` (module docstring) of streams seeded with
+    ``seeds`` (0 <= seed < 2⁶⁴) at ``frames`` (same length): what :class:`RadarStreams` gives a
+    boat seeded with ``seed`` at its frame ``frame``."""
+    base = mix64(np.array([int(x) for x in seeds], dtype=np.uint64))
+    return base + GOLDEN * (np.asarray(frames, dtype=np.uint64) * np.uint64(FRAME_DRAWS))
 
-    A boat's draws depend on its own frames only, so a batch of N boats equals N single boats
-    and the count of draws may vary from frame to frame (module docstring).
-    """
+
+class RadarStreams:
+    """The radar frame keys of N boats: boat i, seeded with s, frame f has the key
+    ``mix64(s) + G f 2²²`` (module docstring); each :meth:`frame_keys` call is the next frame."""
 
     def __init__(self, n_boats: int) -> None:
-        self._gens: list[np.random.Generator | None] = [None] * n_boats
+        self._base = np.zeros(n_boats, dtype=np.uint64)
+        self._frame = np.zeros(n_boats, dtype=np.uint64)
 
     def seed(self, boats: Sequence[int], seeds: Sequence[int]) -> None:
-        """Restart the streams of ``boats`` from ``seeds`` (one per boat)."""
-        for i, s in zip(boats, seeds, strict=True):
-            self._gens[int(i)] = np.random.default_rng(int(s))
+        """Restart the streams of ``boats`` from ``seeds`` (one per boat, 0 <= seed < 2⁶⁴)."""
+        idx = np.asarray(boats, dtype=np.intp)
+        self._base[idx] = mix64(np.array([int(x) for x in seeds], dtype=np.uint64))
+        self._frame[idx] = 0
 
-    def rows(self, boats: NDArray[np.intp]) -> list[np.random.Generator | None]:
-        """The generators of ``boats``, in that order (None for a boat never seeded)."""
-        return [self._gens[i] for i in boats.tolist()]
+    def frame_keys(self, boats: NDArray[np.intp] | slice) -> NDArray[np.uint64]:
+        """The next frame's keys of ``boats`` (in that order); their frame counters advance."""
+        keys = self._base[boats] + GOLDEN * (self._frame[boats] * np.uint64(FRAME_DRAWS))
+        self._frame[boats] += np.uint64(1)
+        return keys
+
+
+Backend = Literal["auto", "compiled", "numpy"]
+
+
+@dataclass(frozen=True)
+class _PolarDiscs:
+    """N boats' J discs in polar form, each (N, J): range, bearing (wrapped), radius, half the
+    bearing span (rad; π for a boat inside a disc larger than a pole) and flags."""
+
+    rho: FloatArray
+    phi: FloatArray
+    r: FloatArray
+    half: FloatArray
+    valid: NDArray[np.bool_]
+    inside: NDArray[np.bool_]
+    box: NDArray[np.bool_]
 
 
 def render_scene(
@@ -92,50 +155,109 @@ def render_scene(
     valid: NDArray[np.bool_],
     cfg: RadarConfig | None = None,
     degradation: RadarDegradation | None = None,
-    rngs: Sequence[np.random.Generator | None] | None = None,
+    keys: NDArray[np.uint64] | None = None,
     box_radius_m: float = 1.0,
+    backend: Backend = "auto",
 ) -> NDArray[np.uint8]:
     """Radar images (N, 1, rows, cols) uint8 of N boats, each seeing J discs.
 
     ``range_m``, ``bearing_rad`` (relative to heading), ``radius_m``, ``valid`` all (N, J);
-    J ≤ :data:`MAX_DISCS`. ``rngs[k]`` is boat k's radar generator (:class:`RadarStreams`), needed
-    only for the boats that ``degradation`` degrades. Discs no larger than ``box_radius_m`` (the
-    study's 1 m pole) are drawn as the study draws its pole, as their polar box
-    (:func:`usvsim.task.radar.render_radar`, the same pixels).
+    J ≤ :data:`MAX_DISCS`. ``keys`` (N,) uint64: each boat's frame key
+    (:meth:`RadarStreams.frame_keys`), needed where ``degradation`` degrades a boat. Discs no
+    larger than ``box_radius_m`` (the study's 1 m pole) are drawn as the study draws its pole, as
+    their polar box (:func:`usvsim.task.radar.render_radar`, the same pixels). ``backend``:
+    ``auto`` the compiled kernel where it builds, else NumPy; ``compiled`` or ``numpy`` only.
 
     Raises
     ------
     ValueError
-        If J > :data:`MAX_DISCS`, or a degraded boat has no generator.
+        If J > :data:`MAX_DISCS`, a boat is degraded without ``keys``, the image has more than
+        2²² − 32 pixels, or ``compiled`` is asked for where no C compiler builds the kernel.
     """
     cfg = cfg or RadarConfig()
-    rho = np.asarray(range_m, dtype=float)
+    rho = np.ascontiguousarray(range_m, dtype=float)
     n, j = rho.shape
     if j > MAX_DISCS:
         raise ValueError(f"a scene holds at most {MAX_DISCS} discs, got {j}")
-    valid = np.asarray(valid, dtype=bool).copy()
-    gens: list[np.random.Generator] = []
-    boats = np.zeros(0, dtype=np.intp)
-    if degradation is not None and degradation.degraded.any():
-        boats = np.flatnonzero(degradation.degraded)
-        given = [None if rngs is None else rngs[k] for k in boats.tolist()]
-        gens = [g for g in given if g is not None]
-        if len(gens) < boats.size:
-            raise ValueError(
-                "radar degradation is enabled: pass a noise source (a generator per degraded boat)"
-            )
-        # each degraded boat's missed returns: MAX_DISCS uniforms, one per possible disc
-        u_miss = np.stack([g.random(MAX_DISCS) for g in gens])
-        valid[boats] &= u_miss[:, :j] >= degradation.missed_probability[boats, None]
+    if cfg.n_rows * cfg.n_cols + MAX_DISCS > FRAME_DRAWS:
+        raise ValueError(f"a radar image holds at most {FRAME_DRAWS - MAX_DISCS} pixels")
+    degraded = degradation is not None and bool(degradation.degraded.any())
+    if degraded and keys is None:
+        raise ValueError(
+            "radar degradation is enabled: pass a noise source (the boats' frame keys)"
+        )
+    if backend == "compiled" and _KERNEL is None:
+        raise ValueError("backend 'compiled': the radar kernel did not build (no C compiler?)")
+    if backend not in ("auto", "compiled", "numpy"):
+        raise ValueError(f"backend must be auto, compiled or numpy; got {backend!r}")
     phi = ssa(np.asarray(bearing_rad, dtype=float))
-    r = np.asarray(radius_m, dtype=float)
-    b_edges = cfg.bearing_edges_rad
-    b_lo, b_hi = b_edges[:-1], b_edges[1:].copy()
-    b_hi[-1] = np.nextafter(b_hi[-1], np.inf)
+    r = np.ascontiguousarray(radius_m, dtype=float)
+    valid = np.asarray(valid, dtype=bool)
     inside = rho < r
     box = r <= box_radius_m  # the study's pole: its polar box
     half = np.arcsin(np.minimum(r / np.maximum(rho, 1e-12), 1.0))
     half = np.where(inside & ~box, math.pi, half)
+    discs = _PolarDiscs(rho, phi, r, half, valid, inside, box)
+    if _KERNEL is not None and backend != "numpy":
+        return _render_compiled(discs, cfg, degradation, keys)
+    if degraded:
+        assert degradation is not None and keys is not None
+        u_miss = frame_draws(keys, cfg.n_rows * cfg.n_cols, j) >> np.uint64(40)
+        p_miss = np.where(degradation.degraded, degradation.missed_probability, 0.0)
+        discs = replace(discs, valid=valid & (u_miss.astype(float) * 2.0**-24 >= p_miss[:, None]))
+    lit = _lit_pixels(discs, cfg)
+    out = np.empty((n, *cfg.shape), dtype=np.uint8)
+    np.multiply(lit.view(np.uint8), np.uint8(255), out=out[:, 0])
+    if degraded:
+        assert degradation is not None and keys is not None
+        boats = np.flatnonzero(degradation.degraded)
+        out[boats, 0] = _degrade(lit[boats], np.asarray(keys)[boats], degradation, boats)
+    return out
+
+
+def _render_compiled(
+    d: _PolarDiscs,
+    cfg: RadarConfig,
+    q: RadarDegradation | None,
+    keys: NDArray[np.uint64] | None,
+) -> NDArray[np.uint8]:
+    """:func:`render_scene` by the compiled kernel (the same arithmetic)."""
+    assert _KERNEL is not None
+    n, j = d.rho.shape
+    flags = (
+        d.valid.astype(np.uint8) | (d.inside.astype(np.uint8) << 1) | (d.box.astype(np.uint8) << 2)
+    )
+    edges = cfg.bearing_edges_rad
+    b_hi = edges[1:].copy()
+    b_hi[-1] = np.nextafter(b_hi[-1], np.inf)
+    out = np.empty((n, *cfg.shape), dtype=np.uint8)
+    arrays = [edges, b_hi, *(np.ascontiguousarray(a) for a in (d.rho, d.phi, d.r, d.half, flags))]
+    if q is not None and keys is not None:
+        key_arr = np.ascontiguousarray(keys, dtype=np.uint64)
+        fields = [
+            np.ascontiguousarray(a, dtype=float)
+            for a in (q.clutter_probability, q.speckle, q.missed_probability, q.noise_amplitude)
+        ]
+        ptrs: list[int | None] = [key_arr.ctypes.data, *(a.ctypes.data for a in fields)]
+    else:
+        ptrs = [None] * 5
+    _KERNEL(
+        n, j, cfg.n_rows, cfg.n_cols, cfg.max_range_m / cfg.n_rows,
+        *(a.ctypes.data for a in arrays), *ptrs, out.ctypes.data,
+    )  # fmt: skip
+    return out
+
+
+def _lit_pixels(
+    d: _PolarDiscs,
+    cfg: RadarConfig,
+) -> NDArray[np.bool_]:
+    """The lit pixels (N, rows, cols) of the valid discs (module docstring), in NumPy."""
+    rho, phi, r, half, valid, inside, box = (d.rho, d.phi, d.r, d.half, d.valid, d.inside, d.box)
+    n = rho.shape[0]
+    b_edges = cfg.bearing_edges_rad
+    b_lo, b_hi = b_edges[:-1], b_edges[1:].copy()
+    b_hi[-1] = np.nextafter(b_hi[-1], np.inf)
     lo_b, hi_b = (phi - half)[..., None], (phi + half)[..., None]
     cols = (b_hi > lo_b) & (b_lo <= hi_b)  # (N, J, cols)
     for shift in (-2.0 * math.pi, 2.0 * math.pi):  # a disc whose bearing span wraps past ±π
@@ -163,69 +285,34 @@ def render_scene(
     np.add.at(diff, base + k_lo[keep].astype(np.intp) * row_len, 1)
     np.add.at(diff, base + (k_hi[keep].astype(np.intp) + 1) * row_len, -1)
     depth = np.cumsum(diff.reshape(n, cfg.n_rows + 1, row_len), axis=1, dtype=np.int8)
-    lit = depth[:, : cfg.n_rows] > 0  # (N, rows, cols)
-    out = np.empty((n, *cfg.shape), dtype=np.uint8)
-    np.multiply(lit.view(np.uint8), np.uint8(255), out=out[:, 0])
-    if gens:
-        assert degradation is not None
-        out[boats, 0] = _degrade(lit[boats], gens, degradation, boats)
-    return out
+    return depth[:, : cfg.n_rows] > 0
 
 
 def _degrade(
     lit: NDArray[np.bool_],
-    gens: Sequence[np.random.Generator],
+    keys: NDArray[np.uint64],
     q: RadarDegradation,
     boats: NDArray[np.intp],
 ) -> NDArray[np.uint8]:
-    """The degraded images (B, rows, cols) of B boats from their lit pixels (module docstring):
-    speckle on lit pixels, then clutter (the brighter of the return and the clutter), then
-    additive noise, clipped to 0..255. ``gens[b]``, ``q``'s fields at ``boats[b]``: boat b's."""
+    """The degraded images (B, rows, cols) of B boats from their lit pixels and frame keys
+    (module docstring): speckle, clutter (the brighter of the return and the clutter), additive
+    noise, clipped to 0..255; float32 as the compiled kernel. ``q``'s fields at ``boats``."""
     b_count, rows, cols = lit.shape
-    pixels = rows * cols
-    flat_lit = lit.reshape(b_count, pixels)
-    level = flat_lit.astype(np.float32) * np.float32(255.0)
-    speckle, clutter = q.speckle[boats], q.clutter_probability[boats]
-    noise = q.noise_amplitude[boats]
-    lit_counts = np.count_nonzero(flat_lit, axis=1)
-    speckled, noisy = np.flatnonzero(speckle > 0), np.flatnonzero(noise > 0)
-    noise_fields = np.empty((noisy.size, pixels), dtype=np.float32)
-    # per boat, in this order: speckle factors, clutter positions and intensities, noise field
-    u_speckle, clutter_at, u_clutter = [], [], []
-    n_field = 0
-    for b, (g, sp, cl, no) in enumerate(
-        zip(gens, (speckle > 0).tolist(), clutter.tolist(), (noise > 0).tolist(), strict=True)
-    ):
-        if sp:  # one factor per lit pixel, in pixel order
-            u_speckle.append(g.random(int(lit_counts[b]), dtype=np.float32))
-        if cl > 0:
-            at = bernoulli_positions(g, pixels, cl)
-            clutter_at.append(b * pixels + at)
-            u_clutter.append(g.random(at.size, dtype=np.float32))
-        if no:
-            g.random(dtype=np.float32, out=noise_fields[n_field])
-            n_field += 1
-    flat = level.reshape(-1)
-    if u_speckle:  # the lit pixels of the speckled boats, boat by boat in pixel order
-        on = np.flatnonzero(flat_lit & (speckle > 0)[:, None])
-        u = np.concatenate(u_speckle)
-        flat[on] *= 1.0 - np.repeat(speckle[speckled], lit_counts[speckled]) * u
-    if clutter_at:
-        at = np.concatenate(clutter_at)
-        flat[at] = np.maximum(flat[at], 255.0 * np.concatenate(u_clutter))
-    if noisy.size:
-        level[noisy] += noise[noisy, None].astype(np.float32) * noise_fields
+    h = frame_draws(keys, 0, rows * cols)  # (B, P)
+    level = lit.reshape(b_count, -1).astype(np.float32) * np.float32(255.0)
+
+    def bits(shift: int, width: int) -> NDArray[np.float32]:
+        field = (h >> np.uint64(shift)) & np.uint64((1 << width) - 1)
+        return field.astype(np.float32) * np.float32(2.0**-width)
+
+    speckle = q.speckle[boats].astype(np.float32)[:, None]
+    level = np.where(speckle > 0, level * (np.float32(1.0) - speckle * bits(50, 14)), level).astype(
+        np.float32
+    )
+    trial = (h & np.uint64(0xFFFFF)).astype(float) * 2.0**-20
+    clutter = trial < q.clutter_probability[boats][:, None]
+    level = np.where(clutter, np.maximum(level, np.float32(255.0) * bits(36, 14)), level)
+    noise = q.noise_amplitude[boats].astype(np.float32)[:, None]
+    level = np.where(noise > 0, level + noise * bits(20, 16), level).astype(np.float32)
     np.clip(level, 0.0, 255.0, out=level)
     return level.astype(np.uint8).reshape(b_count, rows, cols)
-
-
-def bernoulli_positions(g: np.random.Generator, n: int, p: float) -> NDArray[np.intp]:
-    """The indices i < ``n`` where independent Bernoulli(``p``) trials succeed, drawn as the
-    Geometric(``p``) gaps between successes (exactly the law of ``g.random(n) < p``, for
-    ``n · p`` numbers instead of ``n``). ``0 < p <= 1``."""
-    mean = n * p
-    chunk = int(mean + 6.0 * math.sqrt(mean) + 8.0)  # enough at once but in ~1e-9 of frames
-    pos = np.cumsum(g.geometric(p, chunk)) - 1
-    while pos[-1] < n:  # the chunk ended inside the image: draw on
-        pos = np.concatenate([pos, pos[-1] + np.cumsum(g.geometric(p, chunk))])
-    return pos[: np.searchsorted(pos, n)]

@@ -24,13 +24,8 @@ virtual machine: the same numbers to rounding, 20-60× slower.
 from __future__ import annotations
 
 import ctypes
-import hashlib
 import os
-import platform
 import re
-import shutil
-import subprocess
-import sys
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,6 +36,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
+from usvsim.common.cbuild import CompileError, cache_dir, compile_library, cpu_signature
 from usvsim.vessel.soa import SoaUnsupportedError, soa_source
 
 __all__ = ["BACKENDS", "SOA_BUILDS", "BatchStepper", "CompileError", "GatheredSteps", "cache_dir"]
@@ -87,16 +83,6 @@ SOA_BUILDS: tuple[tuple[str, list[str]], ...] = (
     ("portable+libmvec", [*_SOA_TUNED, *_SOA_VECTOR_MATH]),  # the compiler's default target
     ("portable", _SOA_BASE),  # plain -O3 and OpenMP: any GCC-compatible compiler
 )
-
-
-class CompileError(RuntimeError):
-    """The C fast path could not be built."""
-
-
-def cache_dir() -> Path:
-    """Folder for compiled step functions: ``$USVSIM_CACHE_DIR`` or ``~/.cache/usvsim``."""
-    root = os.environ.get("USVSIM_CACHE_DIR")
-    return Path(root) if root else Path.home() / ".cache" / "usvsim"
 
 
 # Exact stand-ins for three C library functions the generated code calls. Each returns the
@@ -166,13 +152,6 @@ void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
 """
 
 
-def _find_compiler() -> str | None:
-    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
-        if name and shutil.which(name):
-            return name
-    return None
-
-
 def _generate_source(fn: ca.Function) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         name = "gen.c"
@@ -199,54 +178,11 @@ def _generate_source(fn: ca.Function) -> str:
     return _EXACT_LIBM + body + driver
 
 
-def _cpu_signature() -> str:
-    """The CPU's model and feature flags (a -march=native build is cached per CPU)."""
-    try:
-        lines = Path("/proc/cpuinfo").read_text().splitlines()
-    except OSError:
-        return platform.machine() + platform.processor()
-    wanted = [ln for ln in lines if ln.startswith(("model name", "flags", "Features"))]
-    return platform.machine() + "\n".join(dict.fromkeys(wanted))
-
-
 def _compile(source: str, flags: list[str] | None = None) -> Path:
     """The shared library of ``source`` built with ``flags`` (default: the scalar path's)."""
     flags = _CFLAGS if flags is None else flags
-    cc = _find_compiler()
-    if cc is None:
-        raise CompileError("no C compiler found (set CC, or install gcc)")
     # the scalar path's key is unchanged (its libraries stay cached); others add the CPU
-    machine = "" if flags is _CFLAGS else _cpu_signature()
-    key = hashlib.sha256(
-        (source + " ".join(flags) + cc + sys.platform + machine).encode()
-    ).hexdigest()
-    out_dir = cache_dir()
-    out_dir.mkdir(parents=True, exist_ok=True)
-    lib = out_dir / f"step_{key[:20]}.so"
-    if lib.exists():
-        return lib
-    with tempfile.TemporaryDirectory(dir=out_dir) as tmp:
-        src = Path(tmp) / "step.c"
-        src.write_text(source)
-        tmp_lib = Path(tmp) / "step.so"
-        proc = subprocess.run(
-            [
-                cc,
-                *(f for f in flags if not f.startswith("-l")),
-                str(src),
-                "-o",
-                str(tmp_lib),
-                *(f for f in flags if f.startswith("-l")),  # libraries after the code
-                "-lm",
-            ],
-            capture_output=True,
-            text=True,
-            check=False,
-        )
-        if proc.returncode != 0:
-            raise CompileError(f"{cc} failed:\n{proc.stderr[-2000:]}")
-        os.replace(tmp_lib, lib)  # atomic: other processes see the whole library or none
-    return lib
+    return compile_library(source, flags, "" if flags is _CFLAGS else cpu_signature())
 
 
 @dataclass(frozen=True)

@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from usvsim.task.scene_radar import (
+    FRAME_DRAWS,
     RadarDegradation,
     RadarStreams,
-    bernoulli_positions,
+    frame_draws,
     render_scene,
 )
+from usvsim.task.scene_radar_kernel import load_kernel
+
+_KERNEL = load_kernel()
 
 PIXELS = 50 * 119
 
@@ -21,29 +23,60 @@ def _quality(n: int, clutter=0.0, speckle=0.0, missed=0.0, noise=0.0) -> RadarDe
     return RadarDegradation(*(np.full(n, float(x)) for x in (clutter, speckle, missed, noise)))
 
 
-def _streams(n: int, seed: int = 0) -> list[np.random.Generator | None]:
+def _streams(n: int, seed: int = 0) -> np.ndarray:
     streams = RadarStreams(n)
     streams.seed(list(range(n)), [seed + i for i in range(n)])
-    return streams.rows(np.arange(n))
+    return streams.frame_keys(np.arange(n))
 
 
-@pytest.mark.parametrize("p", [0.001, 0.02, 0.5, 1.0])
-def test_bernoulli_positions_have_the_law_of_independent_trials(p: float) -> None:
-    g = np.random.default_rng(3)
-    counts = np.zeros(PIXELS)
-    sizes = []
-    for _ in range(400):
-        at = bernoulli_positions(g, PIXELS, p)
-        assert np.all(np.diff(at) > 0) and (at.size == 0 or (at[0] >= 0 and at[-1] < PIXELS))
-        counts[at] += 1
-        sizes.append(at.size)
-    mean, var = PIXELS * p, PIXELS * p * (1 - p)
-    assert abs(np.mean(sizes) - mean) <= 4 * math.sqrt(var / 400) + 1e-9  # Binomial(P, p) count
-    if 0 < p < 1:
-        assert np.var(sizes) == pytest.approx(var, rel=0.25)
-        # no position is favoured: first and second half of the image equally often
-        half = PIXELS // 2
-        assert counts[:half].sum() / counts.sum() == pytest.approx(half / PIXELS, abs=0.02)
+def _random_scenes(rng: np.random.Generator, n: int, j: int):
+    rho = rng.uniform(0.0, 220.0, (n, j))
+    phi = rng.uniform(-4.0, 4.0, (n, j))  # beyond ±π: wrapped
+    r = np.where(rng.random((n, j)) < 0.3, 1.0, rng.uniform(0.5, 40.0, (n, j)))  # poles, islets
+    ok = rng.random((n, j)) < 0.8
+    q = RadarDegradation(
+        *(np.where(rng.random(n) < 0.5, rng.uniform(0.0, x, n), 0.0) for x in (0.02, 0.5, 0.3, 60))
+    )
+    return rho, phi, r, ok, q
+
+
+@pytest.mark.skipif(_KERNEL is None, reason="no C compiler: the radar kernel did not build")
+def test_compiled_kernel_equals_the_numpy_path_bit_for_bit() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(4):
+        rho, phi, r, ok, q = _random_scenes(rng, 128, 12)
+        keys = _streams(128, int(rng.integers(2**62)))
+        for quality, k in ((q, keys), (None, None)):
+            fast = render_scene(rho, phi, r, ok, None, quality, k, backend="compiled")
+            slow = render_scene(rho, phi, r, ok, None, quality, k, backend="numpy")
+            np.testing.assert_array_equal(fast, slow)
+
+
+def test_frames_of_a_stream_differ_and_restart_with_the_seed() -> None:
+    streams = RadarStreams(3)
+    streams.seed([0, 1, 2], [7, 7, 8])
+    first = streams.frame_keys(np.arange(3))
+    second = streams.frame_keys(np.arange(3))
+    assert first[0] == first[1] != first[2]  # the key is the seed's, not the boat's
+    assert np.all(first != second)
+    # consecutive frames tile one SplitMix64 sequence: frame 1 starts 2**22 draws after frame 0
+    np.testing.assert_array_equal(
+        frame_draws(first[:1], FRAME_DRAWS, 5), frame_draws(second[:1], 0, 5)
+    )
+    streams.seed([0], [7])
+    assert streams.frame_keys(np.arange(1))[0] == first[0]
+
+
+def test_pixel_draws_are_uniform_and_uncorrelated_between_fields() -> None:
+    keys = _streams(8, 123)
+    h = frame_draws(keys, 0, PIXELS).ravel()
+    fields = [((h >> np.uint64(s)) & np.uint64((1 << w) - 1)) / 2.0**w
+              for s, w in ((0, 20), (20, 16), (36, 14), (50, 14))]  # fmt: skip
+    for u in fields:
+        assert u.mean() == pytest.approx(0.5, abs=0.005)  # 47,600 draws: σ 0.0013
+        assert u.var() == pytest.approx(1 / 12, rel=0.02)
+    corr = np.corrcoef(np.stack(fields))
+    assert np.abs(corr - np.eye(4)).max() < 0.02
 
 
 def test_clutter_lights_the_stated_fraction_at_uniform_intensity() -> None:
@@ -91,7 +124,7 @@ def test_a_boats_image_depends_on_its_own_stream_only() -> None:
     batch = render_scene(rho, phi, r, ok, None, q, _streams(n))
     alone = render_scene(
         rho[3:4], phi[3:4], r[3:4], ok[3:4], None, _quality(1, 0.01, 0.3, 0.2, 10.0),
-        [np.random.default_rng(3)],
+        _streams(n)[3:4],
     )  # fmt: skip
     np.testing.assert_array_equal(batch[3], alone[0])
     assert not np.array_equal(batch[0], batch[1])  # different streams, different images
