@@ -9,8 +9,17 @@ helmsman met it, in the site's NED frame (SI units), under the key ``"scene"``::
       "goal_ne": [x_N, y_E],                       m
       "episode_start_s": t0,                       s, the log time of the episode's t = 0
       "obstacles": [[x_N, y_E, R], ...],            m, static discs
-      "vessels": [[x0_N, y0_E, χ, V, ω, R], ...]    m, rad, m/s, rad/s, m: moving discs
+      "vessels": [[x0_N, y0_E, χ, V, ω, R], ...],   m, rad, m/s, rad/s, m: moving discs
+      "radar": {"clutter_probability": p, "speckle": s, "missed_probability": m,
+                "noise_amplitude": a, "seed": k}    optional: the radar's degradation
     }
+
+``radar`` (optional; without it the radar image is clean) says how degraded the helmsman's radar
+was (:class:`usvsim.task.openwater.RadarQuality`; probabilities and speckle in [0, 1], noise
+amplitude in [0, 255]) and the integer ``seed`` (0 <= k < 2⁶⁴) of its noise stream: the
+radar observations of the run are then drawn as the simulator draws them for an episode with
+that quality and radar seed (:mod:`usvsim.task.scene_radar`, frame k at decision k), so that a
+discriminator compares like with like.
 
 A vessel at log time t is where :func:`usvsim.task.openwater.vessel_motion` puts it at episode
 time t − t0 (a constant or slowly turning course, as AIS tracks are usually summarised). Every
@@ -22,6 +31,7 @@ at most its ``max_speed_mps``. :meth:`DemoScene.from_meta` raises
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -30,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from learning.imitation.plausibility import PLAUSIBLE, DemoFormatError, finite_number
-from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
+from usvsim.task.openwater import OpenWaterEpisode, RadarQuality, vessel_motion
 
 __all__ = ["FORMAT_SCENE", "POLE_RADIUS_M", "DemoScene"]
 
@@ -47,6 +57,8 @@ class DemoScene:
     episode_start_s: float
     obstacles: FloatArray
     vessels: FloatArray
+    radar: RadarQuality | None = None  # None: a clean radar image
+    radar_seed: int = 0
 
     @classmethod
     def from_episode(cls, episode: OpenWaterEpisode, episode_start_s: float = 0.0) -> DemoScene:
@@ -60,16 +72,21 @@ class DemoScene:
             float(episode_start_s),
             np.asarray(episode.obstacles, dtype=float).reshape(-1, 3),
             np.asarray(v, dtype=float).reshape(-1, 6),
+            episode.radar,
+            episode.radar_seed,
         )
 
     def to_meta(self) -> dict[str, Any]:
         """The ``"scene"`` metadata object (JSON-ready)."""
-        return {
+        meta: dict[str, Any] = {
             "goal_ne": [float(v) for v in self.goal_ne],
             "episode_start_s": self.episode_start_s,
             "obstacles": self.obstacles.tolist(),
             "vessels": self.vessels.tolist(),
         }
+        if self.radar is not None:
+            meta["radar"] = {**dataclasses.asdict(self.radar), "seed": self.radar_seed}
+        return meta
 
     @classmethod
     def from_meta(cls, path: str, meta: dict[str, Any]) -> DemoScene:
@@ -111,7 +128,8 @@ class DemoScene:
                 f"{where}.vessels[{int(fast[0])}] speed {float(vessels[fast[0], 3]):g} m/s is over "
                 f"{PLAUSIBLE.max_speed_mps:g} m/s"
             )
-        return cls(goal, float(t0), obstacles, vessels)
+        radar, seed = _radar(where, scene["radar"]) if "radar" in scene else (None, 0)
+        return cls(goal, float(t0), obstacles, vessels, radar, seed)
 
     @property
     def n_discs(self) -> int:
@@ -142,6 +160,26 @@ class DemoScene:
         centres, _ = self.discs(t_s)
         d = np.hypot(*np.moveaxis(centres - np.asarray(pos_ne)[:, None, :], -1, 0))
         return np.min(d - self.radii_m() + POLE_RADIUS_M, axis=1, initial=math.inf)
+
+
+def _radar(where: str, value: Any) -> tuple[RadarQuality, int]:
+    """The optional ``radar`` object (module docstring), or DemoFormatError."""
+    names = [f.name for f in dataclasses.fields(RadarQuality)]
+    if not isinstance(value, dict) or set(value) != {*names, "seed"}:
+        raise DemoFormatError(
+            f"{where}.radar must be an object with {', '.join(names)} and seed, got {value!r}"
+        )
+    for name in names:
+        high = 255.0 if name == "noise_amplitude" else 1.0
+        x = value[name]
+        if not (finite_number(x) and 0.0 <= x <= high):
+            raise DemoFormatError(
+                f"{where}.radar.{name} must be a number in [0, {high:g}], got {x!r}"
+            )
+    seed = value["seed"]
+    if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < 2**64):
+        raise DemoFormatError(f"{where}.radar.seed must be an integer in [0, 2**64), got {seed!r}")
+    return RadarQuality(**{name: float(value[name]) for name in names}), seed
 
 
 def _rows(where: str, name: str, value: Any, width: int) -> FloatArray:

@@ -16,8 +16,10 @@ Steps (Vedeler 2019, Sect. 3.5.1; ``shared/reference/table-4-1.md``, "Expert dem
    (:func:`usvsim.task.observations.build_observation`) from (p_k, ψ_k, pole, goal): ``positional``,
    ``radar`` or ``radar+goal`` exactly as a policy sees them in the simulator. For a scene run,
    the open-water step's builder (:func:`usvsim.task.openwater_batch.observe_scene`, also
-   ``scene``; a clean radar image) with the velocity over ground v_k the least-squares slope of
-   the GPS fixes within ±2 s of t_k (about 0.5 m/s of noise per axis from 1.5 m fixes at 1 Hz).
+   ``scene``) with the velocity over ground v_k the least-squares slope of the GPS fixes within
+   ±2 s of t_k (about 0.5 m/s of noise per axis from 1.5 m fixes at 1 Hz); its radar image is
+   degraded as the scene's ``radar`` entry says (frame k at decision k, the simulator's draws
+   for that radar seed), clean where the run has none.
 6. **Actions in the env's format** (:func:`encode_actions`): Gaussian ``a = Δψ / 30°`` in
    [-1, 1]; categorical ``k = round(Δψ / 1.5°) + 20`` in 0..40 (the study's 41 bins).
 
@@ -60,8 +62,10 @@ from usvsim.mavlink.messages import Attitude, GlobalPosition, VfrHud
 from usvsim.nav.geo import GeoOrigin
 from usvsim.task.batch import N_CATEGORIES, ActionKind
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
+from usvsim.task.openwater import RadarQuality
 from usvsim.task.openwater_batch import SceneDiscs, observe_scene
 from usvsim.task.radar import RadarConfig
+from usvsim.task.scene_radar import RadarDegradation, stream_keys
 
 __all__ = [
     "DecisionTrack",
@@ -201,9 +205,10 @@ def expert_data(
     goal = np.repeat(np.stack([tr.goal_ne for tr in tracks]), n, axis=0)
     radius = tracks[0].pole_radius_m if tracks else 1.0
     if with_scene:
+        degradation, keys = _scene_radar(with_scene, n)
         obs = observe_scene(
             observation, pos, psi, _velocities(recordings, tracks), goal,
-            _scene_discs(with_scene, tracks), radar,
+            _scene_discs(with_scene, tracks), radar, degradation, keys,
         )  # fmt: skip
     elif observation == "scene":
         raise ValueError("the scene observation needs scene demonstrations (usvsim-demo/2)")
@@ -233,6 +238,24 @@ def _velocities(recordings: Sequence[Recording], tracks: Sequence[DecisionTrack]
             np.where((count[:, 0] >= 2)[:, None], (x @ ne) / np.maximum(sxx, 1e-9)[:, None], 0.0)
         )
     return np.concatenate(out) if out else np.zeros((0, 2))
+
+
+def _scene_radar(
+    scenes: Sequence[DemoScene], n_decisions: Sequence[int]
+) -> tuple[RadarDegradation | None, NDArray[np.uint64] | None]:
+    """Each decision's radar degradation (M,) and frame key (M,): run r's quality at each of its
+    ``n_decisions[r]`` decisions, frame k at decision k of its radar seed (step 5 of the module
+    docstring); (None, None) where no run has a ``radar`` entry."""
+    if all(s.radar is None for s in scenes):
+        return None, None
+    quality = [s.radar or RadarQuality() for s in scenes]
+    fields = [
+        np.repeat([getattr(q, name) for q in quality], n_decisions).astype(float)
+        for name in ("clutter_probability", "speckle", "missed_probability", "noise_amplitude")
+    ]
+    seeds = np.repeat([s.radar_seed for s in scenes], n_decisions).tolist()
+    frames = np.concatenate([np.arange(k, dtype=np.int64) for k in n_decisions])
+    return RadarDegradation(*fields), stream_keys(seeds, frames)
 
 
 def _scene_discs(scenes: Sequence[DemoScene], tracks: Sequence[DecisionTrack]) -> SceneDiscs:

@@ -3,6 +3,7 @@ the expert pairs built from them."""
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from pathlib import Path
@@ -22,6 +23,8 @@ from learning.imitation.family_demos import FAMILY_DEMOS_DIR, record_family_demo
 from learning.imitation.preprocess import check_observations, expert_data
 from usvsim.task.observations import SCENE_FEATURES
 from usvsim.task.openwater import vessel_motion
+from usvsim.task.openwater_batch import SceneDiscs, observe_scene
+from usvsim.task.scene_radar import RadarDegradation, RadarStreams
 
 
 @pytest.fixture(scope="module")
@@ -63,6 +66,12 @@ def _edit(text: str, change) -> str:  # type: ignore[no-untyped-def]
             r"vessels\[0\] speed 40 m/s is over 15",
         ),
         (lambda m: m["scene"].pop("goal_ne") and None, "scene lacks goal_ne"),
+        (lambda m: m["scene"]["radar"].pop("seed") and None, r"scene\.radar must be an object"),
+        (
+            lambda m: m["scene"]["radar"].update(speckle=1.5),
+            r"radar\.speckle must be a number in \[0, 1\]",
+        ),
+        (lambda m: m["scene"]["radar"].update(seed=-1), r"radar\.seed must be an integer"),
     ],
 )
 def test_a_bad_scene_is_refused_naming_the_entry(
@@ -135,6 +144,37 @@ def test_expert_pairs_see_the_scene_where_it_was(recordings) -> None:  # type: i
         centres, _ = scene.discs(tr.t_s[j : j + 1])
         edge = np.hypot(*(centres[0] - tr.pos_ne[j]).T) - scene.radii_m()
         assert first[k, 0] - first[k, 2] == pytest.approx(edge.min(), abs=1e-3)
+
+
+def test_expert_radar_images_are_drawn_as_the_simulator_draws_the_episode(recordings) -> None:  # type: ignore[no-untyped-def]
+    runs = copy.deepcopy(recordings[:3])
+    for r in runs:  # the runs' own quality (often clean) replaced by a strong one
+        r.meta["scene"]["radar"].update(noise_amplitude=30.0, speckle=0.4,
+                                        clutter_probability=0.002)  # fmt: skip
+    data = expert_data(runs, "radar", "gaussian")
+    for r in runs:
+        del r.meta["scene"]["radar"]
+    clean = expert_data(runs, "radar", "gaussian")
+    assert isinstance(data.obs, np.ndarray) and isinstance(clean.obs, np.ndarray)
+    dark = clean.obs == 0
+    assert data.obs[dark].mean() == pytest.approx(14.5 + 0.26, abs=0.5)  # 30 U truncated + clutter
+    # decision 1 of run 0 is the simulator's second radar frame of an episode with that radar
+    # seed (reset, then one step), at the recorded pose and scene
+    scene, track = recordings[0].scene, data.tracks[0]
+    streams = RadarStreams(1)
+    streams.seed([0], [scene.radar_seed])
+    streams.frame_keys(np.arange(1))
+    centres, velocity = scene.discs(track.t_s[1:2])
+    discs = SceneDiscs(centres, scene.radii_m()[None], velocity, np.ones((1, scene.n_discs), bool))
+    q = RadarDegradation(
+        *(np.array([x]) for x in (0.002, 0.4, scene.radar.missed_probability, 30.0))
+    )
+    image = observe_scene(
+        "radar", track.pos_ne[1:2], track.psi_rad[1:2], np.zeros((1, 2)), track.goal_ne[None],
+        discs, None, q, streams.frame_keys(np.arange(1)),
+    )  # fmt: skip
+    np.testing.assert_array_equal(image[0], data.obs[1])
+    assert not np.array_equal(data.obs[0], data.obs[1])
 
 
 def test_mixing_one_pole_and_scene_runs_is_refused(recordings) -> None:  # type: ignore[no-untyped-def]
