@@ -183,6 +183,13 @@ def run_perf(args: PerfArgs) -> int:
             f"everything set {kind} N=256: {fig['everything N=256']:,} decision steps/s, "
             f"{fig['ratio']:.2f} of the study task's {fig['study task N=256']:,}"
         )
+    radar = result.get("scene_radar", {})
+    if radar:
+        print(
+            "scene radar images (N=256, degraded): "
+            + ", ".join(f"{k}: {v:,}" for k, v in radar.items() if k.endswith("images/s"))
+            + (f"; compiled is {radar['compiled_over_numpy']}x NumPy" if len(radar) == 3 else "")
+        )
     return 0
 
 

@@ -29,6 +29,7 @@ __all__ = [
     "per_boat_loop_rate",
     "profile_steps",
     "run_perf",
+    "scene_radar_rates",
     "stress_set_throughput",
 ]
 
@@ -143,7 +144,39 @@ def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
         result["env"] = _env_figures(seconds)
         result["open_water"] = open_water_figures(seconds)
         result["everything_set"] = _everything_figures(seconds)
+        result["scene_radar"] = scene_radar_rates(256, seconds)
     return result
+
+
+def scene_radar_rates(n_boats: int = 256, seconds: float = 1.0) -> dict[str, Any]:
+    """Degraded scene radar images per second, the compiled kernel against the NumPy path in the
+    same run (:func:`usvsim.task.scene_radar.render_scene`): ``n_boats`` boats, each with 4
+    islets and vessels (4-20 m) and 4 poles within 200 m, clutter, speckle, misses and noise."""
+    from usvsim.task.scene_radar import RadarDegradation, RadarStreams, render_scene
+
+    rng = np.random.default_rng(0)
+    shape = (n_boats, 8)
+    rho, phi = rng.uniform(5.0, 200.0, shape), rng.uniform(-np.pi, np.pi, shape)
+    radius = np.concatenate([rng.uniform(4.0, 20.0, (n_boats, 4)), np.ones((n_boats, 4))], 1)
+    ok = np.ones(shape, dtype=bool)
+    q = RadarDegradation(*(np.full(n_boats, x) for x in (0.001, 0.5, 0.2, 40.0)))
+    streams = RadarStreams(n_boats)
+    streams.seed(range(n_boats), range(n_boats))
+    rates: dict[str, float] = {}
+    for backend in ("compiled", "numpy"):
+
+        def frame(b: Any = backend) -> int:
+            keys = streams.frame_keys(slice(None))
+            return render_scene(rho, phi, radius, ok, None, q, keys, backend=b).shape[0]
+
+        try:
+            rates[backend] = _timed_rate(frame, seconds)
+        except ValueError:  # no C compiler: no compiled figure
+            continue
+    figures: dict[str, Any] = {f"{k} images/s": round(v) for k, v in rates.items()}
+    if len(rates) == 2:
+        figures["compiled_over_numpy"] = round(rates["compiled"] / rates["numpy"], 1)
+    return figures
 
 
 def open_water_figures(seconds: float) -> dict[str, Any]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from usvsim.evaluation import perf
 
 
@@ -40,3 +42,12 @@ def test_profile_names_where_each_workload_spends_its_step():
         assert sum(row["ms_per_step"] for row in top) <= figures["ms_per_step"] * 1.05
     names = [row["function"] for f in result.values() for row in f["top"]]
     assert any(name.startswith("usvsim/") for name in names)  # the package's own functions
+
+
+def test_scene_radar_rates_compare_the_kernel_with_numpy():
+    rates = perf.scene_radar_rates(8, seconds=0.05)
+    assert rates["numpy images/s"] > 0
+    if "compiled images/s" in rates:  # a C compiler built the kernel
+        assert rates["compiled_over_numpy"] == pytest.approx(
+            rates["compiled images/s"] / rates["numpy images/s"], rel=0.01
+        )
