@@ -262,6 +262,26 @@ class ActorCritic:
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore a :meth:`state_dict`; raises ``ValueError`` on another format or if its
         spaces differ from ours."""
+        self._check_spaces(state)
+        self.policy.load_state_dict(state["policy"])
+        self.critic.load_state_dict(state["critic"])
+        for key, opt in self.optimizers().items():
+            opt.load_state_dict(state[key])
+        self.normalizer.load_state_dict(state["normalizer"])
+        self.generator.set_state(state["generator"])
+        self.iteration, self.env_steps = int(state["iteration"]), int(state["env_steps"])
+
+    def load_policy(self, state: dict[str, Any]) -> None:
+        """Start from another run's policy: its weights and observation normaliser from
+        ``state`` (a :meth:`state_dict`, slim or full, of the same format, spaces and networks,
+        e.g. a GAIL run's); the critic, optimisers, random generator and counters stay this
+        agent's own. Raises ``ValueError`` as :meth:`load_state_dict`, ``RuntimeError`` where
+        the weights do not fit."""
+        self._check_spaces(state)
+        self.policy.load_state_dict(state["policy"])
+        self.normalizer.load_state_dict(state["normalizer"])
+
+    def _check_spaces(self, state: dict[str, Any]) -> None:
         if state.get("format") != self.STATE_FORMAT:
             raise ValueError(f"not a {self.NAME} state (format {state.get('format')!r})")
         for key, space in (
@@ -270,13 +290,6 @@ class ActorCritic:
         ):
             if state[key] != space_to_spec(space):
                 raise ValueError(f"checkpoint {key} {state[key]} does not match {space}")
-        self.policy.load_state_dict(state["policy"])
-        self.critic.load_state_dict(state["critic"])
-        for key, opt in self.optimizers().items():
-            opt.load_state_dict(state[key])
-        self.normalizer.load_state_dict(state["normalizer"])
-        self.generator.set_state(state["generator"])
-        self.iteration, self.env_steps = int(state["iteration"]), int(state["env_steps"])
 
     @classmethod
     def from_state_dict(cls: type[A], state: dict[str, Any], config: Any | None = None) -> A:

@@ -25,6 +25,7 @@ member                 meaning
 ``update(batch)``      one learning step on a :class:`RolloutBatch`; its :class:`UpdateStats`
 ``state_dict()``       plain data and tensors, with a ``"format"`` and a ``"config"`` entry
 ``load_state_dict``    restore a ``state_dict`` (raises ``ValueError`` on another format)
+``load_policy``        take the policy and normaliser of a ``state_dict`` (fine-tuning)
 =====================  ==================================================================
 
 Every update's statistics carry :class:`UpdateTimes`, where its wall-clock went (measured with
@@ -146,6 +147,7 @@ class Agent(Protocol):
     def update(self, batch: RolloutBatch) -> UpdateStats: ...
     def state_dict(self) -> dict[str, Any]: ...
     def load_state_dict(self, state: dict[str, Any]) -> None: ...
+    def load_policy(self, state: dict[str, Any]) -> None: ...
 
 
 def log_row(stats: UpdateStats) -> dict[str, float | int]:

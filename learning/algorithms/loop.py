@@ -107,12 +107,15 @@ def train(
     *,
     callback: Callable[[IterationStats, Any], bool | None] | None = None,
     state: dict[str, Any] | None = None,
+    warm_start: dict[str, Any] | None = None,
 ) -> Any:
     """Train the registered algorithm whose config ``config`` is, for ``config.iterations``.
 
     ``make_vector_env(num_envs)`` builds the (gymnasium 1.x) vector env; it is closed at the
     end. ``state`` (the agent's ``state_dict``) resumes a run: networks, optimisers, normaliser,
-    random generator and counters continue (:func:`iterate` for the envs). Returns the agent.
+    random generator and counters continue (:func:`iterate` for the envs). ``warm_start`` (an
+    agent ``state_dict``, e.g. of a GAIL run) gives a new run its first policy and normaliser
+    (``Agent.load_policy``); it is ignored when ``state`` resumes one. Returns the agent.
     """
     algorithm = algorithm_for(config)
     env = make_vector_env(config.num_envs)
@@ -120,6 +123,8 @@ def train(
         agent = algorithm.make_agent(env.single_observation_space, env.single_action_space, config)
         if state is not None:
             agent.load_state_dict(state)
+        elif warm_start is not None:
+            agent.load_policy(warm_start)
         return iterate(agent, env, callback)
     finally:
         env.close()

@@ -44,6 +44,11 @@ are one line and exit status 2 before any work starts (:mod:`usvsim.cli.main`).
 format in :mod:`learning.imitation.demonstrations`) instead of the shipped ones; files that
 cannot be read or are physically implausible are skipped with a warning, and the run says how
 many it used (also in ``summary.json``).
+
+``--init-policy FILE`` (rl-* only) starts a new run from a checkpoint's policy and observation
+normaliser (any setup's with the same observation and action kinds, e.g.
+``usvsim/models/il-gaussian-scene-ow.pt``: RL fine-tuning of an imitation policy) with a new
+critic; a setup with an ``init_policy`` (``rl-*-ft``) starts from its shipped model by default.
 """
 
 from __future__ import annotations
@@ -62,7 +67,7 @@ from learning.experiments.checkpoint import CheckpointError, NonFiniteWeightsErr
 from learning.experiments.il_setups import IL_SETUPS, get_il_setup
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
-from learning.experiments.train_rl import train_rl
+from learning.experiments.train_rl import first_policy, train_rl
 from learning.experiments.validation import RunResult
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import check_writable_dir
@@ -91,6 +96,7 @@ class TrainArgs:
     threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
     quiet: bool = False  # no progress bar
     demos: str = ""  # il-*: folder of your demo_*.csv files; default: the shipped demonstrations
+    init_policy: str = ""  # rl-*: start from this checkpoint's policy (fine-tuning); "": setup's
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
@@ -103,6 +109,12 @@ class TrainArgs:
             raise UserError(f"--demos is for the il-* setups, not {self.setup!r}")
         if self.demos and not Path(self.demos).is_dir():
             raise UserError(f"--demos {self.demos}: no such folder")
+        if self.init_policy and not self.setup.startswith("rl-"):
+            raise UserError(f"--init-policy is for the rl-* setups, not {self.setup!r}")
+        if self.init_policy and self.resume:
+            raise UserError("--init-policy starts a new run; --resume continues one: not both")
+        if self.init_policy and not Path(self.init_policy).is_file():
+            raise UserError(f"--init-policy {self.init_policy}: no such file")
 
 
 def _fail(message: str) -> SystemExit:
@@ -279,6 +291,11 @@ def run(args: TrainArgs) -> int:
     out = _out_dir(args, setup.name)
     if args.n_envs and not args.resume:
         setup = setup.with_num_envs(args.n_envs)
+    if not args.resume:
+        try:  # a policy that cannot start this setup: one line before any work
+            first_policy(setup, args.init_policy)
+        except CheckpointError as err:
+            raise _fail(f"cannot start from that policy: {err}") from None
     return _train_and_report(
         lambda: train_rl(
             setup,
@@ -292,6 +309,7 @@ def run(args: TrainArgs) -> int:
             quiet=args.quiet,
             train_args=dataclasses.asdict(args),
             command=command_of(args),
+            init_policy=args.init_policy,
         ),
         setup.name,
         out,

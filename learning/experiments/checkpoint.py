@@ -84,6 +84,7 @@ __all__ = [
     "load_helmsman",
     "save_checkpoint",
     "slim_copy",
+    "starting_policy",
 ]
 
 FORMAT = "usvsim.checkpoint"
@@ -399,6 +400,22 @@ def load_checkpoint(
     except ValueError as err:
         raise CheckpointError(f"{p}: {err}") from None
     return ckpt
+
+
+def starting_policy(path: str | os.PathLike[str], setup: RLSetup) -> dict[str, Any]:
+    """The agent state of the checkpoint at ``path`` (slim or full; float32 weights) for a run
+    of ``setup`` to start from (``Agent.load_policy``): any setup's, e.g. a GAIL run's, as long
+    as its observation and action kinds are ``setup``'s.
+
+    Raises :class:`CheckpointError` (as :func:`load_checkpoint`) or where the kinds differ.
+    """
+    ckpt = load_checkpoint(path)
+    if (ckpt.observation, ckpt.action) != (setup.observation, setup.action):
+        raise CheckpointError(
+            f"{path}: a {ckpt.observation}/{ckpt.action} policy ({ckpt.setup}) cannot start a "
+            f"{setup.observation}/{setup.action} run ({setup.name})"
+        )
+    return {**ckpt.agent, "policy": _cast_floats(ckpt.agent["policy"], torch.float32)}
 
 
 def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>") -> Agent:

@@ -21,7 +21,14 @@ setup                          observation  action       network
 ``rl-categorical-scene-ow``    scene        categorical  as above, 41 logits
 ``rl-gaussian-radar-ow``       radar+goal   gaussian     CNN, balanced late goal fusion
 ``rl-categorical-radar-ow``    radar+goal   categorical  CNN, balanced late goal fusion
+``rl-gaussian-scene-ow-ft``    scene        gaussian     as rl-gaussian-scene-ow, started from
+                                                         the shipped ``il-gaussian-scene-ow``
 =============================  ===========  ===========  =====================================
+
+A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
+policy and observation normaliser (:func:`learning.experiments.checkpoint.starting_policy`, any
+setup's of the same observation and action kinds, e.g. a GAIL run's) with a new critic: RL
+fine-tuning of an imitation policy.
 
 ``scene`` is the k-nearest positional form (goal, own velocity, the 8 nearest obstacles with a
 validity mask; :mod:`usvsim.task.observations`); the radar sees every obstacle. Their runs are
@@ -166,6 +173,8 @@ class RLSetup:
     validate_every: int = 5  # iterations between validations on the 15 episodes
     study_iterations: int = 0  # the study's iterations to its best validation (Table 4.1)
     task: str = "pole"  # one of TASKS: the training environment (make_vector_env)
+    # a shipped model (usvsim/models/<name>.pt) whose policy a run starts from; "": new networks
+    init_policy: str = ""
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
@@ -238,6 +247,14 @@ SETUPS: dict[str, RLSetup] = {
         RLSetup("rl-gaussian-radar-ow", "radar+goal", "gaussian", OW_RADAR_TRPO, task="open-water"),
         RLSetup(
             "rl-categorical-radar-ow", "radar+goal", "categorical", OW_RADAR_TRPO, task="open-water"
+        ),
+        RLSetup(
+            "rl-gaussian-scene-ow-ft",
+            "scene",
+            "gaussian",
+            OW_TRPO,
+            task="open-water",
+            init_policy="il-gaussian-scene-ow",
         ),
     )
 }

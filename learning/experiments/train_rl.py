@@ -30,6 +30,7 @@ from learning.experiments.checkpoint import (
     NonFiniteWeightsError,
     load_checkpoint,
     save_checkpoint,
+    starting_policy,
 )
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
@@ -49,6 +50,7 @@ __all__ = [
     "TIME_FIELDS",
     "VALIDATION_FIELDS",
     "csv_fields",
+    "first_policy",
     "train_rl",
 ]
 
@@ -185,6 +187,18 @@ class _Run:
         )
 
 
+def first_policy(setup: RLSetup, init_policy: str | Path = "") -> dict[str, Any] | None:
+    """The agent state a new run of ``setup`` starts from (:func:`train_rl`), or None; raises
+    :class:`CheckpointError` where that file cannot start it."""
+    from usvsim.helm.registry import MODELS_DIR
+
+    if init_policy:
+        return starting_policy(init_policy, setup)
+    if setup.init_policy:
+        return starting_policy(MODELS_DIR / f"{setup.init_policy}.pt", setup)
+    return None
+
+
 def train_rl(
     setup: RLSetup,
     out_dir: str | Path,
@@ -198,8 +212,12 @@ def train_rl(
     quiet: bool = True,
     train_args: dict[str, Any] | None = None,
     command: str = "",
+    init_policy: str | Path = "",
 ) -> RunResult:
     """Train ``setup`` into ``out_dir`` (module docstring).
+
+    A new run starts from the policy of ``init_policy`` (a checkpoint file; "": the setup's
+    ``init_policy``, a shipped model's name; both empty: new networks), with its own critic.
 
     Validation every ``validate_every`` iterations (0: the setup's); the run stops after
     ``stop_after`` consecutive 15/15 validations (0: never) or once it has run
@@ -231,6 +249,7 @@ def train_rl(
     config = setup.run_config(seed, iterations)
     if state is not None:
         config = dataclasses.replace(config, seed=int(state["config"]["seed"]))
+    start = first_policy(setup, init_policy) if state is None else None
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # half-written files of a killed earlier run
     r = _Run(
@@ -253,7 +272,9 @@ def train_rl(
 
     t0 = time.perf_counter()
     try:
-        agent = train(config, setup.make_vector_env, callback=callback, state=state)
+        agent = train(
+            config, setup.make_vector_env, callback=callback, state=state, warm_start=start
+        )
         iterations, env_steps = agent.iteration, agent.env_steps
     except (NonFiniteError, NonFiniteWeightsError) as err:
         r.log.write()

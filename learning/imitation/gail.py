@@ -297,6 +297,10 @@ class GAILAgent:
         self.policy_agent.load_state_dict(state["agent"])
         self.trainer.load_state_dict(state["gail"])
 
+    def load_policy(self, state: dict[str, Any]) -> None:
+        """Start from another run's policy and normaliser (``TRPOAgent.load_policy``)."""
+        self.policy_agent.load_policy(state)
+
 
 def train_gail(
     gail_config: GAILConfig,

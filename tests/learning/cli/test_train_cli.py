@@ -177,3 +177,28 @@ def test_nan_weights_after_an_update_are_never_saved(
     assert "non-finite weights" in capsys.readouterr().err
     for name, data in before.items():
         assert (tmp_path / name).read_bytes() == data
+
+
+def test_a_run_can_start_from_another_runs_policy(tmp_path: Path) -> None:
+    # an IL model (GAIL's TRPO policy) starts an RL run: the first validation is that policy's
+    source = Path("usvsim/models/il-categorical-positional.pt")
+    assert run(_args(tmp_path, iterations=1, init_policy=str(source))) == 0
+    ckpt = load_checkpoint(tmp_path / "latest.pt")
+    assert ckpt.train_args["init_policy"] == str(source)
+    il = load_checkpoint(source)
+    assert il.validation is not None and il.validation["successes"] == 15
+    rows = _csv(tmp_path / "log.csv")
+    # one small TRPO step (max KL 0.01) from a 15/15 policy keeps it at 14-15/15; new
+    # networks score 0/15 after one iteration
+    assert int(rows[0]["val_successes"]) >= 14
+
+
+def test_a_start_policy_of_other_kinds_or_with_resume_is_refused(tmp_path: Path) -> None:
+    radar = "usvsim/models/il-categorical-radar.pt"
+    with pytest.raises(SystemExit, match=r"cannot start from that policy.*radar\+goal/categorical"):
+        run(_args(tmp_path / "a", init_policy=radar))
+    assert not (tmp_path / "a" / "latest.pt").exists()
+    with pytest.raises(SystemExit, match="not both"):
+        run(_args(tmp_path / "b", init_policy=radar, resume=True))
+    with pytest.raises(SystemExit, match="for the rl-\\* setups"):
+        run(_args(tmp_path / "c", setup="il-gaussian-positional", init_policy=radar))
