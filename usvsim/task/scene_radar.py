@@ -39,7 +39,7 @@ arithmetic in C, OpenMP over boats) where it builds, else this module's NumPy pa
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -66,7 +66,6 @@ FloatArray = NDArray[np.float64]
 MAX_DISCS = 32  # discs a scene may hold (missed-return draws per frame)
 GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment
 FRAME_DRAWS = 1 << 22  # draws reserved per frame: pixels + MAX_DISCS must fit
-_KERNEL = load_kernel()
 
 
 def mix64(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
@@ -186,7 +185,8 @@ def render_scene(
         raise ValueError(
             "radar degradation is enabled: pass a noise source (the boats' frame keys)"
         )
-    if backend == "compiled" and _KERNEL is None:
+    kernel = load_kernel() if backend != "numpy" else None  # built once, on first use
+    if backend == "compiled" and kernel is None:
         raise ValueError("backend 'compiled': the radar kernel did not build (no C compiler?)")
     if backend not in ("auto", "compiled", "numpy"):
         raise ValueError(f"backend must be auto, compiled or numpy; got {backend!r}")
@@ -198,8 +198,8 @@ def render_scene(
     half = np.arcsin(np.minimum(r / np.maximum(rho, 1e-12), 1.0))
     half = np.where(inside & ~box, math.pi, half)
     discs = _PolarDiscs(rho, phi, r, half, valid, inside, box)
-    if _KERNEL is not None and backend != "numpy":
-        return _render_compiled(discs, cfg, degradation, keys)
+    if kernel is not None:
+        return _render_compiled(kernel, discs, cfg, degradation, keys)
     if degraded:
         assert degradation is not None and keys is not None
         u_miss = frame_draws(keys, cfg.n_rows * cfg.n_cols, j) >> np.uint64(40)
@@ -216,13 +216,13 @@ def render_scene(
 
 
 def _render_compiled(
+    kernel: Callable[..., None],
     d: _PolarDiscs,
     cfg: RadarConfig,
     q: RadarDegradation | None,
     keys: NDArray[np.uint64] | None,
 ) -> NDArray[np.uint8]:
     """:func:`render_scene` by the compiled kernel (the same arithmetic)."""
-    assert _KERNEL is not None
     n, j = d.rho.shape
     flags = (
         d.valid.astype(np.uint8) | (d.inside.astype(np.uint8) << 1) | (d.box.astype(np.uint8) << 2)
@@ -241,7 +241,7 @@ def _render_compiled(
         ptrs: list[int | None] = [key_arr.ctypes.data, *(a.ctypes.data for a in fields)]
     else:
         ptrs = [None] * 5
-    _KERNEL(
+    kernel(
         n, j, cfg.n_rows, cfg.n_cols, cfg.max_range_m / cfg.n_rows,
         *(a.ctypes.data for a in arrays), *ptrs, out.ctypes.data,
     )  # fmt: skip

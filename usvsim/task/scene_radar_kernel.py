@@ -18,6 +18,7 @@ returns None and the NumPy path runs.
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 from collections.abc import Callable
 
@@ -140,17 +141,19 @@ _BUILDS: tuple[tuple[list[str], bool], ...] = (
 )
 
 
+@functools.cache
 def load_kernel() -> Callable[..., None] | None:
-    """The compiled ``usv_scene_radar`` (argument types set), or None where no build succeeds."""
+    """The compiled ``usv_scene_radar`` (argument types set), or None where no build succeeds
+    or the cache folder cannot be written (built and loaded once per process)."""
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # as the plant's kernels (codegen)
     for flags, native in _BUILDS:
         try:
             lib = compile_library(
                 KERNEL_SOURCE, flags, cpu_signature() if native else "", prefix="radar"
             )
-        except CompileError:
+            fn = ctypes.CDLL(str(lib)).usv_scene_radar
+        except (CompileError, OSError):  # OSError: an unwritable cache, an unloadable library
             continue
-        fn = ctypes.CDLL(str(lib)).usv_scene_radar
         ptr, int_ = ctypes.c_void_p, ctypes.c_int
         fn.argtypes = [int_, int_, int_, int_, ctypes.c_double, *([ptr] * 13)]
         fn.restype = None

@@ -128,3 +128,22 @@ def test_a_boats_image_depends_on_its_own_stream_only() -> None:
     )  # fmt: skip
     np.testing.assert_array_equal(batch[3], alone[0])
     assert not np.array_equal(batch[0], batch[1])  # different streams, different images
+
+
+def test_without_a_compiler_the_numpy_path_draws_the_same_images(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    rho, phi, r, ok, q = _random_scenes(np.random.default_rng(5), 16, 6)
+    keys = _streams(16, 9)
+    want = render_scene(rho, phi, r, ok, None, q, keys, backend="numpy")
+    load_kernel.cache_clear()
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.setenv("PATH", "/nonexistent")
+    monkeypatch.setenv("USVSIM_CACHE_DIR", "/nonexistent-cache")  # nothing cached to load
+    try:
+        assert load_kernel() is None
+        np.testing.assert_array_equal(render_scene(rho, phi, r, ok, None, q, keys), want)
+        with pytest.raises(ValueError, match="did not build"):
+            render_scene(rho, phi, r, ok, None, q, keys, backend="compiled")
+    finally:
+        load_kernel.cache_clear()
