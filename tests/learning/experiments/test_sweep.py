@@ -84,8 +84,9 @@ def test_seeds_groups_and_trial_count() -> None:
     assert expected_trials(spec) == 4 * 3 * 2
     # the study's groups stay the study's eight setups when open-water setups are added
     assert len(expand_setups(["rl", "il"])) == 8
-    assert not any(s.endswith("-ow") for s in expand_setups(["rl", "radar", "positional"]))
-    assert all(s.endswith("-ow") for s in expand_setups(["open-water"]))
+    assert not any("-ow" in s for s in expand_setups(["rl", "radar", "positional"]))
+    ow = expand_setups(["open-water"])
+    assert all("-ow" in s for s in ow) and len(ow) == 9  # 4 RL, 4 IL, 1 fine-tuned
 
 
 def test_spec_round_trip_and_refusals() -> None:
