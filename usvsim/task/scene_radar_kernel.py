@@ -118,14 +118,16 @@ void usv_scene_radar(int n, int j, int rows, int cols, double dr, const double* 
     const float amp = noise[b] > 0 ? (float)noise[b] : 0.0f;
     const double scaled = p_clutter[b] > 0 ? ceil(p_clutter[b] * 0x1p20) : 0.0;
     const uint32_t threshold = scaled > 0x1p21 ? (1u << 21) : (uint32_t)scaled;
+    uint64_t state = key;  /* key + G (p + 1) at pixel p, by addition */
     for (long p = 0; p < pixels; ++p) {
-      uint64_t h = mix64(key + GOLDEN * (uint64_t)(p + 1));
+      state += GOLDEN;
+      uint64_t h = mix64(state);
       float level = (float)img[p] * 255.0f;
-      level *= 1.0f - sp * ((float)(uint32_t)(h >> 50) * 0x1p-14f);
-      float c = 255.0f * ((float)(uint32_t)((h >> 36) & 0x3FFF) * 0x1p-14f);
+      level *= 1.0f - sp * ((float)(int32_t)(h >> 50) * 0x1p-14f);
+      float c = 255.0f * ((float)(int32_t)((h >> 36) & 0x3FFF) * 0x1p-14f);
       float brighter = c > level ? c : level;
       level = (uint32_t)(h & 0xFFFFF) < threshold ? brighter : level;
-      level += amp * ((float)(uint32_t)((h >> 20) & 0xFFFF) * 0x1p-16f);
+      level += amp * ((float)(int32_t)((h >> 20) & 0xFFFF) * 0x1p-16f);
       level = level < 0.0f ? 0.0f : level;
       level = level > 255.0f ? 255.0f : level;
       img[p] = (uint8_t)(int32_t)level;
@@ -136,7 +138,7 @@ void usv_scene_radar(int n, int j, int rows, int cols, double dr, const double* 
 
 _BASE = ["-O3", "-fPIC", "-shared", "-fopenmp", "-fno-fast-math", "-ffp-contract=off"]
 _BUILDS: tuple[tuple[list[str], bool], ...] = (
-    ([*_BASE, "-march=native"], True),  # (flags, CPU-specific)
+    ([*_BASE, "-march=native", "-mprefer-vector-width=512"], True),  # (flags, CPU-specific)
     (_BASE, False),
 )
 
