@@ -23,6 +23,8 @@ setup                          observation  action       network
 ``rl-categorical-radar-ow``    radar+goal   categorical  CNN, balanced late goal fusion
 ``rl-gaussian-scene-ow-ft``    scene        gaussian     as rl-gaussian-scene-ow, started from
                                                          the shipped ``il-gaussian-scene-ow``
+``rl-categorical-scene-ow-ft``  scene        categorical  as rl-categorical-scene-ow, started
+                                                         from ``il-categorical-scene-ow``
 =============================  ===========  ===========  =====================================
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -255,6 +257,14 @@ SETUPS: dict[str, RLSetup] = {
             OW_TRPO,
             task="open-water",
             init_policy="il-gaussian-scene-ow",
+        ),
+        RLSetup(
+            "rl-categorical-scene-ow-ft",
+            "scene",
+            "categorical",
+            OW_TRPO,
+            task="open-water",
+            init_policy="il-categorical-scene-ow",
         ),
     )
 }
