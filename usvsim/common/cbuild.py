@@ -9,6 +9,7 @@ their NumPy or CasADi path.
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import os
 import platform
@@ -17,8 +18,16 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
-__all__ = ["CompileError", "cache_dir", "compile_library", "cpu_signature", "find_compiler"]
+__all__ = [
+    "CompileError",
+    "cache_dir",
+    "compile_library",
+    "cpu_signature",
+    "find_compiler",
+    "load_function",
+]
 
 
 class CompileError(RuntimeError):
@@ -92,3 +101,28 @@ def compile_library(source: str, flags: list[str], machine: str = "", prefix: st
             raise CompileError(f"{cc} failed:\n{proc.stderr[-2000:]}")
         os.replace(tmp_lib, lib)  # atomic: other processes see the whole library or none
     return lib
+
+
+_BASE_FLAGS = ["-O3", "-fPIC", "-shared", "-fopenmp", "-fno-fast-math", "-ffp-contract=off"]
+_BUILDS: tuple[tuple[list[str], bool], ...] = (
+    ([*_BASE_FLAGS, "-march=native", "-mprefer-vector-width=512"], True),  # (flags, per CPU)
+    (_BASE_FLAGS, False),
+)
+
+
+def load_function(source: str, name: str, argtypes: list[Any], prefix: str) -> Any | None:
+    """The C function ``name`` of ``source`` with ``argtypes`` set (returns void), built with
+    ``-O3 -march=native`` (IEEE arithmetic, no FMA contraction, OpenMP) or, where that fails,
+    the same flags without ``-march``; None where no build loads (no compiler, an unwritable
+    cache, an unloadable library): the caller's NumPy path runs then."""
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # as the plant's kernels (codegen)
+    for flags, native in _BUILDS:
+        try:
+            lib = compile_library(source, flags, cpu_signature() if native else "", prefix=prefix)
+            fn = getattr(ctypes.CDLL(str(lib)), name)
+        except (CompileError, OSError):  # OSError: an unwritable cache, an unloadable library
+            continue
+        fn.argtypes = argtypes
+        fn.restype = None
+        return fn
+    return None

@@ -10,7 +10,8 @@ the scene itself, the way the waypoint courses do (:mod:`usvsim.task.waypoints`)
 * every 0.1 s plant step of the returned true trajectory is checked against every static disc
   and every vessel (at its position at that step): collision, the pole-equivalent distance
   ``|p − c| − R + R_pole`` (the success rule of :mod:`usvsim.task.openwater`), the goal;
-  vectorised over boats, obstacles and steps, (N, J, T) arrays, no Python loop;
+  no Python loop over boats, obstacles or steps (:mod:`usvsim.task.scene_distances`: one
+  compiled call, or the NumPy reference with the CasADi plant or without a C compiler);
 * observations come from the navigation estimate: ``positional`` reports the obstacle nearest
   by pole-equivalent distance as the study's pole ([r_eq, φ, r_goal, φ_goal]; no obstacle: a
   pole 1 km astern); ``radar`` / ``radar+goal`` draw every disc at its true extent
@@ -42,6 +43,7 @@ from usvsim.task.observations import (
 from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
 from usvsim.task.radar import RadarConfig
 from usvsim.task.scenario import Scenario
+from usvsim.task.scene_distances import PackedDiscs, nearest_and_hits
 from usvsim.task.scene_radar import RadarDegradation, RadarStreams, render_scene
 from usvsim.vessel.plant import Plant
 
@@ -113,6 +115,10 @@ class OpenWaterBatch:
         self._radar_streams = RadarStreams(n_boats)
         self._r_pole = self.base.pole_radius_m
         self._half_beam = self.inner.plant.vessel.half_beam_m
+        # the compiled distances; the NumPy reference along with the CasADi plant
+        self._distance_backend: Literal["auto", "numpy"] = (
+            "numpy" if backend == "casadi" else "auto"
+        )
         self._set_scene(list(range(n_boats)), [])
         self._n_dec = np.zeros(n_boats, dtype=np.int64)
         self._min_d = np.full(n_boats, np.inf)
@@ -183,8 +189,8 @@ class OpenWaterBatch:
         self._radar_streams.seed(idx.tolist(), [e.radar_seed for e in episodes])
         pos = inner.state.x[idx, 0:2]
         self._n_dec[idx] = 0
-        d0, _ = self._distances(pos[:, None, :], np.zeros((idx.size, 1)), idx)
-        self._min_d[idx] = d0.min(axis=(1, 2), initial=np.inf)
+        d0, _ = self._nearest_and_hits(pos[:, None, :], np.zeros((idx.size, 1)), idx)
+        self._min_d[idx] = d0[:, 0]
         self._t_goal[idx] = np.inf
         return self._observe(idx)
 
@@ -222,25 +228,20 @@ class OpenWaterBatch:
         centres, radii, velocity, ok = self._discs(np.asarray(t_s, dtype=float)[:, None])
         return centres[:, :, 0], radii, velocity[:, :, 0], ok
 
-    def _distances(
+    def _nearest_and_hits(
         self, pos: FloatArray, t_s: FloatArray, idx: Any = slice(None)
     ) -> tuple[FloatArray, NDArray[np.bool_]]:
-        """Pole-equivalent distance (n, J, T) and collision flags from positions (n, T, 2)."""
-        # statics broadcast over the T steps (no (n, k, T, 2) copy of their centres), then vessels
-        c = self.centres[idx]
-        vessels, _ = self._vessels(t_s, idx)
-        x, y = pos[:, None, :, 0], pos[:, None, :, 1]
-        h = np.concatenate(
-            [
-                np.hypot(x - c[:, :, None, 0], y - c[:, :, None, 1]),
-                np.hypot(x - vessels[..., 0], y - vessels[..., 1]),
-            ],
-            axis=1,
+        """Smallest pole-equivalent distance (n, T) m and any-hit flags (n, T) of boats ``idx``
+        at positions ``pos`` (n, T, ≥ 2) and episode times ``t_s`` (n, T)
+        (:func:`usvsim.task.scene_distances.nearest_and_hits`)."""
+        discs = PackedDiscs(
+            self.centres[idx], self.radii[idx], self.static_ok[idx], self.v_p0[idx],
+            self.v_course[idx], self.v_speed[idx], self.v_turn[idx], self.v_radius[idx],
+            self.vessel_ok[idx],
+        )  # fmt: skip
+        return nearest_and_hits(
+            pos, t_s, discs, self._r_pole, self._half_beam, self._distance_backend
         )
-        radii, ok = self._radii_valid(idx)
-        d = np.where(ok[..., None], h + (self._r_pole - radii)[..., None], np.inf)
-        hit = ok[..., None] & (h < (radii + self._half_beam)[..., None])
-        return d, hit
 
     def _observe(self, idx: NDArray[np.intp] | None = None) -> Any:
         sl: Any = slice(None) if idx is None else idx
@@ -266,9 +267,7 @@ class OpenWaterBatch:
         traj = res.trajectory
         steps = self._n_dec[:, None] * T + np.arange(1, T + 1)
         t: FloatArray = steps.astype(np.float64) * sc.dt_s  # (N, T) episode time
-        d, hit_j = self._distances(traj[:, :, 0:2], t)
-        d_min_t = d.min(axis=1, initial=np.inf)  # (N, T)
-        hit: NDArray[np.bool_] = np.any(hit_j, axis=1)
+        d_min_t, hit = self._nearest_and_hits(traj, t)
         dx, dy = traj[:, :, 0] - self.goal_ne[:, 0:1], traj[:, :, 1] - self.goal_ne[:, 1:2]
         in_goal = within_radius(dx, dy, sc.goal_radius_m)
         collision: NDArray[np.bool_] = np.any(hit, axis=1)

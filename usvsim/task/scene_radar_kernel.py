@@ -19,10 +19,9 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import os
 from collections.abc import Callable
 
-from usvsim.common.cbuild import CompileError, compile_library, cpu_signature
+from usvsim.common.cbuild import load_function
 
 __all__ = ["KERNEL_SOURCE", "load_kernel"]
 
@@ -136,28 +135,14 @@ void usv_scene_radar(int n, int j, int rows, int cols, double dr, const double* 
 }
 """
 
-_BASE = ["-O3", "-fPIC", "-shared", "-fopenmp", "-fno-fast-math", "-ffp-contract=off"]
-_BUILDS: tuple[tuple[list[str], bool], ...] = (
-    ([*_BASE, "-march=native", "-mprefer-vector-width=512"], True),  # (flags, CPU-specific)
-    (_BASE, False),
-)
-
 
 @functools.cache
 def load_kernel() -> Callable[..., None] | None:
     """The compiled ``usv_scene_radar`` (argument types set), or None where no build succeeds
     or the cache folder cannot be written (built and loaded once per process)."""
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # as the plant's kernels (codegen)
-    for flags, native in _BUILDS:
-        try:
-            lib = compile_library(
-                KERNEL_SOURCE, flags, cpu_signature() if native else "", prefix="radar"
-            )
-            fn = ctypes.CDLL(str(lib)).usv_scene_radar
-        except (CompileError, OSError):  # OSError: an unwritable cache, an unloadable library
-            continue
-        ptr, int_ = ctypes.c_void_p, ctypes.c_int
-        fn.argtypes = [int_, int_, int_, int_, ctypes.c_double, *([ptr] * 13)]
-        fn.restype = None
-        return fn
-    return None
+    ptr, int_ = ctypes.c_void_p, ctypes.c_int
+    argtypes = [int_, int_, int_, int_, ctypes.c_double, *([ptr] * 13)]
+    fn: Callable[..., None] | None = load_function(
+        KERNEL_SOURCE, "usv_scene_radar", argtypes, "radar"
+    )
+    return fn

@@ -332,3 +332,21 @@ def test_trpo_learns_pendulum() -> None:
     stats: list[IterationStats] = []
     train(config, _pendulum, callback=lambda s, a: stats.append(s) or s.mean_return > -400)
     assert stats[-1].mean_return > -400.0, [round(s.mean_return) for s in stats[-5:]]
+
+
+@pytest.mark.parametrize("freeze", [False, True])
+def test_freeze_input_stats_keeps_the_normaliser(freeze: bool) -> None:
+    """``freeze_input_stats`` (fine-tuning a loaded policy): the update changes the policy but
+    not the observation statistics it was loaded with; without it they follow the rollouts."""
+    config = dataclasses.replace(CARTPOLE, steps_per_env=64, freeze_input_stats=freeze)
+    agent, batch = _rollout(_cartpole, config)
+    stats = agent.normalizer.stats
+    before = {k: (s.mean.copy(), s.var.copy()) for k, s in stats.items()}
+    params = _params(agent.policy)
+    agent.update(batch)
+    same = all(
+        np.array_equal(before[k][0], s.mean) and np.array_equal(before[k][1], s.var)
+        for k, s in stats.items()
+    )
+    assert same == freeze
+    assert not _same(params, _params(agent.policy))
