@@ -236,10 +236,10 @@ class ActorCritic:
         """Between iterations: refresh the statistics the next rollout's policy will use (the
         normaliser from the raw observations, the policy's BatchNorm from the normalised ones),
         so that within one iteration π_θold is one fixed function; count the update. With
-        ``config.freeze_input_stats`` both stay as they started: refreshed from the rollouts of
+        ``config.fixed_input_stats`` both stay as they started: refreshed from the rollouts of
         a new task they change what a loaded policy does outside the trust region (measured:
         the GAIL radar policy on the family went from 14/15 to 0/15 in 15 RL iterations)."""
-        if not getattr(self.config, "freeze_input_stats", False):
+        if not getattr(self.config, "fixed_input_stats", False):
             self.normalizer.update(tb.raw_obs)
             refresh_batchnorm(self.policy, tb.obs)
         self.iteration += 1

@@ -102,7 +102,7 @@ class PPOConfig:
     obs_clip: float = 10.0  # normalised observations clipped to ±obs_clip
     # keep the observation normaliser's and BatchNorm's statistics as they start (a fine-tuned
     # imitation policy's; ActorCritic.finish_update) instead of refreshing them from rollouts
-    freeze_input_stats: bool = False
+    fixed_input_stats: bool = False
     critic_lr: float = 3e-4  # Adam (PPO, Table 3: one step size for both losses)
     critic_epochs: int = 10  # as the policy's K
     critic_minibatch: int = 128  # rows, as the policy's minibatch

@@ -89,7 +89,7 @@ class TRPOConfig:
     obs_clip: float = 10.0  # normalised observations clipped to ±obs_clip
     # keep the observation normaliser's and BatchNorm's statistics as they start (a fine-tuned
     # imitation policy's; ActorCritic.finish_update) instead of refreshing them from rollouts
-    freeze_input_stats: bool = False
+    fixed_input_stats: bool = False
     critic_lr: float = 1e-3  # Adam
     critic_epochs: int = 5
     critic_minibatch: int = 512  # rows; the CNN's FC1 input is 512·3192 float32 ≈ 6.5 MB

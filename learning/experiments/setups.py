@@ -27,6 +27,8 @@ setup                          observation  action       network
                                                          from ``il-categorical-scene-ow``
 ``rl-gaussian-radar-ow-ft``    radar+goal   gaussian     as rl-gaussian-radar-ow, started from
                                                          the shipped ``il-gaussian-radar-ow``
+``rl-gaussian-radar-ow-cont``  radar+goal   gaussian     rl-gaussian-radar-ow trained on from
+                                                         the shipped model (new critic)
 =============================  ===========  ===========  =====================================
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -165,7 +167,7 @@ OW_RADAR_TRPO = dataclasses.replace(RADAR_TRPO, iterations=1000)
 # fine-tuning a GAIL radar policy: its input statistics (fitted to the expert's images) kept,
 # as its GAIL run kept them; refreshed from the family's noisier rollouts, the policy fell from
 # 14/15 and 81/100 family to 0/15 and 8/100 by iteration 40 (seed 0)
-OW_RADAR_FT_TRPO = dataclasses.replace(OW_RADAR_TRPO, freeze_input_stats=True)
+OW_RADAR_FT_TRPO = dataclasses.replace(OW_RADAR_TRPO, fixed_input_stats=True)
 AlgorithmConfig = TRPOConfig | PPOConfig
 TASKS = ("pole", "open-water")  # RLSetup.task: the study's task or the open-water family
 
@@ -279,6 +281,14 @@ SETUPS: dict[str, RLSetup] = {
             OW_RADAR_FT_TRPO,
             task="open-water",
             init_policy="il-gaussian-radar-ow",
+        ),
+        RLSetup(
+            "rl-gaussian-radar-ow-cont",
+            "radar+goal",
+            "gaussian",
+            OW_RADAR_TRPO,
+            task="open-water",
+            init_policy="rl-gaussian-radar-ow",
         ),
     )
 }

@@ -335,10 +335,10 @@ def test_trpo_learns_pendulum() -> None:
 
 
 @pytest.mark.parametrize("freeze", [False, True])
-def test_freeze_input_stats_keeps_the_normaliser(freeze: bool) -> None:
-    """``freeze_input_stats`` (fine-tuning a loaded policy): the update changes the policy but
+def test_fixed_input_stats_keep_the_normaliser(freeze: bool) -> None:
+    """``fixed_input_stats`` (fine-tuning a loaded policy): the update changes the policy but
     not the observation statistics it was loaded with; without it they follow the rollouts."""
-    config = dataclasses.replace(CARTPOLE, steps_per_env=64, freeze_input_stats=freeze)
+    config = dataclasses.replace(CARTPOLE, steps_per_env=64, fixed_input_stats=freeze)
     agent, batch = _rollout(_cartpole, config)
     stats = agent.normalizer.stats
     before = {k: (s.mean.copy(), s.var.copy()) for k, s in stats.items()}
