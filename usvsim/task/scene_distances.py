@@ -116,9 +116,11 @@ void usv_scene_distances(int n, int T, int K, int M, double r_pole, double half_
       }
       double best = INFINITY;
       for (int q = 0; q < nd; ++q) {
-        if (isfinite(cheap_best) && !NEAR(approx[q], cheap_best)) continue;  /* inf: overflow */
+        /* every disc where the cheap minimum is inf (overflow) or the distance NaN */
+        if (isfinite(cheap_best) && !isnan(approx[q]) && !NEAR(approx[q], cheap_best)) continue;
         const double d = hypot(dxs[q], dys[q]) + (r_pole - rs[q]);
-        if (d < best) best = d;
+        if (d < best || isnan(d)) best = d;
+        if (isnan(best)) break;  /* NaN wins, as in NumPy's minimum */
       }
       d_min[(long)b * T + s] = best;
       hit[(long)b * T + s] = any;

@@ -67,6 +67,18 @@ def test_hits_and_nearest_at_their_thresholds() -> None:
     assert hit[0].tolist() == [False, True, True]
 
 
+def test_a_nan_position_gives_nan_as_in_numpy() -> None:
+    rng = np.random.default_rng(2)
+    discs = _random_discs(rng, 8, 4, 2)
+    traj, t = rng.uniform(-200.0, 200.0, (8, 5, 2)), np.zeros((8, 5))
+    traj[3, 2] = np.nan
+    want = nearest_and_hits(traj, t, discs, 1.0, 1.2, backend="numpy")
+    got = nearest_and_hits(traj, t, discs, 1.0, 1.2, backend="compiled")
+    np.testing.assert_array_equal(got[1], want[1])
+    np.testing.assert_array_equal(np.isnan(got[0]), np.isnan(want[0]))
+    assert np.isnan(got[0][3, 2]) == bool(discs.static_ok[3].any() or discs.vessel_ok[3].any())
+
+
 def test_more_discs_than_the_kernel_takes_run_in_numpy() -> None:
     rng = np.random.default_rng(1)
     discs = _random_discs(rng, 4, MAX_KERNEL_DISCS, 1)
