@@ -34,13 +34,12 @@ from learning.experiments.checkpoint import (
 from learning.experiments.il_setups import ILSetup
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import setup_from_params
-from learning.experiments.train_rl import FAMILY_FIELDS
+from learning.experiments.train_rl import open_water_fields
 from learning.experiments.validation import (
     RunResult,
     family_passed,
-    family_records,
-    family_summary,
     finish_run,
+    open_water_summary,
     policy_records,
     validation_record,
     validation_summary,
@@ -121,7 +120,8 @@ def validate_il(
     :func:`learning.experiments.validation.validation_summary` and the path distance to the
     expert (m); with ``extra_specs`` (run in the same batch) also ``selection_successes``, the
     successes on ``specs`` and ``extra_specs`` together; for an open-water setup also the
-    family set's ``family_*`` entries."""
+    family set's ``family_*`` entries (a radar one also the harsh-radar set's ``radar_*``:
+    :func:`learning.experiments.validation.open_water_summary`)."""
     recs = policy_records(agent, setup, [*specs, *extra_specs])
     val = {
         **validation_summary(recs[: len(specs)]),
@@ -129,8 +129,7 @@ def validate_il(
     }
     if extra_specs:
         val["selection_successes"] = int(sum(r.success for r in recs))
-    if setup.task == "open-water":
-        val.update(family_summary(family_records(agent, setup)))
+    val.update(open_water_summary(agent, setup))
     return val
 
 
@@ -158,7 +157,7 @@ class _ILRun:
         self.time_budget_s = time_budget_s
         self.log = RunLog(
             out,
-            IL_CSV_FIELDS + (FAMILY_FIELDS if setup.task == "open-water" else ()),
+            IL_CSV_FIELDS + open_water_fields(setup),
             setup.name,
             rows,
             "env_return",
@@ -451,11 +450,12 @@ def _rank(rec: dict[str, Any]) -> tuple[int, int, float]:
     choose among many 15/15 checkpoints), then on the 15, then the most expert-like path (the
     point of IL). A record from before the selection set (a resumed older run) ranks as if it
     had failed every extra episode. An open-water run's record (``family_successes``) ranks by
-    the selection's and the family set's successes together, then the 15's, then the mean
-    return: never by likeness, which its closing comparison measures (issue 18)."""
+    the selection's, the family set's and (radar) the harsh-radar set's successes together, then
+    the 15's, then the mean return: never by likeness, which its closing comparison measures
+    (issue 18)."""
     selection = int(rec.get("selection_successes", rec["successes"]))
     if "family_successes" in rec:
-        total = selection + int(rec["family_successes"])
+        total = selection + int(rec["family_successes"]) + int(rec.get("radar_successes", 0))
         return total, int(rec["successes"]), float(rec["mean_return"])
     d = rec.get("path_distance_m", math.inf)
     return selection, int(rec["successes"]), -d if math.isfinite(d) else -math.inf

@@ -8,7 +8,9 @@ checkpoints, early stop, and the run's files (``log.csv``, ``curve.png``, ``late
 value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations), then
 :data:`TIME_FIELDS`: where the iteration's wall-clock went, s (rollout, batch, policy step,
 critic; :mod:`learning.algorithms.loop`), and for a setup on the open-water family
-:data:`FAMILY_FIELDS` (its family validation set, :mod:`learning.experiments.validation`).
+:data:`FAMILY_FIELDS` (its family validation set, :mod:`learning.experiments.validation`), for a
+radar one there also :data:`RADAR_FIELDS` (its harsh-radar validation set); see
+:func:`open_water_fields`.
 """
 
 from __future__ import annotations
@@ -47,10 +49,12 @@ from usvsim.common.fileio import remove_stale_temporaries
 __all__ = [
     "COMMON_FIELDS",
     "FAMILY_FIELDS",
+    "RADAR_FIELDS",
     "TIME_FIELDS",
     "VALIDATION_FIELDS",
     "csv_fields",
     "first_policy",
+    "open_water_fields",
     "train_rl",
 ]
 
@@ -63,13 +67,22 @@ FAMILY_FIELDS = (  # open-water setups: validation.family_summary
     "val_family_collisions",
     "val_family_min_distance_m",
 )
+RADAR_FIELDS = tuple(f.replace("_family_", "_radar_") for f in FAMILY_FIELDS)  # radar setups
+
+
+def open_water_fields(setup: Any) -> tuple[str, ...]:
+    """The validation columns a setup on the open-water family adds (RL and IL): the family
+    set's, and for a radar observation the harsh-radar set's; () for the pole task."""
+    if setup.task != "open-water":
+        return ()
+    return FAMILY_FIELDS + (RADAR_FIELDS if setup.observation.startswith("radar") else ())
 
 
 def csv_fields(setup: RLSetup) -> tuple[str, ...]:
     """The ``log.csv`` columns of a run of ``setup`` (module docstring)."""
     stats = get_algorithm(setup.algorithm).stats_type
-    family = FAMILY_FIELDS if setup.task == "open-water" else ()
-    return COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS + TIME_FIELDS + family
+    fields = COMMON_FIELDS + stats.LOG_FIELDS + VALIDATION_FIELDS + TIME_FIELDS
+    return fields + open_water_fields(setup)
 
 
 class _Run:

@@ -14,13 +14,17 @@ import torch
 from learning.algorithms.networks import SetTrunk
 from learning.algorithms.registry import get_algorithm
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params, setup_params
-from learning.experiments.train_rl import FAMILY_FIELDS, csv_fields
+from learning.experiments.train_rl import FAMILY_FIELDS, RADAR_FIELDS, csv_fields
 from learning.experiments.validation import (
     FAMILY_STOP_RATE,
     FAMILY_VALIDATION_SEED,
     FAMILY_VALIDATION_SIZE,
+    RADAR_STOP_RATE,
+    RADAR_VALIDATION_SEED,
+    RADAR_VALIDATION_SIZE,
     family_passed,
     family_validation_episodes,
+    radar_validation_episodes,
     selection_key,
     validate,
 )
@@ -58,7 +62,8 @@ def test_open_water_setups_train_on_the_family_with_the_fixed_horizon(name):
     assert env.options.reward_horizon == "fixed"
     assert env.options.gamma == setup.algorithm_config.gamma
     assert env.single_observation_space == observation_space(setup.observation)
-    assert csv_fields(setup)[-len(FAMILY_FIELDS) :] == FAMILY_FIELDS
+    radar = RADAR_FIELDS if "radar" in name else ()
+    assert csv_fields(setup)[-len(FAMILY_FIELDS + radar) :] == FAMILY_FIELDS + radar
     assert setup_from_params(get_setup(STUDY[0]), setup_params(setup)) == setup
 
 
@@ -107,6 +112,32 @@ def test_selection_and_early_stop_count_the_family_set():
     assert family_passed({**weak, "family_successes": round(100 * FAMILY_STOP_RATE)})
 
 
+def test_selection_and_early_stop_count_the_harsh_radar_set():
+    family = {"successes": 15, "mean_return": -30.0, "family_successes": 96,
+              "family_n_episodes": 100}  # fmt: skip
+    clean_only = {**family, "radar_successes": 30, "radar_n_episodes": 50}
+    robust = {**family, "family_successes": 93, "radar_successes": 45, "radar_n_episodes": 50}
+    assert selection_key(robust) > selection_key(clean_only)  # 153 > 141 successes
+    assert family_passed(family) and not family_passed(clean_only)
+    assert not family_passed(robust)  # 93 < 95 on the family set
+    assert family_passed({**clean_only, "radar_successes": round(50 * RADAR_STOP_RATE)})
+
+
+def test_harsh_radar_set_is_the_family_at_its_strongest_radar_level():
+    episodes = radar_validation_episodes()
+    assert len(episodes) == RADAR_VALIDATION_SIZE == 50
+    assert episodes == radar_validation_episodes.__wrapped__()  # drawn again: the same
+    assert RADAR_VALIDATION_SEED not in {s.seed for s in STRESS_SETS} | {FAMILY_VALIDATION_SEED}
+    (strongest,) = [s.scenario for s in STRESS_SETS if s.name == "radar-noise"]
+    assert strongest is not None
+    for e in episodes:  # every degradation at the radar-noise stress set's level (or above)
+        assert e.radar.speckle == strongest.radar_speckle_range[1]
+        assert e.radar.noise_amplitude == strongest.radar_noise_range[1]
+        assert e.radar.missed_probability == strongest.radar_missed_range[1]
+        assert e.radar.clutter_probability == 0.001
+    assert len({len(e.obstacles) + 10 * len(e.vessels) for e in episodes}) > 5  # a varied set
+
+
 def test_validation_of_an_open_water_setup_reports_both_sets():
     setup = get_setup("rl-gaussian-scene-ow")
     agent = get_algorithm(setup.algorithm).make_agent(
@@ -116,8 +147,22 @@ def test_validation_of_an_open_water_setup_reports_both_sets():
     assert val["n_episodes"] == 15 and val["family_n_episodes"] == FAMILY_VALIDATION_SIZE
     assert 0 <= val["family_successes"] <= 100 and 0 <= val["family_collisions"] <= 100
     assert np.isfinite(val["family_min_distance_m"])
+    assert "radar_successes" not in val  # the harsh-radar set is for radar setups only
     pole = validate(agent, get_setup("rl-gaussian-positional").replace(observation="scene"))
     assert "family_successes" not in pole and pole["successes"] == val["successes"]
+
+
+def test_validation_of_an_open_water_radar_setup_adds_the_harsh_radar_set():
+    setup = get_setup("rl-gaussian-radar-ow")
+    agent = get_algorithm(setup.algorithm).make_agent(
+        observation_space(setup.observation), action_space(setup.action), setup.run_config(0)
+    )
+    val = validate(agent, setup)
+    assert val["family_n_episodes"] == 100 and val["radar_n_episodes"] == RADAR_VALIDATION_SIZE
+    assert 0 <= val["radar_collisions"] <= val["radar_n_episodes"] - val["radar_successes"]
+    assert selection_key(val)[0] == (
+        val["successes"] + val["family_successes"] + val["radar_successes"]
+    )
 
 
 @pytest.fixture(autouse=True)
