@@ -29,6 +29,7 @@ setup                          observation  action       network
                                                          the shipped ``il-gaussian-radar-ow``
 ``rl-gaussian-radar-ow-cont``  radar+goal   gaussian     rl-gaussian-radar-ow trained on from
                                                          the shipped model (new critic)
+``rl-categorical-radar-ow-cont``  radar+goal  categorical  the same for rl-categorical-radar-ow
 =============================  ===========  ===========  =====================================
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -289,6 +290,14 @@ SETUPS: dict[str, RLSetup] = {
             OW_RADAR_TRPO,
             task="open-water",
             init_policy="rl-gaussian-radar-ow",
+        ),
+        RLSetup(
+            "rl-categorical-radar-ow-cont",
+            "radar+goal",
+            "categorical",
+            OW_RADAR_TRPO,
+            task="open-water",
+            init_policy="rl-categorical-radar-ow",
         ),
     )
 }

@@ -86,7 +86,7 @@ def test_seeds_groups_and_trial_count() -> None:
     assert len(expand_setups(["rl", "il"])) == 8
     assert not any("-ow" in s for s in expand_setups(["rl", "radar", "positional"]))
     ow = expand_setups(["open-water"])
-    assert all("-ow" in s for s in ow) and len(ow) == 12  # 4 RL, 4 IL, 4 fine-tuned
+    assert all("-ow" in s for s in ow) and len(ow) == 13  # 4 RL, 4 IL, 3 fine-tuned, 2 continued
 
 
 def test_spec_round_trip_and_refusals() -> None:
