@@ -18,7 +18,9 @@ variant that changes only speed gives the same curve.
 variant                     what changes (against the code as it is)
 ==========================  =================================================================
 ``as is``                   nothing: the reference
-``batchnorm affine``        the eval-mode BatchNorm as one fused per-channel multiply-add
+``unfolded``                the update without ``networks.fused_passes`` (as before
+                            2026-12-03): ReLU, BatchNorm and the concatenation with the goal
+                            as passes of their own; "as is" against it is the saving
 ``fvp double backward``     Fisher-vector products by the double backward of the mean KL
                             (``kl_hessian_vector_product``, the MLP's; before: the CNN's too)
 ``channels-last``           images and conv weights in ``torch.channels_last``
@@ -54,7 +56,6 @@ from torch import Tensor
 
 import learning.algorithms.trpo as trpo
 from learning.algorithms.loop import IterationStats, iterate
-from learning.algorithms.networks import CNNTrunk
 from learning.algorithms.rollout import RolloutBatch, RolloutCollector
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig
 from learning.algorithms.trust_region import get_flat, kl_hessian_vector_product, trainable_params
@@ -64,16 +65,9 @@ from learning.experiments.validation import validate
 SETUP = "rl-gaussian-radar"
 
 
-def _batchnorm_affine(self: CNNTrunk, image: Tensor) -> Tensor:
-    """``CNNTrunk.image_features`` with the eval-mode BatchNorm as the per-channel affine map it
-    is, y = α x + β, α = γ / sqrt(σ² + ε), β = b − μ α, in one fused multiply-add (the same
-    forward values; its derivatives are elementwise products, not BatchNorm's kernels)."""
-    x, norm = torch.relu(self.conv(image)), self.norm
-    if norm.training or norm.running_var is None or norm.running_mean is None:
-        return norm(x).flatten(1)
-    alpha = norm.weight * torch.rsqrt(norm.running_var + norm.eps)
-    beta = norm.bias - norm.running_mean * alpha
-    return torch.addcmul(beta[:, None, None], x, alpha[:, None, None]).flatten(1)
+def _plain_passes(*nets: Any) -> contextlib.nullcontext[None]:
+    """``networks.fused_passes`` switched off: the update's passes as before 2026-12-03."""
+    return contextlib.nullcontext()
 
 
 def _bf16(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -103,8 +97,8 @@ def variant(name: str, agent: TRPOAgent, batch: RolloutBatch | None) -> Iterator
     """Apply variant ``name`` (module table) to ``agent`` for the duration of the block."""
     cfg = agent.config
     with contextlib.ExitStack() as stack:
-        if name == "batchnorm affine":
-            stack.enter_context(mock.patch.object(CNNTrunk, "image_features", _batchnorm_affine))
+        if name == "unfolded":
+            stack.enter_context(mock.patch.object(trpo, "fused_passes", _plain_passes))
         elif name == "fvp double backward":
             patch = mock.patch.object(trpo, "fisher_vector_product", kl_hessian_vector_product)
             stack.enter_context(patch)
@@ -129,7 +123,7 @@ def variant(name: str, agent: TRPOAgent, batch: RolloutBatch | None) -> Iterator
 
 VARIANTS = (
     "as is",
-    "batchnorm affine",
+    "unfolded",
     "fvp double backward",
     "channels-last",
     "bf16 critic",

@@ -29,7 +29,7 @@ import torch
 from gymnasium import spaces
 from torch import Tensor
 
-from learning.algorithms.base import config_from_dict
+from learning.algorithms.base import Stopwatch, config_from_dict
 from learning.algorithms.gae import gae
 from learning.algorithms.networks import (
     Critic,
@@ -132,6 +132,7 @@ class ActorCritic:
     STATE_FORMAT: ClassVar[str]
     NAME: ClassVar[str]
     config_type: ClassVar[type[Any]]
+    critic_optimizer: torch.optim.Optimizer  # built by the subclass
 
     def __init__(
         self, observation_space: spaces.Space, action_space: spaces.Space, config: Any
@@ -187,7 +188,7 @@ class ActorCritic:
     def critic_values(self, t: TensorObs, chunk: int = 4096) -> np.ndarray:
         """V(s) (M,) for normalised tensor observations (M, ...), ``chunk`` rows at a time."""
         M = next(iter(t.values())).shape[0] if isinstance(t, dict) else t.shape[0]
-        out = [self.critic(rows(t, torch.arange(i, min(M, i + chunk)))) for i in range(0, M, chunk)]
+        out = [self.critic(rows(t, slice(i, i + chunk))) for i in range(0, M, chunk)]
         return torch.cat(out).numpy()
 
     # -- learning --------------------------------------------------------------------------
@@ -231,6 +232,24 @@ class ActorCritic:
         if cfg.normalize_advantages and adv.numel() > 1:
             adv = (adv - adv.mean()) / (adv.std() + 1e-8)
         return TrainingBatch(raw_obs, obs, actions, adv, ret)
+
+    def fit_critic_and_finish(self, tb: TrainingBatch, clock: Stopwatch) -> float:
+        """The update's last steps, after the policy step: the critic's regression on the
+        λ-returns (``critic_s``), then :meth:`finish_update` (``batch_s``); the critic's loss."""
+        cfg = self.config
+        value_loss = fit_critic(
+            self.critic,
+            self.critic_optimizer,
+            tb.obs,
+            tb.returns,
+            cfg.critic_epochs,
+            cfg.critic_minibatch,
+            self.generator,
+        )
+        clock.lap("critic_s")
+        self.finish_update(tb)
+        clock.lap("batch_s")
+        return value_loss
 
     def finish_update(self, tb: TrainingBatch) -> None:
         """Between iterations: refresh the statistics the next rollout's policy will use (the

@@ -41,12 +41,13 @@ import torch
 from gymnasium import spaces
 from torch import Tensor, nn
 
-from learning.algorithms.actor_critic import ActorCritic, fit_critic
+from learning.algorithms.actor_critic import ActorCritic
 from learning.algorithms.base import Stopwatch, UpdateTimes
 from learning.algorithms.networks import (
     NetworkConfig,
     Policy,
     TensorObs,
+    fused_passes,
     rows,
 )
 from learning.algorithms.rollout import (
@@ -292,30 +293,20 @@ class PPOAgent(ActorCritic):
         """Steps 2-5 of the module docstring on one batch (:class:`PPOUpdateStats`). Inputs are
         checked first: non-finite data raises :class:`NonFiniteError` before any parameter
         changes."""
-        cfg = self.config
-        clock = Stopwatch()
-        tb = self.training_batch(batch)
-        clock.lap("batch_s")
-        step = ppo_step(
-            self.policy,
-            self.policy_optimizer,
-            tb.obs,
-            tb.actions,
-            tb.advantages,
-            cfg,
-            self.generator,
-        )
-        clock.lap("policy_step_s")
-        value_loss = fit_critic(
-            self.critic,
-            self.critic_optimizer,
-            tb.obs,
-            tb.returns,
-            cfg.critic_epochs,
-            cfg.critic_minibatch,
-            self.generator,
-        )
-        clock.lap("critic_s")
-        self.finish_update(tb)
-        clock.lap("batch_s")
-        return PPOUpdateStats(step, value_loss, clock.times())
+        with fused_passes(self.policy, self.critic):
+            cfg = self.config
+            clock = Stopwatch()
+            tb = self.training_batch(batch)
+            clock.lap("batch_s")
+            step = ppo_step(
+                self.policy,
+                self.policy_optimizer,
+                tb.obs,
+                tb.actions,
+                tb.advantages,
+                cfg,
+                self.generator,
+            )
+            clock.lap("policy_step_s")
+            value_loss = self.fit_critic_and_finish(tb, clock)
+            return PPOUpdateStats(step, value_loss, clock.times())

@@ -37,9 +37,9 @@ import torch
 from gymnasium import spaces
 from torch import Tensor
 
-from learning.algorithms.actor_critic import ActorCritic, fit_critic
+from learning.algorithms.actor_critic import ActorCritic
 from learning.algorithms.base import Stopwatch, UpdateTimes
-from learning.algorithms.networks import NetworkConfig, Policy, TensorObs, rows
+from learning.algorithms.networks import NetworkConfig, Policy, TensorObs, fused_passes, rows
 from learning.algorithms.rollout import NonFiniteError, RolloutBatch
 from learning.algorithms.trust_region import (
     LineSearchResult,
@@ -237,22 +237,12 @@ class TRPOAgent(ActorCritic):
         """Steps 2-5 of the module docstring on one batch (:class:`TRPOUpdateStats`). Inputs are
         checked first: non-finite data raises :class:`NonFiniteError` before any parameter
         changes."""
-        cfg = self.config
-        clock = Stopwatch()
-        tb = self.training_batch(batch)
-        clock.lap("batch_s")
-        step = trpo_step(self.policy, tb.obs, tb.actions, tb.advantages, cfg, self.generator)
-        clock.lap("policy_step_s")
-        value_loss = fit_critic(
-            self.critic,
-            self.critic_optimizer,
-            tb.obs,
-            tb.returns,
-            cfg.critic_epochs,
-            cfg.critic_minibatch,
-            self.generator,
-        )
-        clock.lap("critic_s")
-        self.finish_update(tb)
-        clock.lap("batch_s")
-        return TRPOUpdateStats(step, value_loss, clock.times())
+        with fused_passes(self.policy, self.critic):
+            cfg = self.config
+            clock = Stopwatch()
+            tb = self.training_batch(batch)
+            clock.lap("batch_s")
+            step = trpo_step(self.policy, tb.obs, tb.actions, tb.advantages, cfg, self.generator)
+            clock.lap("policy_step_s")
+            value_loss = self.fit_critic_and_finish(tb, clock)
+            return TRPOUpdateStats(step, value_loss, clock.times())

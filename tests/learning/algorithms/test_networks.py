@@ -12,6 +12,7 @@ from learning.algorithms.distributions import Categorical, DiagGaussian
 from learning.algorithms.networks import (
     CNNTrunk,
     NetworkConfig,
+    fused_passes,
     make_critic,
     make_policy,
     refresh_batchnorm,
@@ -91,6 +92,82 @@ def test_balanced_fusion_gives_the_goal_the_image_share_of_fc1_input_variance() 
     image_power, goal_power = image.var(0).sum(), goal.var(0).sum()
     assert 0.7 < float(goal_power / image_power) < 1.4
     assert make_policy(space, GAUSSIAN).trunk.vector_scale == 1.0  # the study's fusion by default
+
+
+def _plain_trunk(trunk: CNNTrunk, obs: dict[str, torch.Tensor]) -> torch.Tensor:
+    """The trunk as the module docstring writes it: Conv → ReLU → BatchNorm → [·, vectors] →
+    MLP, every step a pass of its own."""
+    x = trunk.norm(torch.relu(trunk.conv(obs["radar"]))).flatten(1)
+    return trunk.fc(torch.cat([x, trunk.vector_scale * obs["goal"]], dim=-1))
+
+
+def test_fused_passes_are_the_conv_relu_batchnorm_trunk() -> None:
+    torch.manual_seed(5)
+    policy = make_policy(_radar_goal(), GAUSSIAN, NetworkConfig(balanced_fusion=True))
+    trunk = policy.trunk
+    assert isinstance(trunk, CNNTrunk)
+    obs = _dict_obs(32)
+    with torch.no_grad():  # running statistics away from (0, 1), two channels with γ < 0
+        trunk.norm.running_mean.uniform_(0.0, 0.5)
+        trunk.norm.running_var.uniform_(0.2, 2.0)
+        trunk.norm.weight.uniform_(0.5, 1.5)[:2].neg_()
+        trunk.norm.bias.uniform_(-0.3, 0.3)
+    trunk.eval()
+    assert trunk.eval_affine() is not None
+    with torch.no_grad():  # outside fused_passes: the plain passes, bit for bit
+        torch.testing.assert_close(trunk(obs), _plain_trunk(trunk, obs), rtol=0, atol=0)
+    trunk.fused = True
+    params = list(trunk.parameters())
+    # values and reverse-mode gradients of every parameter
+    out, plain = trunk(obs), _plain_trunk(trunk, obs)
+    torch.testing.assert_close(out, plain, rtol=1e-5, atol=1e-6)
+    weights = torch.randn_like(plain)
+    grads = torch.autograd.grad((out * weights).sum(), params)
+    plain_grads = torch.autograd.grad((plain * weights).sum(), params)
+    for g, p in zip(grads, plain_grads, strict=True):  # float32 rounding of sums over 32 rows
+        torch.testing.assert_close(g, p, rtol=1e-4, atol=1e-5 * float(p.abs().max()))
+    # forward mode (J v of the Fisher-vector product)
+    names = [n for n, _ in trunk.named_parameters()]
+    primals = tuple(p.detach() for p in params)
+    tangents = tuple(torch.randn_like(p) for p in primals)
+
+    def folded(*values: torch.Tensor) -> torch.Tensor:
+        out: torch.Tensor = torch.func.functional_call(
+            trunk, dict(zip(names, values, strict=True)), (obs,)
+        )
+        return out
+
+    class Plain(torch.nn.Module):
+        def __init__(self) -> None:
+            super().__init__()
+            self.trunk = trunk
+
+        def forward(self, o: dict[str, torch.Tensor]) -> torch.Tensor:
+            return _plain_trunk(self.trunk, o)
+
+    def unfolded(*values: torch.Tensor) -> torch.Tensor:
+        by_name = {f"trunk.{n}": v for n, v in zip(names, values, strict=True)}
+        out: torch.Tensor = torch.func.functional_call(Plain(), by_name, (obs,))
+        return out
+
+    jv = torch.func.jvp(folded, primals, tangents)[1]
+    jv_plain = torch.func.jvp(unfolded, primals, tangents)[1]
+    torch.testing.assert_close(jv, jv_plain, rtol=1e-4, atol=1e-5 * float(jv_plain.abs().max()))
+    # train mode (batch statistics) runs the plain passes
+    trunk.train()
+    assert trunk.eval_affine() is None
+    torch.testing.assert_close(trunk(obs), _plain_trunk(trunk, obs), rtol=0, atol=0)
+
+
+def test_fused_passes_hold_only_within_the_block() -> None:
+    policy = make_policy(_radar_goal(), CATEGORICAL)
+    critic = make_critic(_radar_goal())
+    trunks = [policy.trunk, critic.trunk]
+    assert not any(t.fused for t in trunks)
+    with pytest.raises(RuntimeError), fused_passes(policy, critic):
+        assert all(t.fused for t in trunks)
+        raise RuntimeError("an update that fails")
+    assert not any(t.fused for t in trunks)
 
 
 def test_cnn_image_shape_is_a_parameter() -> None:
