@@ -37,6 +37,7 @@ from learning.experiments.setups import setup_from_params
 from learning.experiments.train_rl import open_water_fields
 from learning.experiments.validation import (
     RunResult,
+    extra_successes,
     family_passed,
     finish_run,
     open_water_summary,
@@ -120,7 +121,8 @@ def validate_il(
     :func:`learning.experiments.validation.validation_summary` and the path distance to the
     expert (m); with ``extra_specs`` (run in the same batch) also ``selection_successes``, the
     successes on ``specs`` and ``extra_specs`` together; for an open-water setup also the
-    family set's ``family_*`` entries (a radar one also the harsh-radar set's ``radar_*``:
+    family and crowded sets' ``family_*`` and ``crowded_*`` entries (a radar one also the
+    harsh-radar set's ``radar_*``:
     :func:`learning.experiments.validation.open_water_summary`)."""
     recs = policy_records(agent, setup, [*specs, *extra_specs])
     val = {
@@ -450,12 +452,13 @@ def _rank(rec: dict[str, Any]) -> tuple[int, int, float]:
     choose among many 15/15 checkpoints), then on the 15, then the most expert-like path (the
     point of IL). A record from before the selection set (a resumed older run) ranks as if it
     had failed every extra episode. An open-water run's record (``family_successes``) ranks by
-    the selection's, the family set's and (radar) the harsh-radar set's successes together, then
+    the selection's, the family set's, the crowded set's and (radar) the harsh-radar set's
+    successes together, then
     the 15's, then the mean return: never by likeness, which its closing comparison measures
     (issue 18)."""
     selection = int(rec.get("selection_successes", rec["successes"]))
     if "family_successes" in rec:
-        total = selection + int(rec["family_successes"]) + int(rec.get("radar_successes", 0))
+        total = selection + extra_successes(rec)
         return total, int(rec["successes"]), float(rec["mean_return"])
     d = rec.get("path_distance_m", math.inf)
     return selection, int(rec["successes"]), -d if math.isfinite(d) else -math.inf

@@ -8,8 +8,9 @@ checkpoints, early stop, and the run's files (``log.csv``, ``curve.png``, ``late
 value_loss), then :data:`VALIDATION_FIELDS` (filled on validation iterations), then
 :data:`TIME_FIELDS`: where the iteration's wall-clock went, s (rollout, batch, policy step,
 critic; :mod:`learning.algorithms.loop`), and for a setup on the open-water family
-:data:`FAMILY_FIELDS` (its family validation set, :mod:`learning.experiments.validation`), for a
-radar one there also :data:`RADAR_FIELDS` (its harsh-radar validation set); see
+:data:`FAMILY_FIELDS` (its family validation set, :mod:`learning.experiments.validation`) and
+:data:`CROWDED_FIELDS` (its crowded set), for a radar one there also :data:`RADAR_FIELDS` (its
+harsh-radar validation set); see
 :func:`open_water_fields`.
 """
 
@@ -48,6 +49,7 @@ from usvsim.common.fileio import remove_stale_temporaries
 
 __all__ = [
     "COMMON_FIELDS",
+    "CROWDED_FIELDS",
     "FAMILY_FIELDS",
     "RADAR_FIELDS",
     "TIME_FIELDS",
@@ -67,15 +69,18 @@ FAMILY_FIELDS = (  # open-water setups: validation.family_summary
     "val_family_collisions",
     "val_family_min_distance_m",
 )
+CROWDED_FIELDS = tuple(f.replace("_family_", "_crowded_") for f in FAMILY_FIELDS)
 RADAR_FIELDS = tuple(f.replace("_family_", "_radar_") for f in FAMILY_FIELDS)  # radar setups
 
 
 def open_water_fields(setup: Any) -> tuple[str, ...]:
     """The validation columns a setup on the open-water family adds (RL and IL): the family
-    set's, and for a radar observation the harsh-radar set's; () for the pole task."""
+    and crowded sets', and for a radar observation the harsh-radar set's; () for the pole
+    task."""
     if setup.task != "open-water":
         return ()
-    return FAMILY_FIELDS + (RADAR_FIELDS if setup.observation.startswith("radar") else ())
+    radar = RADAR_FIELDS if setup.observation.startswith("radar") else ()
+    return FAMILY_FIELDS + CROWDED_FIELDS + radar
 
 
 def csv_fields(setup: RLSetup) -> tuple[str, ...]:

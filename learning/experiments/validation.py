@@ -20,6 +20,14 @@ set alone cannot tell a checkpoint that holds up under the strongest noise from 
 not (session 7: two checkpoints of one run with the same 15 + family successes scored 98 % and
 89 % on ``radar-noise``). Its ``radar_*`` entries join the record, its successes the selection
 key, and an early stop also needs :data:`RADAR_STOP_RATE` of it.
+
+Every setup on the family is also validated on a crowded set (:func:`crowded_validation_episodes`:
+:data:`CROWDED_VALIDATION_SIZE` episodes of :func:`crowded_family`, each member with its most
+obstacles and vessels, the study's lone pole left out, from their own seed). A tenth of the
+family's episodes carry five or more obstacles and vessels, so the family set barely tells a
+checkpoint that threads a crowd from one that does not (session 10: the stress suite's
+``everything`` set was the one set the best scene policy missed). Its ``crowded_*`` entries join
+the record and its successes the selection key; the early stop does not look at it.
 """
 
 from __future__ import annotations
@@ -44,6 +52,8 @@ from usvsim.task.openwater_env import OPEN_WATER_FAMILY, ScenarioMixture, draw_f
 from usvsim.task.scenario import EpisodeSpec
 
 __all__ = [
+    "CROWDED_VALIDATION_SEED",
+    "CROWDED_VALIDATION_SIZE",
     "FAMILY_STOP_RATE",
     "FAMILY_VALIDATION_SEED",
     "FAMILY_VALIDATION_SIZE",
@@ -51,6 +61,8 @@ __all__ = [
     "RADAR_VALIDATION_SEED",
     "RADAR_VALIDATION_SIZE",
     "RunResult",
+    "crowded_family",
+    "crowded_validation_episodes",
     "family_passed",
     "family_validation_episodes",
     "harsh_radar_family",
@@ -70,6 +82,8 @@ FAMILY_STOP_RATE = 0.95  # -, family success an early stop needs (module docstri
 RADAR_VALIDATION_SEED = zlib.crc32(b"radar-validation")  # none of the stress sets' seeds either
 RADAR_VALIDATION_SIZE = 50  # episodes: about 8 s of a radar validation on this CPU
 RADAR_STOP_RATE = 0.90  # -, harsh-radar success an early stop needs (issue 18's radar bar)
+CROWDED_VALIDATION_SEED = zlib.crc32(b"crowded-validation")  # none of the stress sets' seeds
+CROWDED_VALIDATION_SIZE = 50  # episodes
 _RADAR_RANGES = (
     "radar_clutter_range",
     "radar_speckle_range",
@@ -101,6 +115,39 @@ def radar_validation_episodes(n: int = RADAR_VALIDATION_SIZE) -> tuple[OpenWater
     return draw_family(harsh_radar_family(), RADAR_VALIDATION_SEED, n)
 
 
+def crowded_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixture:
+    """``family`` with each member's obstacle and vessel counts fixed at the most it draws; the
+    members with neither (the study's lone pole) left out, the others keeping their weights."""
+    kept = [
+        (m, w, name)
+        for m, w, name in zip(family.members, family.probabilities, family.names, strict=True)
+        if m.n_extra_range[1] > 0 or m.n_vessels_range[1] > 0
+    ]
+    if not kept:
+        raise ValueError("crowded_family: no member of the family has obstacles or vessels")
+    members = tuple(
+        replace(
+            m,
+            n_extra_range=(m.n_extra_range[1],) * 2,
+            n_vessels_range=(m.n_vessels_range[1],) * 2,
+        )
+        for m, _, _ in kept
+    )
+    return replace(
+        family,
+        members=members,
+        weights=tuple(float(w) for _, w, _ in kept),
+        names=tuple(name for _, _, name in kept),
+    )
+
+
+@functools.lru_cache(maxsize=4)
+def crowded_validation_episodes(n: int = CROWDED_VALIDATION_SIZE) -> tuple[OpenWaterEpisode, ...]:
+    """The fixed crowded validation set (module docstring): ``n`` episodes of
+    :func:`crowded_family`, episode k from ``default_rng([CROWDED_VALIDATION_SEED, k])``."""
+    return draw_family(crowded_family(), CROWDED_VALIDATION_SEED, n)
+
+
 def _on_family(setup: Any) -> bool:
     return getattr(setup, "task", "pole") == "open-water"
 
@@ -123,11 +170,14 @@ def validate(
 
 
 def open_water_summary(agent: Agent, setup: Any) -> dict[str, float]:
-    """The family set's ``family_*`` entries for a setup on the open-water family, and the
-    harsh-radar set's ``radar_*`` entries for a radar one (module docstring); {} otherwise."""
+    """The family set's ``family_*`` and the crowded set's ``crowded_*`` entries for a setup on
+    the open-water family, and the harsh-radar set's ``radar_*`` entries for a radar one (module
+    docstring); {} otherwise."""
     out: dict[str, float] = {}
     if _on_family(setup):
         out.update(family_summary(family_records(agent, setup)))
+        crowded = family_records(agent, setup, crowded_validation_episodes())
+        out.update(family_summary(crowded, "crowded_"))
     if _sees_radar(setup):
         harsh = family_records(agent, setup, radar_validation_episodes())
         out.update(family_summary(harsh, "radar_"))
@@ -159,10 +209,16 @@ def family_summary(records: Sequence[OpenWaterRecord], prefix: str = "family_") 
 
 
 def selection_key(val: dict[str, Any]) -> tuple[int, float]:
-    """How validations rank for ``best.pt``: successes (the study's 15, plus the family set's
-    and the harsh-radar set's where validated on them), then the mean return on the 15."""
-    successes = int(val["successes"]) + int(val.get("family_successes", 0))
-    return successes + int(val.get("radar_successes", 0)), float(val["mean_return"])
+    """How validations rank for ``best.pt``: successes (the study's 15, plus the family set's,
+    the crowded set's and the harsh-radar set's where validated on them), then the mean return
+    on the 15."""
+    return int(val["successes"]) + extra_successes(val), float(val["mean_return"])
+
+
+def extra_successes(val: dict[str, Any]) -> int:
+    """Successes of a validation on the family's sets (family, crowded, harsh radar; 0 for
+    those it was not validated on): the part of the selection key beyond the study's sets."""
+    return sum(int(val.get(f"{prefix}_successes", 0)) for prefix in ("family", "crowded", "radar"))
 
 
 def family_passed(val: dict[str, Any]) -> bool:

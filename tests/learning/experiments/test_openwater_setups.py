@@ -14,14 +14,18 @@ import torch
 from learning.algorithms.networks import SetTrunk
 from learning.algorithms.registry import get_algorithm
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params, setup_params
-from learning.experiments.train_rl import FAMILY_FIELDS, RADAR_FIELDS, csv_fields
+from learning.experiments.train_rl import CROWDED_FIELDS, FAMILY_FIELDS, RADAR_FIELDS, csv_fields
 from learning.experiments.validation import (
+    CROWDED_VALIDATION_SEED,
+    CROWDED_VALIDATION_SIZE,
     FAMILY_STOP_RATE,
     FAMILY_VALIDATION_SEED,
     FAMILY_VALIDATION_SIZE,
     RADAR_STOP_RATE,
     RADAR_VALIDATION_SEED,
     RADAR_VALIDATION_SIZE,
+    crowded_family,
+    crowded_validation_episodes,
     family_passed,
     family_validation_episodes,
     radar_validation_episodes,
@@ -62,8 +66,8 @@ def test_open_water_setups_train_on_the_family_with_the_fixed_horizon(name):
     assert env.options.reward_horizon == "fixed"
     assert env.options.gamma == setup.algorithm_config.gamma
     assert env.single_observation_space == observation_space(setup.observation)
-    radar = RADAR_FIELDS if "radar" in name else ()
-    assert csv_fields(setup)[-len(FAMILY_FIELDS + radar) :] == FAMILY_FIELDS + radar
+    ow = FAMILY_FIELDS + CROWDED_FIELDS + (RADAR_FIELDS if "radar" in name else ())
+    assert csv_fields(setup)[-len(ow) :] == ow
     assert setup_from_params(get_setup(STUDY[0]), setup_params(setup)) == setup
 
 
@@ -123,6 +127,35 @@ def test_selection_and_early_stop_count_the_harsh_radar_set():
     assert family_passed({**clean_only, "radar_successes": round(50 * RADAR_STOP_RATE)})
 
 
+def test_selection_counts_the_crowded_set_and_the_early_stop_does_not():
+    family = {"successes": 15, "mean_return": -30.0, "family_successes": 96,
+              "family_n_episodes": 100}  # fmt: skip
+    crowd_shy = {**family, "crowded_successes": 30, "crowded_n_episodes": 50}
+    threads = {**family, "family_successes": 94, "crowded_successes": 45}
+    assert selection_key(threads) > selection_key(crowd_shy)  # 154 > 141 successes
+    assert family_passed(crowd_shy) and not family_passed(threads)
+
+
+def test_crowded_set_is_the_family_at_its_most_obstacles_and_vessels():
+    episodes = crowded_validation_episodes()
+    assert len(episodes) == CROWDED_VALIDATION_SIZE == 50
+    assert episodes == crowded_validation_episodes.__wrapped__()  # drawn again: the same
+    seeds = {s.seed for s in STRESS_SETS} | {FAMILY_VALIDATION_SEED, RADAR_VALIDATION_SEED}
+    assert CROWDED_VALIDATION_SEED not in seeds
+    crowded = crowded_family()
+    assert (
+        "study" not in crowded.names and len(crowded.members) == len(OPEN_WATER_FAMILY.members) - 1
+    )
+    by_name = dict(zip(OPEN_WATER_FAMILY.names, OPEN_WATER_FAMILY.members, strict=True))
+    for name, member in zip(crowded.names, crowded.members, strict=True):
+        original = by_name[name]
+        assert member.n_extra_range == (original.n_extra_range[1],) * 2
+        assert member.n_vessels_range == (original.n_vessels_range[1],) * 2
+    busiest = max(len(e.obstacles) + len(e.vessels) for e in family_validation_episodes())
+    assert max(len(e.obstacles) + len(e.vessels) for e in episodes) == busiest == 9
+    assert min(len(e.obstacles) + len(e.vessels) for e in episodes) >= 2  # never a lone pole
+
+
 def test_harsh_radar_set_is_the_family_at_its_strongest_radar_level():
     episodes = radar_validation_episodes()
     assert len(episodes) == RADAR_VALIDATION_SIZE == 50
@@ -148,6 +181,10 @@ def test_validation_of_an_open_water_setup_reports_both_sets():
     assert 0 <= val["family_successes"] <= 100 and 0 <= val["family_collisions"] <= 100
     assert np.isfinite(val["family_min_distance_m"])
     assert "radar_successes" not in val  # the harsh-radar set is for radar setups only
+    assert val["crowded_n_episodes"] == CROWDED_VALIDATION_SIZE
+    assert selection_key(val)[0] == (
+        val["successes"] + val["family_successes"] + val["crowded_successes"]
+    )
     pole = validate(agent, get_setup("rl-gaussian-positional").replace(observation="scene"))
     assert "family_successes" not in pole and pole["successes"] == val["successes"]
 
@@ -161,7 +198,10 @@ def test_validation_of_an_open_water_radar_setup_adds_the_harsh_radar_set():
     assert val["family_n_episodes"] == 100 and val["radar_n_episodes"] == RADAR_VALIDATION_SIZE
     assert 0 <= val["radar_collisions"] <= val["radar_n_episodes"] - val["radar_successes"]
     assert selection_key(val)[0] == (
-        val["successes"] + val["family_successes"] + val["radar_successes"]
+        val["successes"]
+        + val["family_successes"]
+        + val["crowded_successes"]
+        + val["radar_successes"]
     )
 
 
