@@ -213,3 +213,29 @@ def bridge_args_offline(tmp_path: Path) -> Any:
     from usvsim.mavlink.bridge import BridgeArgs
 
     return BridgeArgs(log_csv=str(tmp_path / "decisions.csv"), tlog="")
+
+
+class SlowDecisions(AvoidingHelmsman):
+    """Decisions 3 to 5 take ``pause_s`` of wall clock each (a cold cache, a loaded machine)."""
+
+    def __init__(self, pause_s: float) -> None:
+        self.pause_s, self.calls = pause_s, 0
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        self.calls += 1
+        if 3 <= self.calls <= 5:
+            time.sleep(self.pause_s)
+        return super().act(obs)
+
+
+def test_a_slow_decision_is_not_stale_telemetry(tmp_path: Path) -> None:
+    # 1 s of wall clock is 25 vehicle s at this SITL's speed-up, far past stale_s (1.5 vehicle
+    # s) and stale_wall_min_s (0.3 s); the vehicle kept talking meanwhile, and its packets wait
+    # in the socket: the bridge reads them before it judges the telemetry's age
+    mission, _ = episode_mission()
+    helmsman = SlowDecisions(pause_s=1.0)
+    with sitl_running() as sitl:
+        bridge = Bridge(bridge_args(sitl, tmp_path), mission, helmsman)
+        result = bridge.run(max_wall_s=30.0)
+    assert helmsman.calls > 5 and result.reason == "goal reached"
+    assert "failsafe" not in [r["event"] for r in events(tmp_path)[:-2]]
