@@ -92,7 +92,9 @@ class TrainArgs:
     n_envs: int = field(  # boats per batch (batch = n_envs x 64 decisions); 0: setup default
         default=0, metadata=bounds(ge=1, le=65_536, zero_ok=True)
     )
-    time_budget_s: float = field(default=0.0, metadata=bounds(ge=0))  # wall-clock limit, s; 0: none
+    time_budget_s: float = field(  # the run's wall-clock limit, s (resumes: in all); 0: none
+        default=0.0, metadata=bounds(ge=0)
+    )
     threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
     quiet: bool = False  # no progress bar
     demos: str = ""  # il-*: folder of your demo_*.csv files; default: the shipped demonstrations

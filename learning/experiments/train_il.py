@@ -195,7 +195,7 @@ class _ILRun:
         stop = False
         if s.iteration % self.validate_every == 0 or s.iteration == self.last_iteration:
             stop = self._validate(s, agent, row, wall)
-        if not stop and 0 < self.time_budget_s <= self.session_s():
+        if not stop and 0 < self.time_budget_s <= wall:  # the run's wall-clock, resumes included
             self.stop_reason, stop = "time budget", True
         return stop
 
@@ -296,8 +296,9 @@ def train_il(
     ``latest.gail.pt`` its discriminator state; ``resume`` continues from those two with the
     setup, hyperparameters and seed stored there, and keeps ``log.csv`` up to their iteration.
     Validation every ``validate_every`` iterations (0: the setup's) and at the last one; the
-    run stops after ``stop_after`` consecutive 15/15 validations (0: never) or once this
-    session has run ``time_budget_s`` (0: no limit). ``quiet``: no progress bar; ``log``
+    run stops after ``stop_after`` consecutive 15/15 validations (0: never) or once the run
+    has taken ``time_budget_s`` of wall-clock (0: no limit; ``log.csv``'s ``wall_time_s``,
+    a resumed part counted on from its checkpoint's). ``quiet``: no progress bar; ``log``
     prints one line per validation. ``threads``: torch CPU threads (on 2 shared cores, 2
     threads made an iteration 20× slower than 1 when measured).
 

@@ -140,7 +140,7 @@ class _Run:
         stop = False
         if stats.iteration % self.validate_every == 0:
             stop = self._validate(stats, agent, row, wall)
-        if not stop and self.time_budget_s > 0 and stats.wall_time_s >= self.time_budget_s:
+        if not stop and 0 < self.time_budget_s <= wall:  # the run's wall-clock, resumes included
             self.stop_reason, stop = "time budget", True
         return stop
 
@@ -238,8 +238,10 @@ def train_rl(
     ``init_policy``, a shipped model's name; both empty: new networks), with its own critic.
 
     Validation every ``validate_every`` iterations (0: the setup's); the run stops after
-    ``stop_after`` consecutive 15/15 validations (0: never) or once it has run
-    ``time_budget_s`` (0: no limit). ``resume`` continues from ``out_dir/latest.pt`` with the
+    ``stop_after`` consecutive 15/15 validations (0: never) or once the run has taken
+    ``time_budget_s`` of wall-clock (0: no limit), counted as ``log.csv``'s ``wall_time_s``:
+    from the run's start, a resumed part added to the time up to the checkpoint it resumed
+    from (as ``iterations`` counts the run's iterations, not a session's). ``resume`` continues from ``out_dir/latest.pt`` with the
     setup, hyperparameters and seed stored there (the ``seed`` argument is then ignored;
     ``summary.json`` records the seed really used) and keeps ``log.csv`` up to its iteration.
     ``train_args`` go into the checkpoints, ``command`` into ``summary.json``.

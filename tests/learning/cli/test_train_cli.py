@@ -77,6 +77,17 @@ def test_resume_continues_the_run(tmp_path: Path) -> None:
     assert [h["iteration"] for h in ckpt.history] == [1, 2, 3]
 
 
+def test_time_budget_counts_the_whole_run_across_a_resume(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    spent = float(_csv(tmp_path / "log.csv")[-1]["wall_time_s"])
+    # the budget is already spent by the first part: the resumed part stops after one iteration
+    assert run(_args(tmp_path, iterations=6, resume=True, time_budget_s=spent)) == 0
+    rows = _csv(tmp_path / "log.csv")
+    assert [int(r["iteration"]) for r in rows] == [1, 2, 3]
+    assert float(rows[-1]["wall_time_s"]) > spent
+    assert json.loads((tmp_path / "summary.json").read_text())["stop_reason"] == "time budget"
+
+
 def test_existing_run_is_not_overwritten_without_resume(tmp_path: Path) -> None:
     assert run(_args(tmp_path)) == 0
     with pytest.raises(SystemExit, match="exists: use --resume"):

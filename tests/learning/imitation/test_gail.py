@@ -208,5 +208,11 @@ def test_il_run_validates_checkpoints_and_resumes(tmp_path) -> None:  # type: ig
     assert [h["iteration"] for h in resumed.history] == [1, 2, 3]
     latest = load_checkpoint(tmp_path / "latest.pt")
     assert latest.setup == "il-gaussian-positional" and int(latest.agent["iteration"]) == 3
+    spent = float(resumed.history[-1]["wall_time_s"])  # a budget counts the whole run: spent
+    again = train_il(setup, tmp_path, iterations=6, resume=True, time_budget_s=spent,
+                     log=lambda _: None)  # fmt: skip
+    assert [h["iteration"] for h in again.history] == [1, 2, 3, 4]
+    assert again.stop_reason == "time budget"
+    assert int(load_checkpoint(tmp_path / "latest.pt").agent["iteration"]) == 4
     helmsman = load_helmsman(tmp_path / "best.pt")
     assert (helmsman.observation, helmsman.action) == ("positional", "gaussian")
