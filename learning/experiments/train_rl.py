@@ -242,8 +242,9 @@ def train_rl(
     ``time_budget_s`` of wall-clock (0: no limit), counted as ``log.csv``'s ``wall_time_s``:
     from the run's start, a resumed part added to the time up to the checkpoint it resumed
     from (as ``iterations`` counts the run's iterations, not a session's). ``resume``
-    continues from ``out_dir/latest.pt`` with the setup, hyperparameters and seed stored there (the ``seed`` argument is then ignored;
-    ``summary.json`` records the seed really used) and keeps ``log.csv`` up to its iteration.
+    continues from ``out_dir/latest.pt`` with the setup, hyperparameters and seed stored
+    there (the ``seed`` argument is then ignored; ``summary.json`` records the seed really
+    used) and keeps ``log.csv`` up to its iteration.
     ``train_args`` go into the checkpoints, ``command`` into ``summary.json``.
 
     Ctrl-C (``KeyboardInterrupt``, also SIGTERM under ``usvsim``) ends the run like a stop rule:
