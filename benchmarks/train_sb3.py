@@ -66,6 +66,7 @@ import torch
 from sb3_contrib import TRPO
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from stable_baselines3.common.vec_env import VecEnvWrapper, VecNormalize
@@ -246,7 +247,7 @@ def sb3_trpo(setup_name: str, seed: int, sub_sampling_factor: int | None = None)
             "features_extractor_kwargs": {"image_shape": env.image_shape, "network": c.network},
             "share_features_extractor": False,  # usvsim: separate policy and critic trunks
         }
-    return TRPO(
+    model = TRPO(
         UsvsimMlpPolicy,
         env,
         learning_rate=c.critic_lr,
@@ -264,12 +265,20 @@ def sb3_trpo(setup_name: str, seed: int, sub_sampling_factor: int | None = None)
         policy_kwargs=policy_kwargs,
         seed=seed,
     )
+    return without_log_folder(model)
+
+
+def without_log_folder(model: Any) -> Any:
+    """``model`` with a logger that writes nothing: by default SB3 makes a new tempdir/SB3-<time>
+    folder at each ``learn`` call, and the peer comparison calls it once per iteration."""
+    model.set_logger(Logger(folder=None, output_formats=[]))
+    return model
 
 
 def run_sb3(trainer: str, seed: int, max_steps: int, every: int) -> dict[str, Any]:
     if trainer == "sb3-ppo":
         env = make_sb3_vec_env(8, seed=seed)
-        model: Any = PPO("MlpPolicy", env, seed=seed)
+        model: Any = without_log_folder(PPO("MlpPolicy", env, seed=seed))
     else:
         model = sb3_trpo(SETUP, seed, 1 if trainer.endswith("full-fisher") else None)
     progress = Progress(max_steps)

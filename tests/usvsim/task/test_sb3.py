@@ -20,6 +20,13 @@ from stable_baselines3.common.env_util import make_vec_env
 from usvsim.task.sb3 import SB3Helmsman, SB3VecEnv, make_sb3_vec_env
 
 
+@pytest.fixture(autouse=True)
+def sb3_logs_in_tmp_path(tmp_path, monkeypatch):
+    """SB3 makes a log folder per ``learn`` call, by default a new tempdir/SB3-<time>: here the
+    test's own temporary folder, which pytest cleans up."""
+    monkeypatch.setenv("SB3_LOGDIR", str(tmp_path / "sb3"))
+
+
 def test_make_vec_env_with_defaults_steps_and_renders():
     env = make_vec_env(usvsim.ENV_ID, n_envs=4, seed=0)
     obs = env.reset()
