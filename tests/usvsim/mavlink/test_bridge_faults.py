@@ -229,11 +229,11 @@ class SlowDecisions(AvoidingHelmsman):
 
 
 def test_a_slow_decision_is_not_stale_telemetry(tmp_path: Path) -> None:
-    # 1 s of wall clock is 25 vehicle s at this SITL's speed-up, far past stale_s (1.5 vehicle
+    # 0.5 s of wall clock is 12 vehicle s at this SITL's speed-up, far past stale_s (1.5 vehicle
     # s) and stale_wall_min_s (0.3 s); the vehicle kept talking meanwhile, and its packets wait
     # in the socket: the bridge reads them before it judges the telemetry's age
     mission, _ = episode_mission()
-    helmsman = SlowDecisions(pause_s=1.0)
+    helmsman = SlowDecisions(pause_s=0.5)
     with sitl_running() as sitl:
         bridge = Bridge(bridge_args(sitl, tmp_path), mission, helmsman)
         result = bridge.run(max_wall_s=30.0)
