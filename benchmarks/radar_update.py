@@ -21,6 +21,9 @@ variant                     what changes (against the code as it is)
 ``unfolded``                the update without ``networks.fused_passes`` (as before
                             2026-12-03): ReLU, BatchNorm and the concatenation with the goal
                             as passes of their own; "as is" against it is the saving
+``fvp torch.func.jvp``      J v of the Fisher-vector products by ``torch.func.jvp`` (the
+                            forward pass again per product, as before 2026-12-03), not by
+                            ``linearized.linearize_cnn_policy`` (the forward pass kept)
 ``fvp double backward``     Fisher-vector products by the double backward of the mean KL
                             (``kl_hessian_vector_product``, the MLP's; before: the CNN's too)
 ``channels-last``           images and conv weights in ``torch.channels_last``
@@ -54,6 +57,7 @@ from unittest import mock
 import torch
 from torch import Tensor
 
+import learning.algorithms.linearized as linearized
 import learning.algorithms.trpo as trpo
 from learning.algorithms.loop import IterationStats, iterate
 from learning.algorithms.rollout import RolloutBatch, RolloutCollector
@@ -99,6 +103,8 @@ def variant(name: str, agent: TRPOAgent, batch: RolloutBatch | None) -> Iterator
     with contextlib.ExitStack() as stack:
         if name == "unfolded":
             stack.enter_context(mock.patch.object(trpo, "fused_passes", _plain_passes))
+        elif name == "fvp torch.func.jvp":
+            stack.enter_context(mock.patch.object(linearized, "supports", lambda policy: False))
         elif name == "fvp double backward":
             patch = mock.patch.object(trpo, "fisher_vector_product", kl_hessian_vector_product)
             stack.enter_context(patch)
@@ -124,6 +130,7 @@ def variant(name: str, agent: TRPOAgent, batch: RolloutBatch | None) -> Iterator
 VARIANTS = (
     "as is",
     "unfolded",
+    "fvp torch.func.jvp",
     "fvp double backward",
     "channels-last",
     "bf16 critic",

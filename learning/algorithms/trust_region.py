@@ -15,6 +15,7 @@ from typing import Any
 import torch
 from torch import Tensor, nn
 
+from learning.algorithms import linearized
 from learning.algorithms.networks import CNNTrunk, Policy, TensorObs
 
 __all__ = [
@@ -26,6 +27,7 @@ __all__ = [
     "jacobian_fisher_vector_product",
     "kl_hessian_vector_product",
     "line_search",
+    "policy_jvp",
     "set_flat",
     "trainable_params",
 ]
@@ -120,13 +122,40 @@ def jacobian_fisher_vector_product(
     Fisher matrix F = Jᵀ M J (TRPO, Appendix C.1; Martens 2014, Sect. 9), J the Jacobian of the
     distribution's parameters (``ActionDistribution.params``: the Gaussian's mean and log σ, the
     logits) in θ and M their Fisher information (``ActionDistribution.fisher``). Each product is
-    one forward-mode pass for J v (``torch.func.jvp``) and one backward pass for Jᵀ (M J v)
-    through a forward graph built once."""
+    one forward-mode pass for J v (:func:`policy_jvp`: for the CNN policies, the tangent half
+    of a forward pass kept from the start) and one backward pass for Jᵀ (M J v) through a
+    forward graph built once."""
     named = [(n, p) for n, p in policy.named_parameters() if p.requires_grad]
     names, params = [n for n, _ in named], [p for _, p in named]
-    primals = tuple(p.detach() for p in params)
     dist = policy(obs)
     outputs = dist.params()
+    jv_of = policy_jvp(policy, obs, names)
+
+    def fvp(v: Tensor) -> Tensor:
+        chunks = v.split([p.numel() for p in params])
+        tangents = tuple(t.view_as(p) for t, p in zip(chunks, params, strict=True))
+        jv = jv_of(tangents)
+        grads = torch.autograd.grad(
+            outputs, params, dist.fisher(jv), retain_graph=True, allow_unused=True
+        )
+        flat = [torch.zeros_like(p) if g is None else g for g, p in zip(grads, params, strict=True)]
+        return torch.cat([g.reshape(-1) for g in flat]) + damping * v
+
+    return fvp
+
+
+def policy_jvp(
+    policy: Policy, obs: TensorObs, names: Sequence[str]
+) -> Callable[[tuple[Tensor, ...]], tuple[Tensor, ...]]:
+    """(t_1, ...) ↦ J t, the derivative of the distribution's parameters on ``obs`` along
+    tangents of the parameters called ``names`` (the others held): by
+    :func:`learning.algorithms.linearized.linearize_cnn_policy` (the forward pass kept) for
+    the CNN policies it knows, else by ``torch.func.jvp`` (the forward pass again per call)."""
+    if linearized.supports(policy) and set(names) == {n for n, _ in policy.named_parameters()}:
+        jv = linearized.linearize_cnn_policy(policy, obs)
+        return lambda tangents: jv(dict(zip(names, tangents, strict=True)))
+    by_name = dict(policy.named_parameters())
+    primals = tuple(by_name[n].detach() for n in names)
 
     def dist_params(*values: Tensor) -> tuple[Tensor, ...]:
         values_by_name = dict(zip(names, values, strict=True))
@@ -135,19 +164,13 @@ def jacobian_fisher_vector_product(
         ).params()
         return out
 
-    def fvp(v: Tensor) -> Tensor:
-        chunks = v.split([p.numel() for p in params])
-        tangents = tuple(t.view_as(p) for t, p in zip(chunks, params, strict=True))
+    def jv_func(tangents: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
         with warnings.catch_warnings():  # torch's jvp decompositions, loaded on first use
             warnings.filterwarnings("ignore", "`torch.jit.script` is deprecated")
-            jv = torch.func.jvp(dist_params, primals, tangents)[1]
-        grads = torch.autograd.grad(
-            outputs, params, dist.fisher(jv), retain_graph=True, allow_unused=True
-        )
-        flat = [torch.zeros_like(p) if g is None else g for g, p in zip(grads, params, strict=True)]
-        return torch.cat([g.reshape(-1) for g in flat]) + damping * v
+            out: tuple[Tensor, ...] = torch.func.jvp(dist_params, primals, tangents)[1]
+        return out
 
-    return fvp
+    return jv_func
 
 
 @dataclass(frozen=True)
