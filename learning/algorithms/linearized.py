@@ -58,6 +58,7 @@ def supports(policy: Policy) -> bool:
         isinstance(trunk, CNNTrunk)
         and trunk.conv.bias is not None
         and trunk.norm.affine
+        and trunk.norm.track_running_stats
         and _fc_layers(trunk) is not None
         and policy.kind in ("gaussian", "categorical")
     )
