@@ -118,7 +118,15 @@ def linearize_cnn_policy(
 
     @torch.no_grad()
     def jv(v: dict[str, Tensor]) -> tuple[Tensor, ...]:
-        dz = nn.functional.conv2d(image, v[name(conv.weight)], v[name(conv.bias)], conv.stride)
+        dz = nn.functional.conv2d(
+            image,
+            v[name(conv.weight)],
+            v[name(conv.bias)],
+            conv.stride,
+            conv.padding,
+            conv.dilation,
+            conv.groups,
+        )
         d_alpha = v[name(norm.weight)] * inv_std
         d_beta = v[name(norm.bias)] - mean_run * d_alpha
         dy = d_alpha[:, None, None] * relu_z + alpha[:, None, None] * (dz * mask)
