@@ -17,6 +17,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -110,15 +111,19 @@ _BUILDS: tuple[tuple[list[str], bool], ...] = (
 )
 
 
-def load_function(source: str, name: str, argtypes: list[Any], prefix: str) -> Any | None:
+def load_function(
+    source: str, name: str, argtypes: list[Any], prefix: str, link: Sequence[str] = ()
+) -> Any | None:
     """The C function ``name`` of ``source`` with ``argtypes`` set (returns void), built with
     ``-O3 -march=native`` (IEEE arithmetic, no FMA contraction, OpenMP) or, where that fails,
-    the same flags without ``-march``; None where no build loads (no compiler, an unwritable
-    cache, an unloadable library): the caller's NumPy path runs then."""
+    the same flags without ``-march``, plus ``link`` (e.g. ``-L<dir>``, ``-l<name>``); None
+    where no build loads (no compiler, an unwritable cache, an unloadable library): the
+    caller's NumPy path runs then."""
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # as the plant's kernels (codegen)
     for flags, native in _BUILDS:
         try:
-            lib = compile_library(source, flags, cpu_signature() if native else "", prefix=prefix)
+            machine = cpu_signature() if native else ""
+            lib = compile_library(source, [*flags, *link], machine, prefix=prefix)
             fn = getattr(ctypes.CDLL(str(lib)), name)
         except (CompileError, OSError):  # OSError: an unwritable cache, an unloadable library
             continue

@@ -21,12 +21,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import ndtr
 
 from usvsim.common.angles import ssa
+from usvsim.task.noise_kernel import load_kernel as load_noise_kernel
+
+NoiseBackend = Literal["auto", "compiled", "numpy"]
 
 __all__ = [
     "BoatNoise",
@@ -205,15 +209,35 @@ class BoatNoise:
     out (every ~``width / 60`` decisions) and over reset boats.
 
     :meth:`for_boats` restricts the next draws to a subset (e.g. the boats being reset).
+
+    ``backend``: ``"compiled"`` draws every boat's numbers in one C call from its PCG64 state
+    (:mod:`usvsim.task.noise_kernel`: the same numbers, checked against NumPy when it loads,
+    about 6 ns a number against NumPy's 16 ns, no buffers, no loop over boats); ``"numpy"`` is
+    the buffered path above; ``"auto"`` (default) takes the compiled one where it builds.
     """
 
-    def __init__(self, n_boats: int, width: int = 1024, block: int = 64) -> None:
+    def __init__(
+        self, n_boats: int, width: int = 1024, block: int = 64, backend: NoiseBackend = "auto"
+    ) -> None:
+        if backend not in ("auto", "compiled", "numpy"):
+            raise ValueError(f"backend must be 'auto', 'compiled' or 'numpy', got {backend!r}")
+        self._kernel = None if backend == "numpy" else load_noise_kernel()
+        if backend == "compiled" and self._kernel is None:
+            raise RuntimeError(
+                "BoatNoise: the compiled noise kernel is unavailable here (no C compiler or "
+                "no NumPy libnpyrandom); use backend='auto' or 'numpy'"
+            )
+        # compiled path: each boat's PCG64 state, (N, 4) uint64; seeded boats marked
+        self._states = np.zeros((n_boats, 4), dtype=np.uint64)
+        self._seeded = np.zeros(n_boats, dtype=bool)
+        self._states_at = self._states.ctypes.data
         self._gens: list[np.random.Generator | None] = [None] * n_boats
         self._buf = np.zeros((n_boats, width))
         self._cursor = np.full(n_boats, width, dtype=np.int64)  # next unread number per boat
         self._block_cols = block
         self._all: NDArray[np.intp] = np.arange(n_boats)
         self._idx = self._all
+        self._idx_at = self._all.ctypes.data  # address of _idx as int64, for the kernel
         self._block: FloatArray | None = None  # gathered numbers of the served boats
         self._pos = 0  # numbers of the block already served
         self._windows: dict[int, FloatArray] = {}  # m -> view (N, width - m + 1, m) of _buf
@@ -222,6 +246,12 @@ class BoatNoise:
         """Restart the streams of ``boats`` from ``seeds`` (one per boat)."""
         self._commit()
         boats = np.asarray(boats, dtype=np.intp)
+        if self._kernel is not None:
+            if len(seeds) != boats.size:
+                raise ValueError(f"need one seed per boat ({boats.size}), got {len(seeds)}")
+            self._kernel.seed(boats, list(seeds), self._states)
+            self._seeded[boats] = True
+            return
         for i, s in zip(boats.tolist(), seeds, strict=True):
             self._gens[i] = np.random.default_rng(int(s))
         self._cursor[boats] = self._buf.shape[1]
@@ -230,6 +260,10 @@ class BoatNoise:
         """Serve the following draws to ``boats`` only (``None``: all boats); returns self."""
         self._commit()
         self._idx = self._all if boats is None else np.asarray(boats, dtype=np.intp)
+        if self._kernel is not None:
+            if boats is not None:
+                self._idx = np.ascontiguousarray(self._idx, dtype=np.int64)
+            self._idx_at = self._idx.ctypes.data
         return self
 
     def _commit(self) -> None:
@@ -282,6 +316,12 @@ class BoatNoise:
                 "must have that many rows"
             )
         m = math.prod(shape[1:])
+        if self._kernel is not None:
+            if not self._seeded[self._idx].all():
+                i = int(self._idx[np.argmin(self._seeded[self._idx])])
+                raise RuntimeError(f"BoatNoise: boat {i} has no seeded stream")
+            out = self._kernel.draw_at(self._idx.size, self._idx_at, self._states_at, m)
+            return out.reshape(shape)
         if self._block is None or self._pos + m > self._block.shape[1]:
             self._commit()
             self._block = self._gather(max(m, self._block_cols))

@@ -93,8 +93,9 @@ def test_bad_pole_index_raises():
         episode_geometry(Scenario(), [EpisodeSpec(2, 60.0, 0.0)])
 
 
-def test_boat_noise_serves_each_boat_its_own_generator_stream():
-    noise = BoatNoise(3, width=16, block=5)
+@pytest.mark.parametrize("backend", ["numpy", "auto"])
+def test_boat_noise_serves_each_boat_its_own_generator_stream(backend):
+    noise = BoatNoise(3, width=16, block=5, backend=backend)
     noise.seed(np.arange(3), [11, 12, 13])
     got: list[list[float]] = [[], [], []]
     pattern = np.random.default_rng(0)
@@ -111,8 +112,9 @@ def test_boat_noise_serves_each_boat_its_own_generator_stream():
         np.testing.assert_array_equal(np.array(got[i]), ref)
 
 
-def test_boat_noise_reseeding_restarts_only_those_streams():
-    noise = BoatNoise(3, width=16, block=5)
+@pytest.mark.parametrize("backend", ["numpy", "auto"])
+def test_boat_noise_reseeding_restarts_only_those_streams(backend):
+    noise = BoatNoise(3, width=16, block=5, backend=backend)
     noise.seed(np.arange(3), [1, 2, 3])
     first = noise.for_boats(None).standard_normal((3, 7))
     noise.seed(np.array([1]), [42])
@@ -131,8 +133,9 @@ def test_first_bad_spec_is_reported():
         episode_geometry(Scenario(), specs[2:] + specs[:2])
 
 
-def test_boat_noise_scales_and_checks_the_row_count():
-    noise = BoatNoise(2)
+@pytest.mark.parametrize("backend", ["numpy", "auto"])
+def test_boat_noise_scales_and_checks_the_row_count(backend):
+    noise = BoatNoise(2, backend=backend)
     noise.seed(np.arange(2), [1, 2])
     x = noise.normal(3.0, 2.0, size=(2, 4))
     ref = np.stack([np.random.default_rng(s).standard_normal(4) for s in (1, 2)])
