@@ -18,9 +18,15 @@ from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa_casadi
 from usvsim.nav.filter import Navigator
-from usvsim.nav.kalman import FilterNoise, HeadingState, PositionState
+from usvsim.nav.kalman import FilterNoise, HeadingState, PositionState, as_complex
 from usvsim.nav.models import NavConfig
-from usvsim.nav.sensors import period_steps
+from usvsim.nav.sensors import (
+    draw_compass,
+    draw_gps,
+    draw_gyro,
+    period_steps,
+    sample_gyro_bias,
+)
 
 __all__ = [
     "NAV_NOISE",
@@ -31,6 +37,7 @@ __all__ = [
     "import_nav_state",
     "nav_draws_per_step",
     "nav_noise_block",
+    "started_nav_rows",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -51,6 +58,36 @@ def export_nav_state(nav: Navigator) -> FloatArray:
         x.p.real, x.p.imag, x.w.real, x.w.imag, x.L_pp, x.L_pw.real, x.L_pw.imag, x.L_ww,
         h.psi, h.b, h.P_psi, h.P_pb, h.P_b, nav.true_gyro_bias, nav.estimate.yaw_rate,
     ])  # fmt: skip
+
+
+def started_nav_rows(
+    cfg: NavConfig, eta: FloatArray, nu: FloatArray, rng: np.random.Generator
+) -> FloatArray:
+    """The (k, 15) filter states (layout :data:`NAV_STATE_FIELDS`) that
+    :meth:`Navigator.reset <usvsim.nav.filter.Navigator.reset>` gives k boats at true states
+    ``eta``, ``nu`` (k, 3), with the same draws from ``rng`` in the same order and the same
+    arithmetic, so the same numbers (tested); for a caller that keeps the states packed (the
+    batched environments), without the navigator's copies of every boat's arrays."""
+    s = cfg.sensors
+    k = eta.shape[0]
+    psi_true = eta[:, 2]
+    gps = draw_gps(eta[:, :2], rng, s)
+    compass = draw_compass(psi_true, rng, s)
+    w = (nu[:, 0] + 1j * nu[:, 1]) * np.exp(1j * psi_true)
+    w = w + as_complex(rng.normal(0.0, cfg.init_vel_sigma_mps, size=(k, 2)))
+    bias = sample_gyro_bias(k, rng, s)
+    gyro = draw_gyro(nu[:, 2], bias, rng, s)
+    out = np.zeros((k, NAV_NS))
+    out[:, 0:2] = gps
+    out[:, 2], out[:, 3] = w.real, w.imag
+    out[:, 4] = s.gps_sigma_m**2
+    out[:, 7] = cfg.init_vel_sigma_mps**2
+    out[:, 8] = compass
+    out[:, 10] = s.compass_sigma_rad**2
+    out[:, 12] = s.gyro_bias_sigma_radps**2
+    out[:, 13] = bias
+    out[:, 14] = gyro
+    return out
 
 
 def import_nav_state(nav: Navigator, state: FloatArray) -> None:

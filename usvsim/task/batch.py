@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
 from usvsim.common.interrupt import check_interrupt
-from usvsim.nav.compiled import export_nav_state
+from usvsim.nav.compiled import export_nav_state, started_nav_rows
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import PACKED, NavigatedPlant
@@ -325,13 +325,11 @@ class PoleAvoidanceBatch:
         self._s[idx, PACKED.plant], self._s[idx, PACKED.controller] = rows.x, rows.c
         self.pole_ne[idx], self.goal_ne[idx] = geo.pole_ne, geo.goal_ne
         self._noise.seed(idx, [s.noise_seed for s in specs])
-        mask = np.zeros(self.n_boats, dtype=bool)
-        mask[idx] = True
-        x = self._s[:, PACKED.plant]
-        est = self._nav.reset(x[:, 0:3], x[:, 3:6], self._rng_view(idx), mask=mask)
+        # the freshly started filters: Navigator.reset's draws and numbers for these boats only
+        nav = started_nav_rows(self._nav.cfg, rows.x[:, 0:3], rows.x[:, 3:6], self._rng_view(idx))
         self._noise.for_boats(None)
-        self._s[idx, PACKED.nav] = export_nav_state(self._nav)[idx]  # the freshly started filters
-        self._est_pos[idx], self._est_psi[idx] = est.pos_ne[idx], est.psi[idx]
+        self._s[idx, PACKED.nav] = nav
+        self._est_pos[idx], self._est_psi[idx] = nav[:, 0:2], nav[:, 8]
         self._n_decisions[idx] = 0
         self._min_pole[idx] = [s.start_distance_m for s in specs]
         self._t_goal[idx] = np.inf

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usvsim.nav.compiled import build_nav_step, export_nav_state
+from usvsim.nav.compiled import build_nav_step, export_nav_state, started_nav_rows
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
 from usvsim.nav.navplant import PACKED, NavigatedPlant
@@ -118,3 +118,20 @@ def test_packed_layout_tiles_the_state():
     assert [(p.start, p.stop) for p in parts] == [(0, 8), (8, 13), (13, 28)]
     assert PACKED.closed_loop == slice(0, 13) and PACKED.size == 28
     assert (PACKED.nav_pos, PACKED.nav_vel, PACKED.nav_psi) == (slice(13, 15), slice(15, 17), 21)
+
+
+def test_started_rows_equal_a_masked_navigator_reset():
+    cfg = NavConfig()
+    rng = np.random.default_rng(3)
+    n, idx = 7, np.array([1, 4, 5])
+    eta = np.column_stack([rng.uniform(-100, 100, (n, 2)), rng.uniform(-np.pi, np.pi, n)])
+    nu = np.column_stack([rng.uniform(0, 3, n), rng.uniform(-0.3, 0.3, n), rng.normal(0, 0.1, n)])
+    nav = Navigator(cfg, n)
+    nav.reset(eta, nu, np.random.default_rng(0))
+    mask = np.zeros(n, dtype=bool)
+    mask[idx] = True
+    est = nav.reset(eta, nu, np.random.default_rng(9), mask=mask)
+    rows = started_nav_rows(cfg, eta[idx], nu[idx], np.random.default_rng(9))
+    np.testing.assert_array_equal(rows, export_nav_state(nav)[idx])
+    np.testing.assert_array_equal(rows[:, 0:2], est.pos_ne[idx])
+    np.testing.assert_array_equal(rows[:, 8], est.psi[idx])
