@@ -252,7 +252,7 @@ def pcg64_states(seeds: list[int]) -> NDArray[np.uint64]:
     out = np.empty((len(seeds), 4), dtype=np.uint64)
     mask = (1 << 64) - 1
     for row, seed in enumerate(seeds):
-        st = np.random.PCG64(int(seed)).state["state"]
+        st = np.random.PCG64(seed).state["state"]
         s, inc = int(st["state"]), int(st["inc"])
         out[row] = (s >> 64, s & mask, inc >> 64, inc & mask)
     return out
@@ -270,11 +270,11 @@ class NoiseKernel:
         for seeds in [0, 2⁶⁴), else by NumPy (:func:`pcg64_states`, which also rejects what
         NumPy rejects)."""
         boats = np.ascontiguousarray(boats, dtype=np.int64)
-        try:
-            words = np.array(seeds, dtype=np.uint64)
-        except (OverflowError, TypeError, ValueError):
+        in_c = all(isinstance(s, (int, np.integer)) and 0 <= s < 2**64 for s in seeds)
+        if not in_c:
             states[boats] = pcg64_states(seeds)
             return
+        words = np.array([int(s) for s in seeds], dtype=np.uint64)
         if words.shape != boats.shape:
             raise ValueError(f"need one seed per boat ({boats.size}), got {len(seeds)}")
         if boats.size:

@@ -253,7 +253,7 @@ class BoatNoise:
             self._seeded[boats] = True
             return
         for i, s in zip(boats.tolist(), seeds, strict=True):
-            self._gens[i] = np.random.default_rng(int(s))
+            self._gens[i] = np.random.default_rng(s)
         self._cursor[boats] = self._buf.shape[1]
 
     def for_boats(self, boats: NDArray[np.intp] | None) -> BoatNoise:

@@ -54,6 +54,9 @@ def test_seeds_beyond_64_bits_use_numpys_seeding_and_bad_seeds_are_numpys_errors
     np.testing.assert_array_equal(noise.standard_normal((2, 5)), ref)
     with pytest.raises(ValueError):
         noise.seed(np.arange(1), [-1])
+    for backend in ("compiled", "numpy"):
+        with pytest.raises(TypeError):  # NumPy's seeding takes integers only
+            BoatNoise(1, backend=backend).seed(np.arange(1), [1.5])  # type: ignore[list-item]
 
 
 def test_unseeded_boats_and_a_bad_backend_are_reported():
