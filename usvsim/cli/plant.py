@@ -174,8 +174,12 @@ def run_perf(args: PerfArgs) -> int:
         + f"; soa is {plant['soa_over_scalar']}x scalar, {plant['soa_over_casadi_map']}x casadi_map"
     )
     env = result.get("env", {})
+    targets = env.get("targets", {})
     for key, value in env.get("decision_steps_per_s", {}).items():
-        print(f"env {key}: {value:,} decision steps/s")
+        bar = f" (target {targets[key]:,})" if key in targets else ""
+        print(f"env {key}: {value:,} decision steps/s{bar}")
+    if "sensor_noise" in env:
+        print(f"env sensor noise: {env['sensor_noise']} (usvsim.task.noise_kernel)")
     for key, value in result.get("open_water", {}).get("decision_steps_per_s", {}).items():
         print(f"open-water {key}: {value:,} decision steps/s")
     for kind, fig in result.get("everything_set", {}).get("decision_steps_per_s", {}).items():

@@ -51,3 +51,14 @@ def test_scene_radar_rates_compare_the_kernel_with_numpy():
         assert rates["compiled_over_numpy"] == pytest.approx(
             rates["compiled images/s"] / rates["numpy images/s"], rel=0.01
         )
+
+
+def test_env_figures_carry_issue_17s_bars_and_say_which_noise_path_ran(monkeypatch):
+    from usvsim.task.noise_kernel import load_kernel
+
+    monkeypatch.setattr(perf, "env_throughput", lambda obs, n, seconds: 10.0 * n)
+    monkeypatch.setattr(perf, "open_water_env_throughput", lambda obs, n, seconds: 5.0 * n)
+    env = perf._env_figures(0.05)
+    assert env["targets"] == {"positional N=256": 200_000, "radar+goal N=256": 100_000}
+    assert env["decision_steps_per_s"]["positional N=256"] == 2560
+    assert env["sensor_noise"] == ("numpy" if load_kernel() is None else "compiled")
