@@ -17,16 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa_casadi
-from usvsim.nav.filter import Navigator
-from usvsim.nav.kalman import FilterNoise, HeadingState, PositionState, as_complex
+from usvsim.nav.filter import Navigator, first_fix, start_variances
+from usvsim.nav.kalman import FilterNoise, HeadingState, PositionState
 from usvsim.nav.models import NavConfig
-from usvsim.nav.sensors import (
-    draw_compass,
-    draw_gps,
-    draw_gyro,
-    period_steps,
-    sample_gyro_bias,
-)
+from usvsim.nav.sensors import period_steps
 
 __all__ = [
     "NAV_NOISE",
@@ -65,28 +59,17 @@ def started_nav_rows(
 ) -> FloatArray:
     """The (k, 15) filter states (layout :data:`NAV_STATE_FIELDS`) that
     :meth:`Navigator.reset <usvsim.nav.filter.Navigator.reset>` gives k boats at true states
-    ``eta``, ``nu`` (k, 3), with the same draws from ``rng`` in the same order and the same
-    arithmetic, so the same numbers (tested); for a caller that keeps the states packed (the
-    batched environments), without the navigator's copies of every boat's arrays."""
-    s = cfg.sensors
-    k = eta.shape[0]
-    psi_true = eta[:, 2]
-    gps = draw_gps(eta[:, :2], rng, s)
-    compass = draw_compass(psi_true, rng, s)
-    w = (nu[:, 0] + 1j * nu[:, 1]) * np.exp(1j * psi_true)
-    w = w + as_complex(rng.normal(0.0, cfg.init_vel_sigma_mps, size=(k, 2)))
-    bias = sample_gyro_bias(k, rng, s)
-    gyro = draw_gyro(nu[:, 2], bias, rng, s)
-    out = np.zeros((k, NAV_NS))
-    out[:, 0:2] = gps
-    out[:, 2], out[:, 3] = w.real, w.imag
-    out[:, 4] = s.gps_sigma_m**2
-    out[:, 7] = cfg.init_vel_sigma_mps**2
-    out[:, 8] = compass
-    out[:, 10] = s.compass_sigma_rad**2
-    out[:, 12] = s.gyro_bias_sigma_radps**2
-    out[:, 13] = bias
-    out[:, 14] = gyro
+    ``eta``, ``nu`` (k, 3): the same first fix (:func:`usvsim.nav.filter.first_fix`) and
+    starting covariances, so the same numbers (tested); for a caller that keeps the states
+    packed (the batched environments), without the navigator's copies of every boat's arrays."""
+    fix = first_fix(cfg, eta, nu, rng)
+    out = np.zeros((eta.shape[0], NAV_NS))  # cross terms and the bias estimate start at 0
+    out[:, 0:2] = fix.pos_ne
+    out[:, 2], out[:, 3] = fix.vel_ne.real, fix.vel_ne.imag
+    out[:, 4], out[:, 7], out[:, 10], out[:, 12] = start_variances(cfg)
+    out[:, 8] = fix.heading_rad
+    out[:, 13] = fix.gyro_bias_radps
+    out[:, 14] = fix.gyro_radps
     return out
 
 

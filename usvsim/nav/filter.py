@@ -64,10 +64,54 @@ from usvsim.nav.sensors import (
     sample_gyro_bias,
 )
 
-__all__ = ["NavEstimate", "Navigator"]
+__all__ = ["FirstFix", "NavEstimate", "Navigator", "first_fix", "start_variances"]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
+
+
+@dataclass(frozen=True)
+class FirstFix:
+    """The readings a filter starts from, k boats: GNSS position (k, 2) m, velocity over
+    ground (k,) complex ``v_N + i v_E`` m/s, compass heading (k,) rad, the boat's new true gyro
+    bias (k,) rad/s and its first gyro reading (k,) rad/s."""
+
+    pos_ne: FloatArray
+    vel_ne: ComplexArray
+    heading_rad: FloatArray
+    gyro_bias_radps: FloatArray
+    gyro_radps: FloatArray
+
+
+def first_fix(
+    cfg: NavConfig, eta: FloatArray, nu: FloatArray, rng: np.random.Generator
+) -> FirstFix:
+    """Draw the first fix of k boats at true ``eta``, ``nu`` (k, 3): GNSS position, compass,
+    Doppler velocity ``R(ψ) [u, v] + N(0, init_vel_sigma² I)``, a new gyro bias and a gyro
+    reading, in that order from ``rng`` (GNSS (k, 2), compass (k,), velocity (k, 2), bias (k,),
+    gyro (k,)). :meth:`Navigator.reset` starts its filters from it."""
+    s, k = cfg.sensors, eta.shape[0]
+    psi_true = eta[:, 2]
+    gps = draw_gps(eta[:, :2], rng, s)
+    compass = draw_compass(psi_true, rng, s)
+    # Body velocity to NED: w = (u + i v) e^{iψ}, i.e. R(ψ) [u, v].
+    w = (nu[:, 0] + 1j * nu[:, 1]) * np.exp(1j * psi_true)
+    w = w + as_complex(rng.normal(0.0, cfg.init_vel_sigma_mps, size=(k, 2)))
+    bias = sample_gyro_bias(k, rng, s)
+    gyro = draw_gyro(nu[:, 2], bias, rng, s)
+    return FirstFix(gps, w, compass, bias, gyro)
+
+
+def start_variances(cfg: NavConfig) -> tuple[float, float, float, float]:
+    """A started filter's variances (cross terms 0): position ``σ_gps²`` m², velocity
+    ``σ_v0²`` (m/s)², heading ``σ_c²`` rad², gyro bias ``σ_b0²`` (rad/s)²."""
+    s = cfg.sensors
+    return (
+        s.gps_sigma_m**2,
+        cfg.init_vel_sigma_mps**2,
+        s.compass_sigma_rad**2,
+        s.gyro_bias_sigma_radps**2,
+    )
 
 
 @dataclass(frozen=True)
@@ -177,18 +221,10 @@ class Navigator:
         """
         eta, nu = self._check_states(eta, nu)
         idx = self._boats(mask)
-        s, k = self.cfg.sensors, idx.size
-        psi_true = eta[idx, 2]
-        gps = draw_gps(eta[idx, :2], rng, s)
-        compass = draw_compass(psi_true, rng, s)
-        # Body velocity to NED: w = (u + i v) e^{iψ}, i.e. R(ψ) [u, v].
-        w = (nu[idx, 0] + 1j * nu[idx, 1]) * np.exp(1j * psi_true)
-        w = w + as_complex(rng.normal(0.0, self.cfg.init_vel_sigma_mps, size=(k, 2)))
-        bias = sample_gyro_bias(k, rng, s)
-        gyro = draw_gyro(nu[idx, 2], bias, rng, s)
+        fix = first_fix(self.cfg, eta[idx], nu[idx], rng)
         self._gyro_bias = self._gyro_bias.copy()  # copy: earlier estimates may view it
-        self._gyro_bias[idx] = bias
-        return self._start(idx, as_complex(gps), w, compass, gyro)
+        self._gyro_bias[idx] = fix.gyro_bias_radps
+        return self._start(idx, as_complex(fix.pos_ne), fix.vel_ne, fix.heading_rad, fix.gyro_radps)
 
     def start(
         self,
@@ -233,7 +269,7 @@ class Navigator:
         gyro: FloatArray,
     ) -> NavEstimate:
         """Set boats ``idx`` to the first fix ``p``, ``w`` (complex NE), ``psi`` and ``gyro``."""
-        s = self.cfg.sensors
+        L_pp, L_ww, P_psi, P_b = start_variances(self.cfg)
 
         def rows(old: NDArray[Any], value: object) -> NDArray[Any]:
             new = old.copy()  # copy: earlier NavEstimates view the old array
@@ -244,16 +280,16 @@ class Navigator:
         self._pos = PositionState(
             p=rows(x.p, p),
             w=rows(x.w, w),
-            L_pp=rows(x.L_pp, s.gps_sigma_m**2),
+            L_pp=rows(x.L_pp, L_pp),
             L_pw=rows(x.L_pw, 0.0),
-            L_ww=rows(x.L_ww, self.cfg.init_vel_sigma_mps**2),
+            L_ww=rows(x.L_ww, L_ww),
         )
         self._head = HeadingState(
             psi=rows(h.psi, psi),
             b=rows(h.b, 0.0),
-            P_psi=rows(h.P_psi, s.compass_sigma_rad**2),
+            P_psi=rows(h.P_psi, P_psi),
             P_pb=rows(h.P_pb, 0.0),
-            P_b=rows(h.P_b, s.gyro_bias_sigma_radps**2),
+            P_b=rows(h.P_b, P_b),
         )
         self._yaw_rate = rows(self._yaw_rate, gyro)
         self._ready[idx] = True

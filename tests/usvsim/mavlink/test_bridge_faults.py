@@ -94,7 +94,9 @@ def test_peer_closing_is_a_failsafe_with_bounded_reconnects(tmp_path: Path, capf
         cpu = thread_cpu_s() - cpu0
     out = capfd.readouterr()
     assert result.reason.startswith("link lost (MAVLink link tcp:127.0.0.1:")
-    assert "EOF" in result.reason
+    # a peer that closes while our packets wait unread in its socket sends a reset, not a FIN
+    # (RFC 1122, 4.2.2.13): either is the peer closing (seen: 1 run in 7 gets the reset)
+    assert "EOF" in result.reason or "connection reset by the peer" in result.reason
     assert not result.failsafe_acknowledged and result.exit_status == 3
     assert result.failsafe.how == "link lost, 2 reconnect attempts failed"
     text = out.out + out.err
