@@ -232,7 +232,7 @@ class BoatNoise:
         self._seeded = np.zeros(n_boats, dtype=bool)
         self._states_at = self._states.ctypes.data
         self._gens: list[np.random.Generator | None] = [None] * n_boats
-        self._buf = np.zeros((n_boats, width))
+        self._buf = np.zeros((n_boats, 0 if self._kernel else width))  # NumPy path's buffers
         self._cursor = np.full(n_boats, width, dtype=np.int64)  # next unread number per boat
         self._block_cols = block
         self._all: NDArray[np.intp] = np.arange(n_boats)
