@@ -17,10 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa_casadi
-from usvsim.nav.filter import Navigator, first_fix, start_variances
+from usvsim.nav.filter import Navigator
 from usvsim.nav.kalman import FilterNoise, HeadingState, PositionState
 from usvsim.nav.models import NavConfig
 from usvsim.nav.sensors import period_steps
+from usvsim.nav.start import first_fix, start_variances
 
 __all__ = [
     "NAV_NOISE",
