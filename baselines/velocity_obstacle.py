@@ -75,6 +75,9 @@ class VOConfig:
     w_keep: float = 0.5  # 1/rad
     w_vo: float = 10.0
     w_colreg: float = 2.0
+    # weight of how far a blocked candidate falls short of the margin (0: the cone is a yes/no,
+    # the tuned ``vo``): where every course is blocked, the one that passes widest wins
+    w_shortfall: float = 0.0
     moving_speed_mps: float = 0.3  # m/s, an obstacle faster than this over ground is a vessel
     arc_margin_m: float = 8.0  # m, clearance the predicted turn must keep (the cone keeps R_safe)
     turn_rate_radps: float = math.radians(11.5)  # rad/s, ω of the predicted turn (30° per 2 s
@@ -110,10 +113,17 @@ def _turn_arc(
 
 
 def vo_course(
-    cfg: VOConfig, observation: NDArray[np.generic], previous_rad: FloatArray
+    cfg: VOConfig,
+    observation: NDArray[np.generic],
+    previous_rad: FloatArray,
+    extra_margin_m: FloatArray | None = None,
 ) -> tuple[FloatArray, NDArray[np.bool_]]:
     """The chosen course over ground θ* (N,) rad relative to the heading, and whether any
-    candidate near the goal's bearing was blocked (avoiding), from ``scene`` observations."""
+    candidate near the goal's bearing was blocked (avoiding), from ``scene`` observations.
+
+    ``extra_margin_m`` (N,) m, optional: added to every obstacle's margin m_j in the cone test
+    of that boat only (wider passes); the turn's own clearance (``arc_margin_m``) is unchanged.
+    """
     obs = np.asarray(observation, dtype=np.float64)
     n = obs.shape[0]
     phi_goal, u, v = obs[:, 1], obs[:, 2], obs[:, 3]
@@ -127,6 +137,8 @@ def vo_course(
     v_obs = slots[..., 3:5] + np.stack([u, v], axis=-1)[:, None, :]
     moving = np.hypot(v_obs[..., 0], v_obs[..., 1]) > cfg.moving_speed_mps
     r_safe = radius + np.where(moving, cfg.vessel_margin_m, cfg.static_margin_m)
+    if extra_margin_m is not None:
+        r_safe = r_safe + np.asarray(extra_margin_m, dtype=np.float64)[:, None]
     theta = np.linspace(-math.pi, math.pi, cfg.n_candidates, endpoint=False)  # (C,)
     cand = speed[:, None, None] * np.stack([np.cos(theta), np.sin(theta)], -1)[None]  # (N, C, 2)
     w = cand[:, :, None, :] - v_obs[:, None, :, :]  # (N, C, K, 2)
@@ -154,6 +166,10 @@ def vo_course(
     cost_vo = cfg.w_vo * np.sum(
         in_vo * (1.1 - np.minimum(t_hit, cfg.horizon_s) / cfg.horizon_s), -1
     )
+    if cfg.w_shortfall > 0:  # share of the margin a blocked candidate misses, arc or cone
+        short_cone = in_cone * (1.0 - d_cpa / r_safe[:, None])
+        short_arc = hit_arc * (1.0 - gap.min(axis=2) / r_arc[:, None])
+        cost_vo = cost_vo + cfg.w_shortfall * np.sum(np.maximum(short_cone, short_arc), -1)
     pw = np.einsum("nckd,nkd->nck", w, p)  # closing, from the present position (COLREG)
     # COLREG 14/15 for moving obstacles: head-on, or crossing from starboard and closing
     course_rel = np.arctan2(v_obs[..., 1], v_obs[..., 0])

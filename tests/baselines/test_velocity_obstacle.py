@@ -51,6 +51,31 @@ def test_pole_dead_ahead_is_passed_to_starboard_at_the_cone_edge():
     assert edge < math.degrees(course[0]) < edge + 4.0
 
 
+def test_extra_margin_widens_that_boats_pass_only():
+    obs = np.repeat(_obs(obstacles=[(60.0, 0.0, 1.0, -3.0, 0.0)]), 2, axis=0)
+    course, _ = vo_course(VOConfig(), obs, np.full(2, np.nan), np.array([0.0, 6.0]))
+    assert math.degrees(course[0]) < math.degrees(math.asin(18.0 / 60.0)) + 4.0
+    assert math.degrees(course[1]) > math.degrees(math.asin(24.0 / 60.0))  # R_safe = 1 + 23 m
+
+
+def test_graded_cone_turns_away_where_every_course_is_blocked():
+    # a pole 15.5 m ahead, 2° to port: every course's predicted turn comes within its margin.
+    # The yes/no cone, all candidates blocked alike, steers for the goal past the pole's edge;
+    # graded by how far each falls short, it turns away hard to starboard
+    obs = _obs(obstacles=[(15.5, -2 * DEG, 1.0, -3.0, 0.0)])
+    yes_no, _ = vo_course(VOConfig(), obs, np.full(1, np.nan))
+    graded, _ = vo_course(VOConfig(w_shortfall=5.0), obs, np.full(1, np.nan))
+    assert abs(math.degrees(yes_no[0])) < 10.0
+    assert math.degrees(graded[0]) > 40.0
+
+
+def test_graded_cone_leaves_an_open_course_alone():
+    obs = _obs(obstacles=[(60.0, 0.0, 1.0, -3.0, 0.0)])
+    a, _ = vo_course(VOConfig(), obs, np.full(1, np.nan))
+    b, _ = vo_course(VOConfig(w_shortfall=5.0), obs, np.full(1, np.nan))
+    assert a[0] == b[0]
+
+
 def test_head_on_vessel_gives_a_starboard_turn():
     # a vessel 150 m ahead coming at us at 3 m/s, slightly to port of dead ahead
     vessel = (150.0, -2 * DEG, 5.0, -6.0, 0.0)  # relative velocity: closing at 6 m/s
