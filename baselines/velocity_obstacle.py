@@ -38,6 +38,12 @@ on the own starboard side (w × p_j > 0, i.e. ahead of a crossing vessel) are pe
 makes the boat alter to starboard and pass astern / port-to-port. θ_prev (the previous choice,
 kept relative to the goal's bearing) damps switching between the two edges of a cone.
 
+Two optional terms, off in ``vo`` (used by the family expert, :mod:`baselines.family_expert`):
+``w_shortfall`` Σ_j (1 − d_j / R_j) over a candidate's blocked obstacles (d_j its closest
+approach, R_j the clearance it wanted), so that where every course is blocked the widest pass
+wins; and ``w_static_starboard`` on candidates that would leave a static obstacle blocking the
+goal's course on the own starboard side (a turn to port).
+
 The course θ* becomes a heading through the crab angle β = atan2(v, u) (current, sway):
 Δψ = clip(ssa(θ* − β), ±30°). Without obstacles this is line-of-sight (pursuit) guidance to the
 goal, course over ground on the goal's bearing (Fossen 2021, §12.4: ψ_d = χ_d − β).
@@ -78,6 +84,10 @@ class VOConfig:
     # weight of how far a blocked candidate falls short of the margin (0: the cone is a yes/no,
     # the tuned ``vo``): where every course is blocked, the one that passes widest wins
     w_shortfall: float = 0.0
+    # cost of passing a static obstacle that blocks the course to the goal with it on the own
+    # starboard side, i.e. of turning to port (0: either side, the tuned ``vo``). A habit of
+    # altering to starboard makes the side of a pass dead ahead a rule instead of a coin toss
+    w_static_starboard: float = 0.0
     moving_speed_mps: float = 0.3  # m/s, an obstacle faster than this over ground is a vessel
     arc_margin_m: float = 8.0  # m, clearance the predicted turn must keep (the cone keeps R_safe)
     turn_rate_radps: float = math.radians(11.5)  # rad/s, ω of the predicted turn (30° per 2 s
@@ -196,9 +206,12 @@ def vo_course(
         + cost_colreg
         + 1e-6 * (theta < 0)[None]  # ties go to starboard (COLREG rule 14)
     )
-    best = np.argmin(cost, axis=1)
     rows = np.arange(n)
     goal_c = np.argmin(np.abs(ssa(theta[None] - phi_goal[:, None])), axis=1)
+    if cfg.w_static_starboard > 0:
+        in_the_way = valid & ~moving & in_vo[rows, goal_c]  # (N, K): blocks the goal's course
+        cost = cost + cfg.w_static_starboard * np.sum(in_the_way[:, None] & starboard_pass, axis=-1)
+    best = np.argmin(cost, axis=1)
     return theta[best], (cost_vo[rows, goal_c] + cost_colreg[rows, goal_c]) > 0
 
 

@@ -69,6 +69,15 @@ def test_graded_cone_turns_away_where_every_course_is_blocked():
     assert math.degrees(graded[0]) > 40.0
 
 
+@pytest.mark.parametrize("bearing_deg", [-3.0, -1.0, 1.0, 3.0])
+def test_starboard_habit_passes_a_pole_near_dead_ahead_to_starboard(bearing_deg):
+    obs = _obs(obstacles=[(60.0, bearing_deg * DEG, 1.0, -3.0, 0.0)])
+    either, _ = vo_course(VOConfig(), obs, np.full(1, np.nan))
+    habit, _ = vo_course(VOConfig(w_static_starboard=0.3), obs, np.full(1, np.nan))
+    assert (either[0] > 0) == (bearing_deg < 0)  # yes/no cone: away from the pole's side
+    assert habit[0] > 0  # the habit: always to starboard, the pole left to port
+
+
 def test_graded_cone_leaves_an_open_course_alone():
     obs = _obs(obstacles=[(60.0, 0.0, 1.0, -3.0, 0.0)])
     a, _ = vo_course(VOConfig(), obs, np.full(1, np.nan))
