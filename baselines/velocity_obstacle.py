@@ -148,7 +148,12 @@ def vo_course(
     moving = np.hypot(v_obs[..., 0], v_obs[..., 1]) > cfg.moving_speed_mps
     r_safe = radius + np.where(moving, cfg.vessel_margin_m, cfg.static_margin_m)
     if extra_margin_m is not None:
-        r_safe = r_safe + np.asarray(extra_margin_m, dtype=np.float64)[:, None]
+        extra = np.asarray(extra_margin_m, dtype=np.float64)
+        if extra.shape != (n,):
+            raise ValueError(
+                f"extra_margin_m must have shape ({n},) m, one per boat; got {extra.shape}"
+            )
+        r_safe = r_safe + extra[:, None]
     theta = np.linspace(-math.pi, math.pi, cfg.n_candidates, endpoint=False)  # (C,)
     cand = speed[:, None, None] * np.stack([np.cos(theta), np.sin(theta)], -1)[None]  # (N, C, 2)
     w = cand[:, :, None, :] - v_obs[:, None, :, :]  # (N, C, K, 2)

@@ -58,6 +58,12 @@ def test_extra_margin_widens_that_boats_pass_only():
     assert math.degrees(course[1]) > math.degrees(math.asin(24.0 / 60.0))  # R_safe = 1 + 23 m
 
 
+def test_extra_margin_needs_one_value_per_boat():
+    obs = np.repeat(_obs(), 2, axis=0)
+    with pytest.raises(ValueError, match=r"extra_margin_m must have shape \(2,\)"):
+        vo_course(VOConfig(), obs, np.full(2, np.nan), np.array([1.0, 2.0, 3.0]))
+
+
 def test_graded_cone_turns_away_where_every_course_is_blocked():
     # a pole 15.5 m ahead, 2° to port: every course's predicted turn comes within its margin.
     # The yes/no cone, all candidates blocked alike, steers for the goal past the pole's edge;
