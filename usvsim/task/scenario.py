@@ -230,6 +230,7 @@ class BoatNoise:
         # compiled path: each boat's PCG64 state, (N, 4) uint64; seeded boats marked
         self._states = np.zeros((n_boats, 4), dtype=np.uint64)
         self._seeded = np.zeros(n_boats, dtype=bool)
+        self._all_seeded = False  # once every boat has a stream, draws skip the per-boat check
         self._states_at = self._states.ctypes.data
         self._gens: list[np.random.Generator | None] = [None] * n_boats
         self._buf = np.zeros((n_boats, 0 if self._kernel else width))  # NumPy path's buffers
@@ -251,6 +252,7 @@ class BoatNoise:
                 raise ValueError(f"need one seed per boat ({boats.size}), got {len(seeds)}")
             self._kernel.seed(boats, list(seeds), self._states)
             self._seeded[boats] = True
+            self._all_seeded = bool(self._seeded.all())
             return
         for i, s in zip(boats.tolist(), seeds, strict=True):
             self._gens[i] = np.random.default_rng(s)
@@ -317,7 +319,7 @@ class BoatNoise:
             )
         m = math.prod(shape[1:])
         if self._kernel is not None:
-            if not self._seeded[self._idx].all():
+            if not self._all_seeded and not self._seeded[self._idx].all():
                 i = int(self._idx[np.argmin(self._seeded[self._idx])])
                 raise RuntimeError(f"BoatNoise: boat {i} has no seeded stream")
             out = self._kernel.draw_at(self._idx.size, self._idx_at, self._states_at, m)

@@ -69,6 +69,29 @@ def test_unseeded_boats_and_a_bad_backend_are_reported():
             noise.standard_normal((2, 3))
 
 
+def test_draws_below_and_above_the_threads_threshold_are_each_boats_numpy_stream():
+    # the kernel runs its boats in one thread below 65,536 numbers (waking a second thread costs
+    # more than it saves there) and in OpenMP threads above: both give every boat its own stream
+    for n, m in ((256, 80), (820, 80)):  # 20,480 and 65,600 numbers
+        noise = BoatNoise(n, backend="compiled")
+        noise.seed(np.arange(n), list(range(n)))
+        got = noise.standard_normal((n, m))
+        for i in (0, 1, n // 2, n - 1):
+            np.testing.assert_array_equal(got[i], np.random.default_rng(i).standard_normal(m))
+
+
+def test_a_boat_left_unseeded_is_reported_after_others_are_reseeded():
+    noise = BoatNoise(3, backend="compiled")
+    noise.seed(np.array([0, 2]), [1, 2])
+    noise.seed(np.array([0]), [5])
+    with pytest.raises(RuntimeError, match="boat 1 has no seeded stream"):
+        noise.standard_normal((3, 2))
+    noise.seed(np.array([1]), [3])  # now every boat has a stream
+    np.testing.assert_array_equal(
+        noise.standard_normal((3, 2))[1], np.random.default_rng(3).standard_normal(2)
+    )
+
+
 def test_without_the_kernel_auto_falls_back_and_compiled_says_why(monkeypatch):
     import usvsim.task.scenario as scenario
 
