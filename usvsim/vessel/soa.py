@@ -216,8 +216,11 @@ void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
                    const double* per_boat, int n_per_boat, const double* pool, int n_pool,
                    const long long* index, const double* factor, double* traj) {{
   int n_blocks = (n + B - 1) / B;
-  /* dynamic: on a loaded machine a thread that runs takes the blocks of one that waits */
-  #pragma omp parallel for schedule(dynamic, 1) if(n >= 64)
+  /* dynamic: on a loaded machine a thread that runs takes the blocks of one that waits.
+     Threads only from 2,048 boat-substeps: one takes ~90 ns, waking a second thread ~70 us
+     (2026-12-03, quiet, plant + filter, 20 sub-steps: 64 boats 142 us in one thread, 153 us
+     in two; 128 boats 248 / 211 us; 256 boats 485 / 358 us) */
+  #pragma omp parallel for schedule(dynamic, 1) if((long)n * n_sub >= 2048)
   for (int b = 0; b < n_blocks; ++b) {{
     double state[2][NS * B] __attribute__((aligned(64)));
     double *s = state[0], *s_next = state[1];
