@@ -49,6 +49,11 @@ many it used (also in ``summary.json``).
 normaliser (any setup's with the same observation and action kinds, e.g.
 ``usvsim/models/il-gaussian-scene-ow.pt``: RL fine-tuning of an imitation policy) with a new
 critic; a setup with an ``init_policy`` (``rl-*-ft``) starts from its shipped model by default.
+
+``--crowded-share S`` (rl-*-ow only, a new run) draws that share of the training episodes from
+the crowded family (every member at its most obstacles and vessels), the rest from the family
+(:attr:`learning.experiments.setups.RLSetup.crowded_share`; stored in the checkpoints, so a
+resumed run keeps it).
 """
 
 from __future__ import annotations
@@ -99,6 +104,9 @@ class TrainArgs:
     quiet: bool = False  # no progress bar
     demos: str = ""  # il-*: folder of your demo_*.csv files; default: the shipped demonstrations
     init_policy: str = ""  # rl-*: start from this checkpoint's policy (fine-tuning); "": setup's
+    crowded_share: float = field(  # rl-*-ow: share of episodes from the crowded family; 0: setup's
+        default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
+    )
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
@@ -117,6 +125,14 @@ class TrainArgs:
             raise UserError("--init-policy starts a new run; --resume continues one: not both")
         if self.init_policy and not Path(self.init_policy).is_file():
             raise UserError(f"--init-policy {self.init_policy}: no such file")
+        if self.crowded_share:
+            if self.setup not in SETUPS or SETUPS[self.setup].task != "open-water":
+                raise UserError(
+                    f"--crowded-share is for the rl-*-ow setups (the open-water family), "
+                    f"not {self.setup!r}"
+                )
+            if self.resume:
+                raise UserError("--crowded-share starts a new run; --resume keeps the run's own")
 
 
 def _fail(message: str) -> SystemExit:
@@ -293,6 +309,8 @@ def run(args: TrainArgs) -> int:
     out = _out_dir(args, setup.name)
     if args.n_envs and not args.resume:
         setup = setup.with_num_envs(args.n_envs)
+    if args.crowded_share:
+        setup = setup.replace(crowded_share=args.crowded_share)
     if not args.resume:
         try:  # a policy that cannot start this setup: one line before any work
             first_policy(setup, args.init_policy)

@@ -40,7 +40,10 @@ fine-tuning of an imitation policy.
 ``scene`` is the k-nearest positional form (goal, own velocity, the 8 nearest obstacles with a
 validity mask; :mod:`usvsim.task.observations`); the radar sees every obstacle. Their runs are
 validated on the study's 15 episodes (the reported validation) and on a fixed family set
-(:func:`learning.experiments.validation.family_validation_episodes`).
+(:func:`learning.experiments.validation.family_validation_episodes`). ``crowded_share`` (0 for
+every registered setup; ``usvsim train --crowded-share``) draws that share of the training
+episodes from :func:`usvsim.task.openwater_env.crowded_family` instead, every member at its most
+obstacles and vessels (:attr:`RLSetup.training_family`).
 
 "radar" setups use the ``radar+goal`` observation: the study's RL radar setups fed the
 standardised goal vector to the CNN after the convolution ("late fusion"); with the image alone
@@ -72,8 +75,9 @@ plain concatenation rl-gaussian-radar needed 230 iterations to its first 15/15, 
 Each setup is a frozen dataclass that holds its algorithm's config
 (:attr:`RLSetup.algorithm_config`, a :class:`learning.algorithms.trpo.TRPOConfig`);
 :meth:`RLSetup.run_config` gives the config of a run. The command line (``usvsim train``)
-overrides only the seed, the iteration budget and the number of boats, so a setup name plus a
-seed reproduces a run. :func:`setup_params` and :func:`setup_from_params` store a setup in a
+overrides only the seed, the iteration budget, the number of boats, the starting policy and the
+crowded share (each stored in the run's checkpoints), so a setup name plus a seed and those
+options reproduces a run. :func:`setup_params` and :func:`setup_from_params` store a setup in a
 checkpoint and read it back (also the flat form of checkpoints written before the setups held
 their configs).
 """
@@ -94,7 +98,13 @@ from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
 from usvsim.task.observations import ObservationKind
-from usvsim.task.openwater_env import OpenWaterVectorEnv
+from usvsim.task.openwater_env import (
+    OPEN_WATER_FAMILY,
+    OpenWaterVectorEnv,
+    ScenarioMixture,
+    crowded_family,
+    mix_families,
+)
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 __all__ = [
@@ -186,10 +196,25 @@ class RLSetup:
     task: str = "pole"  # one of TASKS: the training environment (make_vector_env)
     # a shipped model (usvsim/models/<name>.pt) whose policy a run starts from; "": new networks
     init_policy: str = ""
+    # open-water: the share of training episodes drawn from the crowded family (every member at
+    # its most obstacles and vessels, usvsim.task.openwater_env.crowded_family), the rest from
+    # OPEN_WATER_FAMILY; 0: the family alone
+    crowded_share: float = 0.0
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
             raise ValueError(f"RLSetup.task must be one of {TASKS}, got {self.task!r}")
+        if not 0.0 <= self.crowded_share < 1.0:
+            raise ValueError(f"RLSetup.crowded_share must be in [0, 1), got {self.crowded_share!r}")
+        if self.crowded_share and self.task != "open-water":
+            raise ValueError("RLSetup.crowded_share is for task='open-water' setups only")
+
+    @property
+    def training_family(self) -> ScenarioMixture:
+        """The open-water training distribution (:attr:`crowded_share`)."""
+        if not self.crowded_share:
+            return OPEN_WATER_FAMILY
+        return mix_families(OPEN_WATER_FAMILY, crowded_family(), self.crowded_share)
 
     @property
     def algorithm(self) -> str:
@@ -206,6 +231,7 @@ class RLSetup:
         """The training environment: ``num_envs`` boats on the fixed reward horizon with the
         run's γ (module docstring); the open-water family for ``task="open-water"``."""
         if self.task == "open-water":
+            env_kwargs.setdefault("family", self.training_family)
             return OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,

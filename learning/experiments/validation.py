@@ -48,7 +48,12 @@ from usvsim.common.fileio import atomic_write_text, json_safe
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
 from usvsim.evaluation.openwater import OpenWaterRecord, evaluate_open_water
 from usvsim.task.openwater import OpenWaterEpisode, OpenWaterScenario
-from usvsim.task.openwater_env import OPEN_WATER_FAMILY, ScenarioMixture, draw_family
+from usvsim.task.openwater_env import (
+    OPEN_WATER_FAMILY,
+    ScenarioMixture,
+    crowded_family,
+    draw_family,
+)
 from usvsim.task.scenario import EpisodeSpec
 
 __all__ = [
@@ -113,32 +118,6 @@ def radar_validation_episodes(n: int = RADAR_VALIDATION_SIZE) -> tuple[OpenWater
     """The fixed harsh-radar validation set (module docstring): ``n`` episodes of
     :func:`harsh_radar_family`, episode k from ``default_rng([RADAR_VALIDATION_SEED, k])``."""
     return draw_family(harsh_radar_family(), RADAR_VALIDATION_SEED, n)
-
-
-def crowded_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixture:
-    """``family`` with each member's obstacle and vessel counts fixed at the most it draws; the
-    members with neither (the study's lone pole) left out, the others keeping their weights."""
-    kept = [
-        (m, w, name)
-        for m, w, name in zip(family.members, family.probabilities, family.names, strict=True)
-        if m.n_extra_range[1] > 0 or m.n_vessels_range[1] > 0
-    ]
-    if not kept:
-        raise ValueError("crowded_family: no member of the family has obstacles or vessels")
-    members = tuple(
-        replace(
-            m,
-            n_extra_range=(m.n_extra_range[1],) * 2,
-            n_vessels_range=(m.n_vessels_range[1],) * 2,
-        )
-        for m, _, _ in kept
-    )
-    return replace(
-        family,
-        members=members,
-        weights=tuple(float(w) for _, w, _ in kept),
-        names=tuple(name for _, _, name in kept),
-    )
 
 
 @functools.lru_cache(maxsize=4)

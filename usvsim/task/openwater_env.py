@@ -67,8 +67,10 @@ __all__ = [
     "OPEN_WATER_FAMILY",
     "OpenWaterVectorEnv",
     "ScenarioMixture",
+    "crowded_family",
     "draw_family",
     "draw_family_episode",
+    "mix_families",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -142,6 +144,51 @@ OPEN_WATER_FAMILY = ScenarioMixture(
     weights=(0.15, 0.45, 0.15, 0.15, 0.10),
     names=("study", "poles", "islets", "traffic", "close-pair"),
 )
+
+
+def crowded_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixture:
+    """``family`` with each member's obstacle and vessel counts fixed at the most it draws; the
+    members with neither (the study's lone pole) left out, the others keeping their weights."""
+    kept = [
+        (m, w, name)
+        for m, w, name in zip(family.members, family.probabilities, family.names, strict=True)
+        if m.n_extra_range[1] > 0 or m.n_vessels_range[1] > 0
+    ]
+    if not kept:
+        raise ValueError("crowded_family: no member of the family has obstacles or vessels")
+    members = tuple(
+        replace(
+            m,
+            n_extra_range=(m.n_extra_range[1],) * 2,
+            n_vessels_range=(m.n_vessels_range[1],) * 2,
+        )
+        for m, _, _ in kept
+    )
+    return replace(
+        family,
+        members=members,
+        weights=tuple(float(w) for _, w, _ in kept),
+        names=tuple(name for _, _, name in kept),
+    )
+
+
+def mix_families(
+    base: ScenarioMixture, extra: ScenarioMixture, extra_share: float, prefix: str = "crowded-"
+) -> ScenarioMixture:
+    """One mixture drawing from ``extra`` with probability ``extra_share`` and from ``base``
+    otherwise (each keeping its members' relative weights); ``extra``'s member names get
+    ``prefix``. ``extra_share`` must lie in [0, 1)."""
+    if not 0.0 <= extra_share < 1.0:
+        raise ValueError(f"mix_families: extra_share must be in [0, 1), got {extra_share!r}")
+    names: tuple[str, ...] = ()
+    if base.names and extra.names:
+        names = base.names + tuple(prefix + n for n in extra.names)
+    return ScenarioMixture(
+        members=base.members + extra.members,
+        weights=tuple((1.0 - extra_share) * base.probabilities)
+        + tuple(extra_share * extra.probabilities),
+        names=names,
+    )
 
 
 def draw_family_episode(

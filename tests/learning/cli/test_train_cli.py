@@ -213,3 +213,13 @@ def test_a_start_policy_of_other_kinds_or_with_resume_is_refused(tmp_path: Path)
         run(_args(tmp_path / "b", init_policy=radar, resume=True))
     with pytest.raises(SystemExit, match="for the rl-\\* setups"):
         run(_args(tmp_path / "c", setup="il-gaussian-positional", init_policy=radar))
+
+
+def test_crowded_share_is_for_new_open_water_runs(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match="for the rl-\\*-ow setups"):
+        run(_args(tmp_path / "a", crowded_share=0.5))
+    with pytest.raises(SystemExit, match="--resume keeps the run's own"):
+        run(_args(tmp_path / "b", setup="rl-gaussian-scene-ow", crowded_share=0.5, resume=True))
+    with pytest.raises(SystemExit, match="must be > 0 and < 1"):
+        run(_args(tmp_path / "c", setup="rl-gaussian-scene-ow", crowded_share=1.0))
+    assert not any(tmp_path.rglob("*.pt"))

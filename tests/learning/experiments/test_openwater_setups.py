@@ -35,7 +35,7 @@ from learning.experiments.validation import (
 from usvsim.evaluation.stress import STRESS_SETS, stress_episodes
 from usvsim.task.batch import action_space
 from usvsim.task.observations import observation_space
-from usvsim.task.openwater_env import OPEN_WATER_FAMILY, OpenWaterVectorEnv
+from usvsim.task.openwater_env import OPEN_WATER_FAMILY, OpenWaterVectorEnv, draw_family
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 OW = ("rl-gaussian-scene-ow", "rl-categorical-scene-ow", "rl-gaussian-radar-ow",
@@ -69,6 +69,31 @@ def test_open_water_setups_train_on_the_family_with_the_fixed_horizon(name):
     ow = FAMILY_FIELDS + CROWDED_FIELDS + (RADAR_FIELDS if "radar" in name else ())
     assert csv_fields(setup)[-len(ow) :] == ow
     assert setup_from_params(get_setup(STUDY[0]), setup_params(setup)) == setup
+
+
+def test_a_crowded_share_mixes_the_crowded_family_into_training():
+    base = get_setup("rl-gaussian-scene-ow")
+    setup = base.replace(crowded_share=0.4)
+    family, crowded, n = (
+        setup.make_vector_env(2).family,
+        crowded_family(),
+        len(OPEN_WATER_FAMILY.members),
+    )
+    assert family.members == OPEN_WATER_FAMILY.members + crowded.members
+    np.testing.assert_allclose(family.probabilities[:n], 0.6 * OPEN_WATER_FAMILY.probabilities)
+    np.testing.assert_allclose(family.probabilities[n:], 0.4 * crowded.probabilities)
+    assert family.names[n:] == tuple("crowded-" + name for name in crowded.names)
+
+    def busy(f):  # mean discs and vessels per episode of 300 draws
+        return np.mean([len(e.obstacles) + len(e.vessels) for e in draw_family(f, 7, 300)])
+
+    # 300 draws: the family 3.0 discs and vessels on average, the crowded family 6.1, this 4.2
+    assert busy(family) > busy(OPEN_WATER_FAMILY) + 1.0
+    assert setup_from_params(base, setup_params(setup)) == setup  # stored with a run
+    with pytest.raises(ValueError, match=r"crowded_share must be in \[0, 1\)"):
+        base.replace(crowded_share=1.0)
+    with pytest.raises(ValueError, match="task='open-water' setups only"):
+        get_setup(STUDY[0]).replace(crowded_share=0.2)
 
 
 def test_unknown_task_is_refused():
@@ -226,7 +251,7 @@ def test_usvsim_train_scene_ow_end_to_end(tmp_path: Path) -> None:
 
     args = TrainArgs(
         setup="rl-gaussian-scene-ow", iterations=2, validate_every=1, n_envs=4,
-        out=str(tmp_path), quiet=True, threads=1,
+        out=str(tmp_path), quiet=True, threads=1, crowded_share=0.5,
     )  # fmt: skip
     assert run(args) == 0
     rows = _csv(tmp_path / "log.csv")
@@ -235,6 +260,7 @@ def test_usvsim_train_scene_ow_end_to_end(tmp_path: Path) -> None:
     ckpt = load_checkpoint(tmp_path / "best.pt", expected_setup="rl-gaussian-scene-ow")
     assert ckpt.observation == "scene" and ckpt.history[-1]["family_n_episodes"] == 100
     assert ckpt.agent["env_steps"] in (4 * 64, 2 * 4 * 64)
+    assert ckpt.setup_params["crowded_share"] == 0.5  # a resume trains on the same mixture
     helm = load_helmsman(tmp_path / "best.pt")
     assert helm.observation == "scene"
     summary = json.loads((tmp_path / "summary.json").read_text())
