@@ -44,9 +44,11 @@ def _numeric_fields(cls: type) -> list[dataclasses.Field]:
 
 
 def _required(cls: type) -> dict[str, typing.Any]:
-    """Values for the positional fields (setup, checkpoint) so the class can be built."""
+    """Values for the positional fields (setup, checkpoint) so the class can be built: an
+    open-water RL setup, which takes every numeric option of ``train`` (``--crowded-share``
+    included)."""
     return {
-        f.name: "rl-gaussian-positional" if f.name == "setup" else "x.pt"
+        f.name: "rl-gaussian-scene-ow" if f.name == "setup" else "x.pt"
         for f in dataclasses.fields(cls)
         if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
     }
