@@ -108,7 +108,7 @@ class _Run:
         self.log = RunLog(out, csv_fields(setup), setup.name, rows)
         self.rows = self.log.rows
         self.history: list[dict[str, Any]] = []
-        self.best: tuple[int, float] | None = None
+        self.best: tuple[bool, int, float] | None = None
         self.milestones = Milestones()
         self.stop_reason = "iterations"
         self.wall_offset_s = 0.0  # wall-clock of the run before a resume
@@ -178,7 +178,7 @@ class _Run:
         """Write ``summary.json`` (JSON without NaN: null); the run's :class:`RunResult`."""
         best = None
         if self.best is not None:
-            best = {"successes": self.best[0], "mean_return": self.best[1]}
+            best = {"successes": self.best[1], "mean_return": self.best[2]}
         summary = {
             "setup": self.setup.name,
             "seed": seed,

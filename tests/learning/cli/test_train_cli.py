@@ -50,6 +50,10 @@ def test_two_iterations_write_checkpoints_log_curve_and_summary(tmp_path: Path) 
     assert ckpt.train_args["seed"] == 0 and not ckpt.slim
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["iterations"] == 2 and summary["stop_reason"] == "iterations"
+    best = max(rows, key=lambda r: (int(r["val_successes"]), float(r["val_mean_return"])))
+    assert type(summary["best"]["successes"]) is int  # the count, not the "passed all 15" flag
+    assert summary["best"]["successes"] == int(best["val_successes"])
+    assert summary["best"]["mean_return"] == pytest.approx(float(best["val_mean_return"]))
     assert (tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
 
 
