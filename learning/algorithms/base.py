@@ -20,6 +20,8 @@ member                 meaning
 ``iteration``          completed updates
 ``env_steps``          valid transitions learned from
 ``info_keys``          boolean per-step ``info`` arrays the update needs (``RolloutBatch.info``)
+``obs_info_keys``      optional: ``info`` arrays describing s_t the update needs
+                       (``RolloutBatch.aux``; absent: none)
 ``sample(obs)``        (actions, log-probabilities) for a rollout, arrays (N, ...), (N,)
 ``act(obs, det)``      environment-ready actions (N, ...)
 ``update(batch)``      one learning step on a :class:`RolloutBatch`; its :class:`UpdateStats`

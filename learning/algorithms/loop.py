@@ -76,7 +76,12 @@ def iterate(
     uninterrupted one. Same config and seed on the same machine → identical statistics.
     """
     config = agent.config
-    collector = RolloutCollector(env, seed=config.seed + agent.iteration, info_keys=agent.info_keys)
+    collector = RolloutCollector(
+        env,
+        seed=config.seed + agent.iteration,
+        info_keys=agent.info_keys,
+        obs_info_keys=getattr(agent, "obs_info_keys", ()),  # optional (an asymmetric GAIL's)
+    )
     start = time.perf_counter()
     while agent.iteration < config.iterations:
         t0 = time.perf_counter()

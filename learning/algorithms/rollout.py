@@ -29,7 +29,13 @@ final_index         (F, 2)               their (t, n)
 values              (T, N)               V(s_t), set by :func:`attach_values`
 next_values         (T, N)               V(s'_t), set by :func:`attach_values`
 info[key]           (T, N)               boolean ``info[key]`` per step (``info_keys``)
+aux[key]            (T, N, ...)          ``info[key]`` describing s_t (``obs_info_keys``)
 ==================  ===================  ==========================================
+
+``obs_info_keys`` name ``info`` arrays (N, ...) that describe the observation returned with
+them (from ``reset`` and every ``step``, after a SAME_STEP autoreset the new episode's), e.g. the
+open-water env's ``info["observation_scene"]``: what an asymmetric learner (a GAIL
+discriminator that sees the true scene while the policy sees the radar) reads beside s_t.
 """
 
 from __future__ import annotations
@@ -104,6 +110,7 @@ class RolloutBatch:
     values: NDArray[np.float32] | None = None
     next_values: NDArray[np.float32] | None = None
     info: dict[str, NDArray[np.bool_]] = field(default_factory=dict)  # (T, N) per info key
+    aux: dict[str, NDArray[Any]] = field(default_factory=dict)  # (T, N, ...) per obs_info key
 
     @property
     def episode_end(self) -> NDArray[np.bool_]:
@@ -145,24 +152,39 @@ class RolloutCollector:
     ``act(obs)`` gets the raw observations of all N envs and returns the actions to store (Box:
     unclipped samples; they are clipped to the bounds only on the way to the env) and their
     log-probabilities (N,). ``seed`` seeds the env's first reset. ``info_keys`` name boolean
-    per-env ``info`` arrays to keep in :attr:`RolloutBatch.info` (False where absent).
+    per-env ``info`` arrays to keep in :attr:`RolloutBatch.info` (False where absent);
+    ``obs_info_keys`` name ``info`` arrays that describe the returned observation, kept in
+    :attr:`RolloutBatch.aux` beside s_t (the env must give them at reset and at every step:
+    ``KeyError`` naming the key otherwise).
     """
 
     def __init__(
-        self, env: VectorEnv, seed: int | None = None, info_keys: tuple[str, ...] = ()
+        self,
+        env: VectorEnv,
+        seed: int | None = None,
+        info_keys: tuple[str, ...] = (),
+        obs_info_keys: tuple[str, ...] = (),
     ) -> None:
-        self.info_keys = info_keys
+        self.info_keys, self.obs_info_keys = info_keys, obs_info_keys
         mode = env.metadata.get("autoreset_mode", AutoresetMode.NEXT_STEP)
         if mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
             raise ValueError(f"autoreset mode {mode} is not supported (NEXT_STEP or SAME_STEP)")
         self.env, self.same_step = env, mode == AutoresetMode.SAME_STEP
         self.n = env.num_envs
         self.obs_space, self.act_space = env.single_observation_space, env.single_action_space
-        self.obs, _ = env.reset(seed=seed)
+        self.obs, info = env.reset(seed=seed)
         check_finite(self.obs, "the observations after reset")
+        self._obs_info = self._observation_info(info, "reset")
         self._reset_pending = np.zeros(self.n, dtype=bool)  # NEXT_STEP: next step only resets
         self._ep_return = np.zeros(self.n)
         self._ep_length = np.zeros(self.n, dtype=np.int64)
+
+    def _observation_info(self, info: dict[str, Any], where: str) -> dict[str, NDArray[Any]]:
+        """Copies of the ``obs_info_keys`` arrays of ``info`` (``KeyError`` naming one absent)."""
+        missing = [k for k in self.obs_info_keys if k not in info]
+        if missing:
+            raise KeyError(f"the env's info at {where} has no {missing[0]!r} (obs_info_keys)")
+        return {k: np.array(info[k]) for k in self.obs_info_keys}
 
     def _buffer(self, T: int) -> Obs:
         def empty(space: spaces.Space) -> NDArray[Any]:
@@ -193,7 +215,10 @@ class RolloutCollector:
         returns: list[float] = []
         lengths: list[int] = []
         infos = {k: np.zeros((T, N), dtype=bool) for k in self.info_keys}
+        aux = {k: np.empty((T, *v.shape), dtype=v.dtype) for k, v in self._obs_info.items()}
         for t in range(T):
+            for k, v in self._obs_info.items():
+                aux[k][t] = v
             if isinstance(obs_buf, dict):
                 for k in obs_buf:
                     obs_buf[k][t] = self.obs[k]
@@ -227,6 +252,8 @@ class RolloutCollector:
             if not self.same_step:
                 self._reset_pending = done
             self.obs = obs
+            if self.obs_info_keys:
+                self._obs_info = self._observation_info(info, f"step {t}")
         assert actions_buf is not None
         return RolloutBatch(
             obs=obs_buf,
@@ -242,4 +269,5 @@ class RolloutCollector:
             episode_returns=returns,
             episode_lengths=lengths,
             info=infos,
+            aux=aux,
         )

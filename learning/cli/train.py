@@ -54,12 +54,19 @@ critic; a setup with an ``init_policy`` (``rl-*-ft``) starts from its shipped mo
 the crowded family (every member at its most obstacles and vessels), the rest from the family
 (:attr:`learning.experiments.setups.RLSetup.crowded_share`; stored in the checkpoints, so a
 resumed run keeps it).
+
+``--disc-observation scene`` (il-*-ow only, a new run): GAIL's discriminator sees the true
+scene's k-nearest form (the demonstrations' scene, the env's ``info["observation_scene"]``)
+whatever the policy sees, e.g. beside a radar policy
+(:attr:`learning.imitation.discriminator.GAILConfig.disc_observation`; stored in the
+checkpoints).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import sys
+import typing
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -74,6 +81,7 @@ from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
 from learning.experiments.train_rl import first_policy, train_rl
 from learning.experiments.validation import RunResult
+from learning.imitation.discriminator import DISC_OBSERVATIONS, DiscObservation
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import check_writable_dir
 from usvsim.common.options import bounds
@@ -107,6 +115,7 @@ class TrainArgs:
     crowded_share: float = field(  # rl-*-ow: share of episodes from the crowded family; 0: setup's
         default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
     )
+    disc_observation: str = ""  # il-*-ow: "scene" = GAIL's discriminator sees the true scene
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
@@ -133,6 +142,19 @@ class TrainArgs:
                 )
             if self.resume:
                 raise UserError("--crowded-share starts a new run; --resume keeps the run's own")
+        if self.disc_observation:
+            if self.disc_observation not in DISC_OBSERVATIONS:
+                raise UserError(
+                    f"--disc-observation must be one of {', '.join(DISC_OBSERVATIONS)}, "
+                    f"got {self.disc_observation!r}"
+                )
+            if self.setup not in IL_SETUPS or IL_SETUPS[self.setup].task != "open-water":
+                raise UserError(
+                    f"--disc-observation is for the il-*-ow setups (scene demonstrations), "
+                    f"not {self.setup!r}"
+                )
+            if self.resume:
+                raise UserError("--disc-observation starts a new run; --resume keeps the run's own")
 
 
 def _fail(message: str) -> SystemExit:
@@ -240,6 +262,10 @@ def _run_il(args: TrainArgs) -> int:
     out = _out_dir(args, setup.name)
     if args.n_envs:
         setup = setup.with_num_envs(args.n_envs)
+    if args.disc_observation:
+        view = typing.cast(DiscObservation, args.disc_observation)  # checked: TrainArgs.check
+        gail = dataclasses.replace(setup.gail, disc_observation=view)
+        setup = setup.replace(gail=gail)
     return _train_and_report(
         lambda: train_il(
             setup,

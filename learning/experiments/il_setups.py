@@ -88,6 +88,11 @@ class ILSetup:
     def __post_init__(self) -> None:
         if self.task not in TASKS:
             raise ValueError(f"ILSetup.task must be one of {TASKS}, got {self.task!r}")
+        if self.gail.disc_observation == "scene" and self.task != "open-water":
+            raise ValueError(
+                "a discriminator on the scene (GAILConfig.disc_observation='scene') needs "
+                f"task='open-water' (scene demonstrations), got task={self.task!r}"
+            )
 
     @property
     def algorithm(self) -> str:

@@ -15,6 +15,7 @@ as RL; 0 runs the whole budget), ``--time-budget-s``, ``--validate-every``, ``--
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -358,9 +359,16 @@ def train_il(
         advance(bar, s.mean_return, s.kl, run.history[-1] if run.history else None)
         return stop
 
+    view = setup.gail.disc_observation
+
     def make_env(n: int) -> PoleAvoidanceVectorEnv | OpenWaterVectorEnv:
         if setup.task == "open-water":
-            return OpenWaterVectorEnv(n, observation=setup.observation, action=setup.action)
+            return OpenWaterVectorEnv(
+                n,
+                observation=setup.observation,
+                action=setup.action,
+                info_observation=None if view == "policy" else view,
+            )
         return PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
 
     run.start = time.perf_counter()  # the clock counts GAIL, warm start included
@@ -420,6 +428,9 @@ def expert_pairs(
             f"{len(report.recordings)})"
         )
     data = expert_data(kept, setup.observation, setup.action)
+    if setup.gail.disc_observation != "policy":  # an asymmetric discriminator's view
+        disc = expert_data(kept, setup.gail.disc_observation, setup.action)
+        data = dataclasses.replace(data, disc_obs=disc.obs)
     log(
         f"{setup.name}: using {len(kept)} of {total} demonstrations in {demos_dir} "
         f"({len(report.errors)} skipped as unreadable or implausible, "

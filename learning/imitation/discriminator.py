@@ -26,14 +26,19 @@ from usvsim.task.observations import (
     POSITIONAL_STANDARDIZATION,
     SCENE_FEATURES,
     SCENE_K,
+    observation_space,
     standardize_scene,
 )
 
 SCENE_WIDTH = 4 + SCENE_FEATURES * SCENE_K  # floats of a scene observation (its standardisation)
+_SCENE_SPACE = observation_space("scene")
 
 __all__ = [
+    "DISC_OBSERVATIONS",
     "N_ABSORBING",
     "REWARDS",
+    "SCENE_INFO_KEY",
+    "DiscObservation",
     "Discriminator",
     "GAILConfig",
     "GAILTrainer",
@@ -46,6 +51,9 @@ __all__ = [
 
 RewardKind = Literal["-log(1-D)", "logit", "log_d"]
 REWARDS: tuple[str, ...] = get_args(RewardKind)
+DiscObservation = Literal["policy", "scene"]
+DISC_OBSERVATIONS: tuple[str, ...] = get_args(DiscObservation)
+SCENE_INFO_KEY = "observation_scene"  # usvsim.task.openwater_env: info_observation="scene"
 N_ABSORBING = 2  # [goal end, collision end]
 STATE_FORMAT = "usvsim.learning.gail/1"
 
@@ -132,10 +140,24 @@ class GAILConfig:
     freeze_input_stats: bool = False
     # keep the policy's observation-normaliser and BatchNorm statistics at the expert's (fitted
     # by the warm start) instead of refreshing them from rollouts (GAILAgent.update, gail.py)
+    disc_observation: DiscObservation = "policy"
+    # what D sees of the state: "policy" the policy's own observation; "scene" the true scene's
+    # k-nearest form (the env's info["observation_scene"], the demonstrations' scene), whatever
+    # the policy sees: an asymmetric discriminator that judges the boat's conduct, not its image
 
     def __post_init__(self) -> None:
         if self.reward not in REWARDS:
             raise ValueError(f"reward must be one of {REWARDS}, got {self.reward!r}")
+        if self.disc_observation not in DISC_OBSERVATIONS:
+            raise ValueError(
+                f"disc_observation must be one of {DISC_OBSERVATIONS}, "
+                f"got {self.disc_observation!r}"
+            )
+
+    @property
+    def disc_info_key(self) -> str | None:
+        """The env ``info`` key of D's observation (None: the policy's observation)."""
+        return None if self.disc_observation == "policy" else SCENE_INFO_KEY
 
 
 class GAILTrainer:
@@ -154,12 +176,21 @@ class GAILTrainer:
             observation_space,
             action_space,
         )
+        expert_obs = expert.obs
+        if config.disc_observation == "scene":
+            if expert.disc_obs is None:
+                raise ValueError(
+                    "disc_observation='scene' needs the expert's scene observations "
+                    "(ExpertData.disc_obs, from scene demonstrations)"
+                )
+            observation_space, expert_obs = _SCENE_SPACE, expert.disc_obs
+        self.disc_space = observation_space
         with torch.random.fork_rng():
             torch.manual_seed(seed + 7)
             self.disc = Discriminator(observation_space, config.disc_hidden, config.balanced_fusion)
         self.optimizer = torch.optim.Adam(self.disc.parameters(), lr=config.disc_lr)
         self.generator = torch.Generator().manual_seed(seed + 11)
-        obs = self.disc_obs(expert.obs)
+        obs = self.disc_obs(expert_obs)
         az = self._az(normalize_actions(expert.actions, action_space), np.zeros((len(expert), 2)))
         if config.absorbing:  # one goal-absorbing sample per expert run
             n_runs = int(expert.last.sum())
@@ -193,12 +224,22 @@ class GAILTrainer:
             return {k: torch.zeros((n, *v.shape[1:])) for k, v in like.items()}
         return torch.zeros((n, like.shape[1]))
 
+    def batch_obs(self, batch: RolloutBatch) -> Obs:
+        """The raw observations D sees of ``batch``'s steps (T, N, ...): the policy's, or the
+        env info the config names (:attr:`GAILConfig.disc_info_key`, ``batch.aux``)."""
+        key = self.config.disc_info_key
+        if key is None:
+            return batch.obs
+        if key not in batch.aux:
+            raise KeyError(f"the rollout has no {key!r}: make the env with info_observation")
+        return batch.aux[key]
+
     def policy_samples(
         self, batch: RolloutBatch, ends: NDArray[np.bool_]
     ) -> tuple[Any, Tensor, Tensor, Tensor]:
         """(obs, az) of the batch's valid steps, then of its absorbing samples; and the kinds."""
         valid = batch.valid.reshape(-1)
-        obs = self.disc_obs(index_obs(flatten_obs(batch.obs, 2), valid))
+        obs = self.disc_obs(index_obs(flatten_obs(self.batch_obs(batch), 2), valid))
         acts = batch.actions.reshape(-1, *batch.actions.shape[2:])[valid]
         az = self._az(normalize_actions(acts, self.action_space), np.zeros((int(valid.sum()), 2)))
         kinds = (ends & batch.terminated[..., None]).reshape(-1, N_ABSORBING)
@@ -277,7 +318,7 @@ class GAILTrainer:
         """Imitation rewards (T, N) for ``batch`` (steps 3 of the module docstring)."""
         cfg = self.config
         T, N = batch.rewards.shape
-        obs = self.disc_obs(flatten_obs(batch.obs, 2))
+        obs = self.disc_obs(flatten_obs(self.batch_obs(batch), 2))
         acts = batch.actions.reshape(-1, *batch.actions.shape[2:])
         az = self._az(normalize_actions(acts, self.action_space), np.zeros((T * N, 2)))
         clip = cfg.reward_clip

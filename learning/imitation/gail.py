@@ -36,6 +36,14 @@ action a            NORMALISED: the heading change as a fraction of the ±30° b
 z (2,)              absorbing-state indicator [goal end, collision end] (see below)
 ==================  =========================================================================
 
+``GAILConfig(disc_observation="scene")`` gives D the scene row's input whatever the policy
+sees: the demonstrations' true scene and, for the policy's pairs, the env's
+``info["observation_scene"]`` (``OpenWaterVectorEnv(info_observation="scene")``, kept beside
+s_t in ``RolloutBatch.aux``). A radar policy is then judged on where it steers among the
+obstacles, not on how its images look: D cannot tell the expert from the policy by radar noise
+or clutter that the policy does not cause (privileged information for the learner only, as an
+asymmetric actor-critic's critic; the policy, its checkpoint and its helmsman see the radar).
+
 Variable-length episodes: absorbing states (Kostrikov et al. 2019, "Discriminator-Actor-
 Critic"). An episode that *terminates* (goal reached or collision; truncation is not an end of
 the MDP and is bootstrapped as usual) moves to an absorbing state s_a that it never leaves; its
@@ -206,6 +214,8 @@ class GAILAgent:
         self.observation_space, self.action_space = observation_space, action_space
         self.config, self.gail_config, self.expert = config, gail_config, expert
         self.policy_agent = TRPOAgent(observation_space, action_space, config)
+        key = gail_config.disc_info_key
+        self.obs_info_keys: tuple[str, ...] = () if key is None else (key,)
         self.trainer = GAILTrainer(
             observation_space, action_space, expert, gail_config, seed=config.seed
         )

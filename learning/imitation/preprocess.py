@@ -171,6 +171,9 @@ class ExpertData:
     episode: NDArray[np.int64]
     last: NDArray[np.bool_]
     tracks: tuple[DecisionTrack, ...]
+    # the same pairs' observations in a second form, for a discriminator that sees more than the
+    # policy (GAILConfig.disc_observation; learning.experiments.train_il.expert_pairs)
+    disc_obs: NDArray[Any] | dict[str, NDArray[Any]] | None = None
 
     def __len__(self) -> int:
         return int(self.heading_change_rad.size)

@@ -243,7 +243,16 @@ class OpenWaterBatch:
             pos, t_s, discs, self._r_pole, self._half_beam, self._distance_backend
         )
 
-    def _observe(self, idx: NDArray[np.intp] | None = None) -> Any:
+    def observe(self, kind: ObservationKind) -> Any:
+        """Every boat's ``kind`` observation now (the step's own is ``observation_kind``'s), from
+        the same navigation estimate and scene: e.g. the true-scene ``scene`` form beside a
+        radar policy's image, for an asymmetric learner. A radar kind draws the frame the
+        step drew."""
+        return self._observe(kind=kind)
+
+    def _observe(
+        self, idx: NDArray[np.intp] | None = None, kind: ObservationKind | None = None
+    ) -> Any:
         sl: Any = slice(None) if idx is None else idx
         pos, psi = self.inner.estimate
         t = (self._n_dec[sl] * self.base.decision_period_s).astype(float)[:, None]
@@ -254,7 +263,7 @@ class OpenWaterBatch:
             q.noise_amplitude[sl],
         )  # fmt: skip
         return observe_scene(
-            self.observation_kind, pos[sl], psi[sl], self.inner.estimated_velocity[sl],
+            kind or self.observation_kind, pos[sl], psi[sl], self.inner.estimated_velocity[sl],
             self.goal_ne[sl], SceneDiscs(centres[:, :, 0], radii, velocity[:, :, 0], ok),
             self.radar, degr, self._radar_streams.frame_keys(sl),
         )  # fmt: skip

@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from usvsim.task.batch import ActionKind, Observation, observation_rows, write_observation_rows
 from usvsim.task.horizon import RewardHorizon, apply_reward_horizon
-from usvsim.task.observations import ObservationKind
+from usvsim.task.observations import OBSERVATION_KINDS, ObservationKind
 from usvsim.task.openwater import (
     OpenWaterEpisode,
     OpenWaterScenario,
@@ -249,7 +249,11 @@ class OpenWaterVectorEnv(VectorEnv):
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
     ``plant``, ``radar``, ``backend``. ``render_mode`` must be ``None``: the top view draws one
-    pole (:mod:`usvsim.task.render`).
+    pole (:mod:`usvsim.task.render`). ``info_observation`` (e.g. ``"scene"``): ``reset`` and
+    every ``step`` also return that form of the returned observation as
+    ``info["observation_<kind>"]`` (N, ...) (after an autoreset the new episode's, as the
+    observation; ``final_info`` does not carry it): privileged input for a learner that trains
+    on more than the policy sees (a GAIL discriminator on the true scene beside a radar policy).
     """
 
     def __init__(
@@ -266,6 +270,7 @@ class OpenWaterVectorEnv(VectorEnv):
         plant: Plant | None = None,
         radar: RadarConfig | None = None,
         backend: Literal["auto", "compiled", "casadi"] = "auto",
+        info_observation: ObservationKind | None = None,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -282,6 +287,12 @@ class OpenWaterVectorEnv(VectorEnv):
             backend=backend,
         )  # fmt: skip
         self.num_envs = self.sim.n_boats
+        if info_observation is not None and info_observation not in OBSERVATION_KINDS:
+            raise ValueError(
+                f"info_observation must be None or one of {OBSERVATION_KINDS}, "
+                f"got {info_observation!r}"
+            )
+        self.info_observation = info_observation
         self._normalize = normalize_observation and observation == "positional"
         space = self.sim.single_observation_space
         if self._normalize:
@@ -326,7 +337,16 @@ class OpenWaterVectorEnv(VectorEnv):
         if len(episodes) != self.num_envs:
             raise ValueError(f"need one episode per boat ({self.num_envs}), got {len(episodes)}")
         obs = self._start(everyone, list(episodes))
-        return obs, {"goal_ne": self.sim.goal_ne.copy()}
+        info = {"goal_ne": self.sim.goal_ne.copy()}
+        return obs, self._add_info_observation(info)
+
+    def _add_info_observation(self, info: dict[str, Any]) -> dict[str, Any]:
+        """``info`` with ``observation_<kind>`` of ``info_observation`` (unchanged if None)."""
+        if self.info_observation is not None:
+            info[f"observation_{self.info_observation.replace('+', '_')}"] = self.sim.observe(
+                self.info_observation
+            )
+        return info
 
     def _end_distance(self, res: OpenWaterStep) -> FloatArray:
         """Pole-equivalent distance (m) to the nearest obstacle at each boat's end step (N,)."""
@@ -391,7 +411,7 @@ class OpenWaterVectorEnv(VectorEnv):
                 final_obs=final_obs, _final_obs=done, final_info=final_info, _final_info=done
             )
             write_observation_rows(obs, idx, self._start(idx, self._draw(idx)))
-        return obs, reward, terminated, truncated, info
+        return obs, reward, terminated, truncated, self._add_info_observation(info)
 
 
 def _rows_list(obs: Observation, idx: NDArray[np.intp]) -> list[Any]:
