@@ -297,7 +297,7 @@ def test_usvsim_train_il_scene_ow_end_to_end(tmp_path: Path) -> None:
     rows = _csv(tmp_path / "log.csv")
     assert [r["val_family_n_episodes"] for r in rows if r["val_successes"]] == ["100", "100"]
     summary = json.loads((tmp_path / "summary.json").read_text())
-    assert summary["demonstrations"] == 392  # of the 480 shipped runs, the quality filter keeps 392
+    assert summary["demonstrations"] == 785  # of the 960 shipped runs, the quality filter keeps 785
     best = summary["best"]
     assert best["family_n_episodes"] == 100
     first_best = max(  # the first of the best, as best.pt keeps it (strictly better only)

@@ -141,10 +141,13 @@ def test_the_agent_asks_the_rollout_for_the_scene() -> None:
         env.single_observation_space,
         env.single_action_space,
         setup.algorithm_config,
-        setup.gail,
+        dataclasses.replace(setup.gail, disc_observation="policy"),
         _synthetic_expert(),
     )
     assert plain.obs_info_keys == ()
+    # the shipped recipes: the Gaussian radar setup's D sees the scene, the categorical's the image
+    assert setup.gail.disc_observation == "scene"
+    assert get_il_setup("il-categorical-radar-ow").gail.disc_observation == "policy"
 
 
 def _args(out: Path, **kw: object) -> TrainArgs:

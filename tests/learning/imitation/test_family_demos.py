@@ -188,9 +188,9 @@ def test_mixing_one_pole_and_scene_runs_is_refused(recordings) -> None:  # type:
 
 def test_the_shipped_family_demonstrations_load() -> None:
     paths = sorted(FAMILY_DEMOS_DIR.glob("demo_*.csv.gz"))
-    assert len(paths) == 480
+    assert len(paths) == 960
     kept = [p for p in paths[:20] if not quality_check(load_recording(p))]
-    assert len(kept) >= 12  # 392 of the 480 pass
+    assert len(kept) >= 12  # 785 of the 960 pass
 
 
 def test_gzipped_files_load_as_the_text_does(recordings, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
