@@ -129,22 +129,14 @@ def test_the_scene_discriminator_needs_scene_data_and_an_open_water_setup() -> N
 def test_the_agent_asks_the_rollout_for_the_scene() -> None:
     env = OpenWaterVectorEnv(2, observation="radar+goal")
     setup = get_il_setup("il-gaussian-radar-ow")
-    agent = GAILAgent(
-        env.single_observation_space,
-        env.single_action_space,
-        setup.algorithm_config,
-        dataclasses.replace(setup.gail, disc_observation="scene"),
-        _synthetic_expert(),
-    )
-    assert agent.obs_info_keys == (SCENE_INFO_KEY,)
-    plain = GAILAgent(
-        env.single_observation_space,
-        env.single_action_space,
-        setup.algorithm_config,
-        dataclasses.replace(setup.gail, disc_observation="policy"),
-        _synthetic_expert(),
-    )
-    assert plain.obs_info_keys == ()
+
+    def agent(view: str) -> GAILAgent:
+        gail = dataclasses.replace(setup.gail, disc_observation=view)
+        space_o, space_a = env.single_observation_space, env.single_action_space
+        return GAILAgent(space_o, space_a, setup.algorithm_config, gail, _synthetic_expert())
+
+    assert agent("scene").obs_info_keys == (SCENE_INFO_KEY,)
+    assert agent("policy").obs_info_keys == ()
     # the shipped recipes: the Gaussian radar setup's D sees the scene, the categorical's the image
     assert setup.gail.disc_observation == "scene"
     assert get_il_setup("il-categorical-radar-ow").gail.disc_observation == "policy"
