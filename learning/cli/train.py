@@ -60,6 +60,11 @@ scene's k-nearest form (the demonstrations' scene, the env's ``info["observation
 whatever the policy sees, e.g. beside a radar policy
 (:attr:`learning.imitation.discriminator.GAILConfig.disc_observation`; stored in the
 checkpoints).
+
+``--harsh-radar-copies K`` (il-*-radar-ow only, a new run): every demonstration also enters the
+expert data K times with its radar at the family's harshest level, and K/(K+1) of the training
+episodes are drawn from that harsh-radar family
+(:attr:`learning.experiments.il_setups.ILSetup.harsh_radar_copies`; stored in the checkpoints).
 """
 
 from __future__ import annotations
@@ -76,7 +81,7 @@ import torch
 
 from learning.algorithms.rollout import NonFiniteError
 from learning.experiments.checkpoint import CheckpointError, NonFiniteWeightsError, load_checkpoint
-from learning.experiments.il_setups import IL_SETUPS, get_il_setup
+from learning.experiments.il_setups import IL_SETUPS, MAX_HARSH_RADAR_COPIES, get_il_setup
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
 from learning.experiments.train_rl import first_policy, train_rl
@@ -116,6 +121,9 @@ class TrainArgs:
         default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
     )
     disc_observation: str = ""  # il-*-ow: "scene" = GAIL's discriminator sees the true scene
+    harsh_radar_copies: int = field(  # il-*-radar-ow: each demo again K× at the harshest radar
+        default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
+    )
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
@@ -155,6 +163,16 @@ class TrainArgs:
                 )
             if self.resume:
                 raise UserError("--disc-observation starts a new run; --resume keeps the run's own")
+        if self.harsh_radar_copies:
+            il = IL_SETUPS.get(self.setup)
+            if il is None or il.task != "open-water" or il.observation != "radar+goal":
+                raise UserError(
+                    f"--harsh-radar-copies is for the il-*-radar-ow setups, not {self.setup!r}"
+                )
+            if self.resume:
+                raise UserError(
+                    "--harsh-radar-copies starts a new run; --resume keeps the run's own"
+                )
 
 
 def _fail(message: str) -> SystemExit:
@@ -266,6 +284,8 @@ def _run_il(args: TrainArgs) -> int:
         view = typing.cast(DiscObservation, args.disc_observation)  # checked: TrainArgs.check
         gail = dataclasses.replace(setup.gail, disc_observation=view)
         setup = setup.replace(gail=gail)
+    if args.harsh_radar_copies:
+        setup = setup.replace(harsh_radar_copies=args.harsh_radar_copies)
     return _train_and_report(
         lambda: train_il(
             setup,

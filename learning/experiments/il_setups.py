@@ -65,11 +65,25 @@ from learning.experiments.setups import RL_TRPO, TASKS
 from learning.imitation.gail import GAILConfig
 from usvsim.task.batch import ActionKind
 from usvsim.task.observations import ObservationKind
+from usvsim.task.openwater_env import (
+    OPEN_WATER_FAMILY,
+    ScenarioMixture,
+    harsh_radar_family,
+    mix_families,
+)
 
-__all__ = ["IL_GAIL", "IL_SETUPS", "IL_TRPO", "ILSetup", "get_il_setup"]
+__all__ = [
+    "IL_GAIL",
+    "IL_SETUPS",
+    "IL_TRPO",
+    "MAX_HARSH_RADAR_COPIES",
+    "ILSetup",
+    "get_il_setup",
+]
 
 IL_TRPO = dataclasses.replace(RL_TRPO, iterations=120, num_envs=16)  # B = N·T = 1024
 IL_GAIL = GAILConfig(bc_epochs=50)
+MAX_HARSH_RADAR_COPIES = 8  # ILSetup.harsh_radar_copies: 8 copies = 89 % of the data harsh
 
 
 @dataclass(frozen=True)
@@ -85,15 +99,49 @@ class ILSetup:
     study_success: float = 0.0  # the study's best validation success (Table 4.1)
     study_iterations: int = 0  # the study's iterations to it
     task: str = "pole"  # one of learning.experiments.setups.TASKS: the training environment
+    # radar on the family: each demonstration also enters the expert data this many times with
+    # its radar at the family's harshest level (its own radar draws), and that share, k/(k+1),
+    # of the training episodes comes from the harsh-radar family (:meth:`training_family`), so
+    # the expert's and the policy's data keep the same mix; 0: neither
+    harsh_radar_copies: int = 0
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
             raise ValueError(f"ILSetup.task must be one of {TASKS}, got {self.task!r}")
+        if not 0 <= self.harsh_radar_copies <= MAX_HARSH_RADAR_COPIES:
+            raise ValueError(
+                f"ILSetup.harsh_radar_copies must be an integer in [0, {MAX_HARSH_RADAR_COPIES}], "
+                f"got {self.harsh_radar_copies!r}"
+            )
+        if self.harsh_radar_copies and (
+            self.task != "open-water" or self.observation != "radar+goal"
+        ):
+            raise ValueError(
+                "ILSetup.harsh_radar_copies is for radar setups on the open-water family "
+                f"(task='open-water', observation='radar+goal'), got task={self.task!r}, "
+                f"observation={self.observation!r}"
+            )
         if self.gail.disc_observation == "scene" and self.task != "open-water":
             raise ValueError(
                 "a discriminator on the scene (GAILConfig.disc_observation='scene') needs "
                 f"task='open-water' (scene demonstrations), got task={self.task!r}"
             )
+
+    @property
+    def harsh_radar_share(self) -> float:
+        """The share of training episodes (and of expert runs) at the harshest radar level that
+        :attr:`harsh_radar_copies` adds: k/(k+1)."""
+        k = self.harsh_radar_copies
+        return k / (k + 1)
+
+    @property
+    def training_family(self) -> ScenarioMixture:
+        """The open-water training distribution: the family, mixed with its harsh-radar form
+        (:func:`usvsim.task.openwater_env.harsh_radar_family`) at :attr:`harsh_radar_share`."""
+        if not self.harsh_radar_copies:
+            return OPEN_WATER_FAMILY
+        harsh = harsh_radar_family()
+        return mix_families(OPEN_WATER_FAMILY, harsh, self.harsh_radar_share, prefix="harsh-")
 
     @property
     def algorithm(self) -> str:

@@ -50,23 +50,37 @@ from learning.imitation.demonstrations import (
     DEMOS_DIR,
     DemoFormatError,
     LoadReport,
+    Recording,
     load_recordings,
     quality_check,
 )
 from learning.imitation.family_demos import FAMILY_DEMOS_DIR
 from learning.imitation.gail import GAILAgent, GAILStats, train_gail
-from learning.imitation.preprocess import ExpertData, check_observations, expert_data
+from learning.imitation.preprocess import (
+    ExpertData,
+    check_observations,
+    expert_data,
+    with_radar,
+)
 from usvsim.common.fileio import (
     atomic_open,
     remove_stale_temporaries,
 )
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
-from usvsim.task.openwater_env import OpenWaterVectorEnv
+from usvsim.task.openwater import RadarQuality
+from usvsim.task.openwater_env import RADAR_RANGES, OpenWaterVectorEnv, harsh_radar_family
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
-__all__ = ["IL_CSV_FIELDS", "ILRunResult", "expert_pairs", "train_il", "validate_il"]
+__all__ = [
+    "IL_CSV_FIELDS",
+    "ILRunResult",
+    "expert_pairs",
+    "harsh_radar_runs",
+    "train_il",
+    "validate_il",
+]
 
 ILRunResult = RunResult  # the outcome of train_il (the same record as an RL run's)
 
@@ -367,6 +381,7 @@ def train_il(
                 n,
                 observation=setup.observation,
                 action=setup.action,
+                family=setup.training_family,
                 info_observation=None if view == "policy" else view,
             )
         return PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
@@ -427,17 +442,34 @@ def expert_pairs(
             f"implausible: {len(report.errors)}, rejected by the quality filter: "
             f"{len(report.recordings)})"
         )
+    if setup.harsh_radar_copies:  # each run again at the harshest radar level (ILSetup)
+        kept = kept + harsh_radar_runs(kept, setup.harsh_radar_copies)
     data = expert_data(kept, setup.observation, setup.action)
     if setup.gail.disc_observation != "policy":  # an asymmetric discriminator's view
         disc = expert_data(kept, setup.gail.disc_observation, setup.action)
         data = dataclasses.replace(data, disc_obs=disc.obs)
+    n_runs = len(kept) // (setup.harsh_radar_copies + 1)
+    copies = (
+        f", each also {setup.harsh_radar_copies}× at the harshest radar level"
+        if setup.harsh_radar_copies
+        else ""
+    )
     log(
-        f"{setup.name}: using {len(kept)} of {total} demonstrations in {demos_dir} "
+        f"{setup.name}: using {n_runs} of {total} demonstrations in {demos_dir} "
         f"({len(report.errors)} skipped as unreadable or implausible, "
-        f"{len(report.recordings) - len(kept)} rejected by the quality filter), "
+        f"{len(report.recordings) - n_runs} rejected by the quality filter{copies}), "
         f"{len(data)} pairs"
     )
-    return data, len(kept), len(report.errors)
+    return data, n_runs, len(report.errors)
+
+
+def harsh_radar_runs(runs: Sequence[Recording], copies: int) -> list[Recording]:
+    """``copies`` copies of every scene run in ``runs`` with its radar at the open-water family's
+    harshest level (:func:`usvsim.task.openwater_env.harsh_radar_family`; its own noise per copy,
+    :func:`learning.imitation.preprocess.with_radar`), copy by copy."""
+    member = harsh_radar_family().members[0]
+    quality = RadarQuality(*(getattr(member, name)[0] for name in RADAR_RANGES))
+    return [with_radar(r, quality, c) for c in range(1, copies + 1) for r in runs]
 
 
 def _resume_state(

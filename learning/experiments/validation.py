@@ -37,7 +37,7 @@ import functools
 import json
 import zlib
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,12 +48,12 @@ from learning.experiments.checkpoint import PolicyHelmsman
 from usvsim.common.fileio import atomic_write_text, json_safe
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
 from usvsim.evaluation.openwater import OpenWaterRecord, evaluate_open_water
-from usvsim.task.openwater import OpenWaterEpisode, OpenWaterScenario
+from usvsim.task.openwater import OpenWaterEpisode
 from usvsim.task.openwater_env import (
     OPEN_WATER_FAMILY,
-    ScenarioMixture,
     crowded_family,
     draw_family,
+    harsh_radar_family,
 )
 from usvsim.task.scenario import EpisodeSpec
 
@@ -90,12 +90,6 @@ RADAR_VALIDATION_SIZE = 50  # episodes: about 8 s of a radar validation on this 
 RADAR_STOP_RATE = 0.90  # -, harsh-radar success an early stop needs (issue 18's radar bar)
 CROWDED_VALIDATION_SEED = zlib.crc32(b"crowded-validation")  # none of the stress sets' seeds
 CROWDED_VALIDATION_SIZE = 50  # episodes
-_RADAR_RANGES = (
-    "radar_clutter_range",
-    "radar_speckle_range",
-    "radar_missed_range",
-    "radar_noise_range",
-)
 
 
 @functools.lru_cache(maxsize=4)
@@ -103,15 +97,6 @@ def family_validation_episodes(n: int = FAMILY_VALIDATION_SIZE) -> tuple[OpenWat
     """The fixed family validation set: ``n`` episodes of the training family, episode k from
     ``default_rng([FAMILY_VALIDATION_SEED, k])`` (:func:`usvsim.task.openwater_env.draw_family`)."""
     return draw_family(OPEN_WATER_FAMILY, FAMILY_VALIDATION_SEED, n)
-
-
-def harsh_radar_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixture:
-    """``family`` with each radar degradation (clutter, speckle, missed returns, noise) fixed at
-    the highest level any of its members draws, in every member."""
-    top = {name: max(getattr(m, name)[1] for m in family.members) for name in _RADAR_RANGES}
-    fixed: dict[str, Any] = {name: (v, v) for name, v in top.items()}
-    members: tuple[OpenWaterScenario, ...] = tuple(replace(m, **fixed) for m in family.members)
-    return replace(family, members=members)
 
 
 @functools.lru_cache(maxsize=4)

@@ -77,6 +77,7 @@ __all__ = [
     "interpolate_heading",
     "interpolate_position",
     "recording_from_tlog",
+    "with_radar",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -380,3 +381,28 @@ def _increasing(rows: FloatArray) -> FloatArray:
         return rows.reshape(0, 3)
     keep = rows[:, 0] > np.maximum.accumulate(np.concatenate([[-np.inf], rows[:-1, 0]]))
     return rows[keep]
+
+
+def with_radar(recording: Recording, quality: RadarQuality, copy: int) -> Recording:
+    """``recording`` (a ``usvsim-demo/2`` run) as if its helmsman's radar had been of
+    ``quality``: the same streams and scene, the ``radar`` entry replaced, its noise seed drawn
+    from the run's own radar seed and ``copy`` (>= 1), so that copies of one run, and copies of
+    different runs, see different noise. Its ``source`` names the copy.
+
+    Used to add demonstrations at the family's harshest radar level
+    (:attr:`learning.experiments.il_setups.ILSetup.harsh_radar_copies`): the expert's heading
+    changes depend on the true scene, not on the image, so the pairs stay the expert's."""
+    if "scene" not in recording.meta:
+        raise ValueError(f"{recording.source or 'recording'}: not a scene run (usvsim-demo/2)")
+    if copy < 1:
+        raise ValueError(f"with_radar: copy must be >= 1, got {copy!r}")
+    scene = dict(recording.meta["scene"])
+    own = int(scene.get("radar", {}).get("seed", 0))
+    seed = int(np.random.SeedSequence([own, copy, _COPY_TAG]).generate_state(1, np.uint64)[0])
+    scene["radar"] = {**dataclasses.asdict(quality), "seed": seed}
+    meta = {**recording.meta, "scene": scene}
+    source = f"{recording.source}#radar{copy}" if recording.source else ""
+    return dataclasses.replace(recording, meta=meta, source=source)
+
+
+_COPY_TAG = 0x68617273  # "hars": keeps the copies' seeds apart from [own, copy] draws elsewhere

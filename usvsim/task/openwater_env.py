@@ -65,11 +65,13 @@ from usvsim.vessel.plant import Plant
 
 __all__ = [
     "OPEN_WATER_FAMILY",
+    "RADAR_RANGES",
     "OpenWaterVectorEnv",
     "ScenarioMixture",
     "crowded_family",
     "draw_family",
     "draw_family_episode",
+    "harsh_radar_family",
     "mix_families",
 ]
 
@@ -170,6 +172,24 @@ def crowded_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixtu
         weights=tuple(float(w) for _, w, _ in kept),
         names=tuple(name for _, _, name in kept),
     )
+
+
+RADAR_RANGES = (  # the OpenWaterScenario fields of the radar's degradation
+    "radar_clutter_range",
+    "radar_speckle_range",
+    "radar_missed_range",
+    "radar_noise_range",
+)
+
+
+def harsh_radar_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixture:
+    """``family`` with each radar degradation (clutter, speckle, missed returns, noise) fixed at
+    the highest level any of its members draws, in every member (the level of the stress suite's
+    ``radar-noise`` set)."""
+    top = {name: max(getattr(m, name)[1] for m in family.members) for name in RADAR_RANGES}
+    fixed: dict[str, Any] = {name: (v, v) for name, v in top.items()}
+    members = tuple(replace(m, **fixed) for m in family.members)
+    return replace(family, members=members)
 
 
 def mix_families(
