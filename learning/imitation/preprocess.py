@@ -257,7 +257,10 @@ def _scene_radar(
         np.repeat([getattr(q, name) for q in quality], n_decisions).astype(float)
         for name in ("clutter_probability", "speckle", "missed_probability", "noise_amplitude")
     ]
-    seeds = np.repeat([s.radar_seed for s in scenes], n_decisions).tolist()
+    # uint64: a seed may be any integer below 2⁶⁴, and a list holding one above 2⁶³ - 1 would
+    # otherwise become float64 and round every seed in it to 53 bits
+    own = np.array([s.radar_seed for s in scenes], dtype=np.uint64)
+    seeds = np.repeat(own, n_decisions).tolist()
     frames = np.concatenate([np.arange(k, dtype=np.int64) for k in n_decisions])
     return RadarDegradation(*fields), stream_keys(seeds, frames)
 
