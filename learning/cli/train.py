@@ -55,6 +55,10 @@ the crowded family (every member at its most obstacles and vessels), the rest fr
 (:attr:`learning.experiments.setups.RLSetup.crowded_share`; stored in the checkpoints, so a
 resumed run keeps it).
 
+``--harsh-radar-share S`` (rl-*-radar-ow only, a new run) puts that share of the training
+episodes at the family's harshest radar, every degradation at its strongest
+(:attr:`learning.experiments.setups.RLSetup.harsh_radar_share`; stored in the checkpoints).
+
 ``--disc-observation scene`` (il-*-ow only, a new run): GAIL's discriminator sees the true
 scene's k-nearest form (the demonstrations' scene, the env's ``info["observation_scene"]``)
 whatever the policy sees, e.g. beside a radar policy
@@ -120,6 +124,9 @@ class TrainArgs:
     crowded_share: float = field(  # rl-*-ow: share of episodes from the crowded family; 0: setup's
         default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
     )
+    harsh_radar_share: float = field(  # rl-*-radar-ow: share of episodes at the harshest radar
+        default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
+    )
     disc_observation: str = ""  # il-*-ow: "scene" = GAIL's discriminator sees the true scene
     harsh_radar_copies: int = field(  # il-*-radar-ow: each demo again K× at the harshest radar
         default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
@@ -150,6 +157,17 @@ class TrainArgs:
                 )
             if self.resume:
                 raise UserError("--crowded-share starts a new run; --resume keeps the run's own")
+        if self.harsh_radar_share:
+            rl = SETUPS.get(self.setup)
+            if rl is None or rl.task != "open-water" or rl.observation != "radar+goal":
+                raise UserError(
+                    f"--harsh-radar-share is for the rl-*-radar-ow setups, not {self.setup!r} "
+                    "(il-*-radar-ow: --harsh-radar-copies)"
+                )
+            if self.resume:
+                raise UserError(
+                    "--harsh-radar-share starts a new run; --resume keeps the run's own"
+                )
         if self.disc_observation:
             if self.disc_observation not in DISC_OBSERVATIONS:
                 raise UserError(
@@ -357,6 +375,8 @@ def run(args: TrainArgs) -> int:
         setup = setup.with_num_envs(args.n_envs)
     if args.crowded_share:
         setup = setup.replace(crowded_share=args.crowded_share)
+    if args.harsh_radar_share:
+        setup = setup.replace(harsh_radar_share=args.harsh_radar_share)
     if not args.resume:
         try:  # a policy that cannot start this setup: one line before any work
             first_policy(setup, args.init_policy)

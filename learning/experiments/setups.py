@@ -43,7 +43,9 @@ validated on the study's 15 episodes (the reported validation) and on a fixed fa
 (:func:`learning.experiments.validation.family_validation_episodes`). ``crowded_share`` (0 for
 every registered setup; ``usvsim train --crowded-share``) draws that share of the training
 episodes from :func:`usvsim.task.openwater_env.crowded_family` instead, every member at its most
-obstacles and vessels (:attr:`RLSetup.training_family`).
+obstacles and vessels (:attr:`RLSetup.training_family`); ``harsh_radar_share`` (radar setups;
+``usvsim train --harsh-radar-share``) puts that share of the episodes at the family's harshest
+radar (:func:`usvsim.task.openwater_env.harsh_radar_family`).
 
 "radar" setups use the ``radar+goal`` observation: the study's RL radar setups fed the
 standardised goal vector to the CNN after the convolution ("late fusion"); with the image alone
@@ -103,6 +105,7 @@ from usvsim.task.openwater_env import (
     OpenWaterVectorEnv,
     ScenarioMixture,
     crowded_family,
+    harsh_radar_family,
     mix_families,
 )
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
@@ -200,6 +203,10 @@ class RLSetup:
     # its most obstacles and vessels, usvsim.task.openwater_env.crowded_family), the rest from
     # OPEN_WATER_FAMILY; 0: the family alone
     crowded_share: float = 0.0
+    # radar on the family: the share of training episodes whose radar is at the family's
+    # harshest level (usvsim.task.openwater_env.harsh_radar_family, crowded or not as above);
+    # 0: the family's own radar draws
+    harsh_radar_share: float = 0.0
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
@@ -208,13 +215,30 @@ class RLSetup:
             raise ValueError(f"RLSetup.crowded_share must be in [0, 1), got {self.crowded_share!r}")
         if self.crowded_share and self.task != "open-water":
             raise ValueError("RLSetup.crowded_share is for task='open-water' setups only")
+        if not 0.0 <= self.harsh_radar_share < 1.0:
+            raise ValueError(
+                f"RLSetup.harsh_radar_share must be in [0, 1), got {self.harsh_radar_share!r}"
+            )
+        if self.harsh_radar_share and (
+            self.task != "open-water" or self.observation != "radar+goal"
+        ):
+            raise ValueError(
+                "RLSetup.harsh_radar_share is for radar setups on the open-water family "
+                f"(task='open-water', observation='radar+goal'), got task={self.task!r}, "
+                f"observation={self.observation!r}"
+            )
 
     @property
     def training_family(self) -> ScenarioMixture:
-        """The open-water training distribution (:attr:`crowded_share`)."""
-        if not self.crowded_share:
-            return OPEN_WATER_FAMILY
-        return mix_families(OPEN_WATER_FAMILY, crowded_family(), self.crowded_share)
+        """The open-water training distribution (:attr:`crowded_share`, then
+        :attr:`harsh_radar_share` of that mixture at the harshest radar)."""
+        family = OPEN_WATER_FAMILY
+        if self.crowded_share:
+            family = mix_families(family, crowded_family(), self.crowded_share)
+        if self.harsh_radar_share:
+            harsh = harsh_radar_family(family)
+            family = mix_families(family, harsh, self.harsh_radar_share, prefix="harsh-")
+        return family
 
     @property
     def algorithm(self) -> str:

@@ -227,3 +227,15 @@ def test_crowded_share_is_for_new_open_water_runs(tmp_path: Path) -> None:
     with pytest.raises(SystemExit, match="must be > 0 and < 1"):
         run(_args(tmp_path / "c", setup="rl-gaussian-scene-ow", crowded_share=1.0))
     assert not any(tmp_path.rglob("*.pt"))
+
+
+def test_harsh_radar_share_is_for_new_radar_rl_runs_on_the_family(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match="for the rl-\\*-radar-ow setups"):
+        run(_args(tmp_path / "a", setup="rl-gaussian-scene-ow", harsh_radar_share=0.5))
+    with pytest.raises(SystemExit, match="--harsh-radar-copies"):
+        run(_args(tmp_path / "b", setup="il-gaussian-radar-ow", harsh_radar_share=0.5))
+    with pytest.raises(SystemExit, match="--resume keeps the run's own"):
+        run(_args(tmp_path / "c", setup="rl-gaussian-radar-ow", harsh_radar_share=0.5, resume=True))
+    with pytest.raises(SystemExit, match="must be > 0 and < 1"):
+        run(_args(tmp_path / "d", setup="rl-gaussian-radar-ow", harsh_radar_share=1.0))
+    assert not any(tmp_path.rglob("*.pt"))

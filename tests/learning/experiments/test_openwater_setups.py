@@ -96,6 +96,28 @@ def test_a_crowded_share_mixes_the_crowded_family_into_training():
         get_setup(STUDY[0]).replace(crowded_share=0.2)
 
 
+def test_a_harsh_radar_share_puts_that_share_of_episodes_at_the_strongest_radar():
+    base = get_setup("rl-gaussian-radar-ow")
+    setup = base.replace(harsh_radar_share=0.3, crowded_share=0.2)
+    family = setup.make_vector_env(2).family
+    harsh = np.array([name.startswith("harsh-") for name in family.names])
+    assert family.probabilities[harsh].sum() == pytest.approx(0.3)
+    crowded = np.array(["crowded-" in name for name in family.names])
+    assert family.probabilities[crowded].sum() == pytest.approx(0.2)  # independent of the radar
+    (radar_noise,) = [s.scenario for s in STRESS_SETS if s.name == "radar-noise"]
+    assert radar_noise is not None
+    top = radar_noise.radar_noise_range[1]
+    episodes = draw_family(family, 3, 500)
+    at_top = np.mean([e.radar.noise_amplitude == top for e in episodes])
+    assert 0.23 < at_top < 0.37  # 0.3 ± 3.4 σ of 500 draws; the family alone never draws it
+    assert not any(e.radar.noise_amplitude == top for e in draw_family(OPEN_WATER_FAMILY, 3, 500))
+    assert setup_from_params(base, setup_params(setup)) == setup  # stored with a run
+    with pytest.raises(ValueError, match=r"harsh_radar_share must be in \[0, 1\)"):
+        base.replace(harsh_radar_share=1.0)
+    with pytest.raises(ValueError, match="for radar setups on the open-water family"):
+        get_setup("rl-gaussian-scene-ow").replace(harsh_radar_share=0.2)
+
+
 def test_unknown_task_is_refused():
     with pytest.raises(ValueError, match=r"RLSetup\.task must be one of"):
         get_setup("rl-gaussian-scene-ow").replace(task="lake")
