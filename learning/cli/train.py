@@ -124,11 +124,11 @@ class TrainArgs:
     crowded_share: float = field(  # rl-*-ow: share of episodes from the crowded family; 0: setup's
         default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
     )
-    harsh_radar_share: float = field(  # rl-*-radar-ow: share of episodes at the harshest radar
+    harsh_radar_share: float = field(  # rl-*-radar-ow: share at the harshest radar; 0: setup's
         default=0.0, metadata=bounds(gt=0, lt=1, zero_ok=True)
     )
     disc_observation: str = ""  # il-*-ow: "scene" = GAIL's discriminator sees the true scene
-    harsh_radar_copies: int = field(  # il-*-radar-ow: each demo again K× at the harshest radar
+    harsh_radar_copies: int = field(  # il-*-radar-ow: K harsh-radar copies per demo; 0: setup's
         default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
     )
 

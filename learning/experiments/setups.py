@@ -305,7 +305,17 @@ SETUPS: dict[str, RLSetup] = {
         # on the open-water family (issue 18): the k-nearest positional form and the radar
         RLSetup("rl-gaussian-scene-ow", "scene", "gaussian", OW_TRPO, task="open-water"),
         RLSetup("rl-categorical-scene-ow", "scene", "categorical", OW_TRPO, task="open-water"),
-        RLSetup("rl-gaussian-radar-ow", "radar+goal", "gaussian", OW_RADAR_TRPO, task="open-water"),
+        # 30 % of its episodes at the harshest radar (measured 2026-12-04, seed 0, 2,700 s on one
+        # core: radar-noise 98 %, radar-clutter 100 %, 17 stress sets >= 95 %, mean 95.6 %,
+        # against 88 %, 95 %, 16 and 95.6 % without; extended obstacles 77 % against 93 %)
+        RLSetup(
+            "rl-gaussian-radar-ow",
+            "radar+goal",
+            "gaussian",
+            OW_RADAR_TRPO,
+            task="open-water",
+            harsh_radar_share=0.3,
+        ),
         RLSetup(
             "rl-categorical-radar-ow", "radar+goal", "categorical", OW_RADAR_TRPO, task="open-water"
         ),

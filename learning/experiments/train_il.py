@@ -50,7 +50,6 @@ from learning.imitation.demonstrations import (
     DEMOS_DIR,
     DemoFormatError,
     LoadReport,
-    Recording,
     load_recordings,
     quality_check,
 )
@@ -60,7 +59,7 @@ from learning.imitation.preprocess import (
     ExpertData,
     check_observations,
     expert_data,
-    with_radar,
+    harsh_radar_runs,
 )
 from usvsim.common.fileio import (
     atomic_open,
@@ -68,8 +67,7 @@ from usvsim.common.fileio import (
 )
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
-from usvsim.task.openwater import RadarQuality
-from usvsim.task.openwater_env import RADAR_RANGES, OpenWaterVectorEnv, harsh_radar_family
+from usvsim.task.openwater_env import OpenWaterVectorEnv
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
@@ -77,7 +75,6 @@ __all__ = [
     "IL_CSV_FIELDS",
     "ILRunResult",
     "expert_pairs",
-    "harsh_radar_runs",
     "train_il",
     "validate_il",
 ]
@@ -461,15 +458,6 @@ def expert_pairs(
         f"{len(data)} pairs"
     )
     return data, n_runs, len(report.errors)
-
-
-def harsh_radar_runs(runs: Sequence[Recording], copies: int) -> list[Recording]:
-    """``copies`` copies of every scene run in ``runs`` with its radar at the open-water family's
-    harshest level (:func:`usvsim.task.openwater_env.harsh_radar_family`; its own noise per copy,
-    :func:`learning.imitation.preprocess.with_radar`), copy by copy."""
-    member = harsh_radar_family().members[0]
-    quality = RadarQuality(*(getattr(member, name)[0] for name in RADAR_RANGES))
-    return [with_radar(r, quality, c) for c in range(1, copies + 1) for r in runs]
 
 
 def _resume_state(

@@ -64,6 +64,7 @@ from usvsim.task.batch import N_CATEGORIES, ActionKind
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
 from usvsim.task.openwater import RadarQuality
 from usvsim.task.openwater_batch import SceneDiscs, observe_scene
+from usvsim.task.openwater_env import RADAR_RANGES, harsh_radar_family
 from usvsim.task.radar import RadarConfig
 from usvsim.task.scene_radar import RadarDegradation, stream_keys
 
@@ -74,6 +75,7 @@ __all__ = [
     "decision_track",
     "encode_actions",
     "expert_data",
+    "harsh_radar_runs",
     "interpolate_heading",
     "interpolate_position",
     "recording_from_tlog",
@@ -406,6 +408,15 @@ def with_radar(recording: Recording, quality: RadarQuality, copy: int) -> Record
     meta = {**recording.meta, "scene": scene}
     source = f"{recording.source}#radar{copy}" if recording.source else ""
     return dataclasses.replace(recording, meta=meta, source=source)
+
+
+def harsh_radar_runs(runs: Sequence[Recording], copies: int) -> list[Recording]:
+    """``copies`` copies of every scene run in ``runs`` with its radar at the open-water family's
+    harshest level (:func:`usvsim.task.openwater_env.harsh_radar_family`; its own noise per copy,
+    :func:`with_radar`), copy by copy."""
+    member = harsh_radar_family().members[0]
+    quality = RadarQuality(*(getattr(member, name)[0] for name in RADAR_RANGES))
+    return [with_radar(r, quality, c) for c in range(1, copies + 1) for r in runs]
 
 
 _COPY_TAG = 0x68617273  # "hars": keeps the copies' seeds apart from [own, copy] draws elsewhere

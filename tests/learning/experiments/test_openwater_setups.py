@@ -62,7 +62,10 @@ def test_open_water_setups_train_on_the_family_with_the_fixed_horizon(name):
     setup = get_setup(name)
     assert setup.task == "open-water" and name.endswith("-ow")
     env = setup.make_vector_env(2)
-    assert isinstance(env, OpenWaterVectorEnv) and env.family is OPEN_WATER_FAMILY
+    assert isinstance(env, OpenWaterVectorEnv) and env.family == setup.training_family
+    # the family itself, or (rl-gaussian-radar-ow) the family with a harsh-radar share
+    assert env.family.members[: len(OPEN_WATER_FAMILY.members)] == OPEN_WATER_FAMILY.members
+    assert (env.family is OPEN_WATER_FAMILY) == (setup.harsh_radar_share == 0)
     assert env.options.reward_horizon == "fixed"
     assert env.options.gamma == setup.algorithm_config.gamma
     assert env.single_observation_space == observation_space(setup.observation)

@@ -11,10 +11,10 @@ import pytest
 
 from learning.cli.train import TrainArgs, run
 from learning.experiments.il_setups import MAX_HARSH_RADAR_COPIES, get_il_setup
-from learning.experiments.train_il import expert_pairs, harsh_radar_runs
+from learning.experiments.train_il import expert_pairs
 from learning.imitation.demonstrations import DEMOS_DIR, load_recordings, save_recordings
 from learning.imitation.family_demos import record_family_demonstrations
-from learning.imitation.preprocess import with_radar
+from learning.imitation.preprocess import harsh_radar_runs, with_radar
 from usvsim.evaluation.stress import STRESS_SETS
 from usvsim.task.openwater import RadarQuality
 from usvsim.task.openwater_env import OPEN_WATER_FAMILY, draw_family, harsh_radar_family

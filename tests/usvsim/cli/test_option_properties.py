@@ -43,12 +43,14 @@ def _numeric_fields(cls: type) -> list[dataclasses.Field]:
     return [f for f in dataclasses.fields(cls) if hints[f.name] in (int, float)]
 
 
-def _required(cls: type) -> dict[str, typing.Any]:
-    """Values for the positional fields (setup, checkpoint) so the class can be built: an
-    open-water RL setup, which takes every numeric option of ``train`` (``--crowded-share``
-    included)."""
+def _required(cls: type, option: str = "") -> dict[str, typing.Any]:
+    """Values for the positional fields (setup, checkpoint) so the class can be built with
+    ``option``: an open-water radar RL setup, which takes every numeric option of ``train``
+    (``--crowded-share`` and ``--harsh-radar-share`` included) but ``--harsh-radar-copies``,
+    for which it is the open-water radar IL setup."""
+    setup = "il-gaussian-radar-ow" if option == "harsh_radar_copies" else "rl-gaussian-radar-ow"
     return {
-        f.name: "rl-gaussian-scene-ow" if f.name == "setup" else "x.pt"
+        f.name: setup if f.name == "setup" else "x.pt"
         for f in dataclasses.fields(cls)
         if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
     }
@@ -93,7 +95,7 @@ def test_any_option_value_is_checked_or_refused(command: str, data: st.DataObjec
     if typing.get_type_hints(cls)[f.name] is int:
         value = int(value) if isinstance(value, int) or math.isfinite(value) else 0
     try:
-        options = cls(**_required(cls), **{f.name: value})
+        options = cls(**_required(cls, f.name), **{f.name: value})
         check_options(options)
     except UserError as err:
         # the flag leads, or a rule across several options names each of them
