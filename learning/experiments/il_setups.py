@@ -206,10 +206,11 @@ _OW_RADAR_TRPO = dataclasses.replace(_RADAR_TRPO, iterations=400, num_envs=32)
 _OW_RADAR_GAIL_SCENE = dataclasses.replace(_RADAR_GAIL, disc_observation="scene")
 # with 3 harsh-radar copies of every demonstration (ILSetup.harsh_radar_copies) the expert data
 # is 4x as long, so 13 epochs over it make about as many cloning steps as the 50 over the
-# recorded runs alone (measured 2026-12-04, seed 0, 2,400 s on one core: cloning 335 s against
-# 1,360 s with 50 epochs; il-gaussian-radar-ow radar-noise 94 %, radar-clutter 100 %, 14 stress
-# sets >= 95 %, mean 92.0 %, against 80 %, 97 %, 14 and 90.2 % without the copies; the same
-# recipe for il-categorical-radar-ow: radar-noise 80 %, 13 sets, mean 86.0 %, not adopted)
+# recorded runs alone (measured 2026-12-04, seed 0, 2,400 s on one core: cloning 335 s, where
+# 50 epochs over 4x the pairs took 1,360 s in a categorical run; il-gaussian-radar-ow
+# radar-noise 94 %, radar-clutter 100 %, 14 stress sets >= 95 %, mean 92.0 %, against 80 %,
+# 97 %, 14 and 90.2 % without the copies; the same recipe for il-categorical-radar-ow:
+# radar-noise 80 %, 13 sets, mean 86.0 %, not adopted)
 _OW_RADAR_GAIL_SCENE_HARSH = dataclasses.replace(_OW_RADAR_GAIL_SCENE, bc_epochs=13)
 # the same rule for il-categorical-radar-ow's 5 copies: 8 epochs over 6x the pairs (measured
 # 2026-12-04, seed 0, 2,400 s on one core: radar-noise 94 %, radar-clutter 99 %, 15 stress sets

@@ -138,3 +138,13 @@ def test_harsh_radar_copies_option_is_for_new_radar_runs_on_the_family(tmp_path:
     with pytest.raises(SystemExit, match=f"<= {MAX_HARSH_RADAR_COPIES}"):
         run(_args(tmp_path / "d", harsh_radar_copies=MAX_HARSH_RADAR_COPIES + 1))
     assert not any(tmp_path.rglob("*.pt"))
+
+
+def test_the_radar_setups_clone_about_as_long_as_without_copies() -> None:
+    """``bc_epochs`` counts passes over the data with its copies: the shipped radar setups scale
+    it by 1/(K+1), so cloning takes about the 50 epochs' steps of the recorded runs alone."""
+    for name in ("il-gaussian-radar-ow", "il-categorical-radar-ow"):
+        setup = get_il_setup(name)
+        assert setup.harsh_radar_copies > 0
+        passes = setup.gail.bc_epochs * (setup.harsh_radar_copies + 1)
+        assert 45 <= passes <= 55, (name, passes)
