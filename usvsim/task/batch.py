@@ -356,7 +356,9 @@ class PoleAvoidanceBatch:
             self.scenario.pole_radius_m,
             self.radar,
             noise,
-            self._s[sl, PACKED.nav_vel] if self.observation_kind == "scene" else None,
+            self._s[sl, PACKED.nav_vel]
+            if self.observation_kind in ("scene", "radar+nav")
+            else None,
         )
         self._noise.for_boats(None)
         return obs

@@ -9,6 +9,8 @@ name            single-boat value                            space
 ``positional``  ``[r_pole, φ_pole, r_goal, φ_goal]``         ``Box((4,), float32)``, raw m and rad
 ``radar``       image (:mod:`usvsim.task.radar`)             ``Box(0, 255, (1, 50, 119), uint8)``
 ``radar+goal``  ``{"radar": image, "goal": ĝ}``              ``Dict``; ĝ the standardised goal
+``radar+nav``   ``{"radar": image, "goal": ĝ, "nav": n}``   ``Dict``; n = ``[x_N, y_E, ψ, v_N,
+                                                             v_E]`` the navigation estimate
 ``scene``       ``[r_goal, φ_goal, u, v, (r, φ, R, v_x, v_y,  ``Box((52,), float32)``, raw m, rad,
                 valid) × 8]``: the goal, the own velocity   m/s (issue 16)
                 over ground and the k = 8 nearest obstacles
@@ -19,6 +21,10 @@ name            single-boat value                            space
 ``r − R``: centre range r, bearing φ, radius R, velocity relative to the own boat (body frame,
 m/s) and a validity flag (1 = an obstacle, 0 = an empty slot, all its entries 0). In the pole task
 the one pole fills the first slot. The study's 4-vector ``positional`` stays the default.
+
+``radar+nav`` is ``radar+goal`` plus the own navigation estimate in NED (m, m, rad, m/s, m/s,
+float32): what a classical radar pipeline (detections → tracks in NED, :mod:`usvsim.nav.tracker`)
+needs to place the returns of successive frames in one fixed frame (issue 37).
 
 Ranges in m; bearings in rad relative to the estimated heading, clockwise positive, in [-π, π)
 (:func:`usvsim.common.angles.ssa`). The positional observation is left raw (the study's definition);
@@ -55,6 +61,7 @@ __all__ = [
     "ObservationKind",
     "Standardization",
     "build_observation",
+    "nav_vector",
     "observation_space",
     "parse_observation_kind",
     "relative_polar",
@@ -62,7 +69,7 @@ __all__ = [
     "standardize_scene",
 ]
 
-ObservationKind = Literal["positional", "radar", "radar+goal", "scene"]
+ObservationKind = Literal["positional", "radar", "radar+goal", "scene", "radar+nav"]
 OBSERVATION_KINDS: tuple[str, ...] = get_args(ObservationKind)
 FloatArray = NDArray[np.float64]
 
@@ -165,6 +172,10 @@ def observation_space(kind: ObservationKind, radar: RadarConfig | None = None) -
     goal_high = GOAL_STANDARDIZATION.apply(np.array([MAX_RANGE_M, np.pi]))
     goal_low = GOAL_STANDARDIZATION.apply(np.array([0.0, -np.pi]))
     goal = spaces.Box(goal_low, goal_high, dtype=np.float32)
+    if kind == "radar+nav":
+        nav_hi = np.array([MAX_RANGE_M, MAX_RANGE_M, np.pi, MAX_SPEED_MPS, MAX_SPEED_MPS])
+        nav = spaces.Box(-nav_hi.astype(np.float32), nav_hi.astype(np.float32), dtype=np.float32)
+        return spaces.Dict({"radar": image, "goal": goal, "nav": nav})
     return spaces.Dict({"radar": image, "goal": goal})
 
 
@@ -183,7 +194,8 @@ def build_observation(
 
     ``pos_ne`` (N, 2) m and ``psi_rad`` (N,) rad are the navigation estimate; ``pole_ne`` and
     ``goal_ne`` (N, 2) m; ``velocity_ne`` (N, 2) m/s the estimated velocity over ground (used by
-    ``scene`` only; default 0). Returns an array or, for ``radar+goal``, a dict of arrays.
+    ``scene`` and ``radar+nav`` only; default 0). Returns an array or, for ``radar+goal`` and
+    ``radar+nav``, a dict of arrays.
     """
     parse_observation_kind(kind)
     if kind == "scene":
@@ -205,7 +217,18 @@ def build_observation(
         return image
     r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
     goal = GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], axis=-1))
+    if kind == "radar+nav":
+        return {"radar": image, "goal": goal, "nav": nav_vector(pos_ne, psi_rad, velocity_ne)}
     return {"radar": image, "goal": goal}
+
+
+def nav_vector(
+    pos_ne: FloatArray, psi_rad: FloatArray, velocity_ne: FloatArray | None
+) -> NDArray[np.float32]:
+    """The ``nav`` entry of ``radar+nav`` (N, 5) float32: ``[x_N, y_E, ψ, v_N, v_E]`` (m, m, rad,
+    m/s, m/s) of the navigation estimate; velocity 0 where ``velocity_ne`` is None."""
+    vel = np.zeros_like(pos_ne) if velocity_ne is None else velocity_ne
+    return np.concatenate([pos_ne, np.asarray(psi_rad)[:, None], vel], axis=1).astype(np.float32)
 
 
 def scene_observation(

@@ -36,6 +36,7 @@ from usvsim.task.batch import ActionKind, PoleAvoidanceBatch, within_radius
 from usvsim.task.observations import (
     GOAL_STANDARDIZATION,
     ObservationKind,
+    nav_vector,
     observation_space,
     relative_polar,
     scene_observation,
@@ -362,7 +363,10 @@ def observe_scene(
     if kind == "radar":
         return image
     r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
-    return {"radar": image, "goal": GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], -1))}
+    goal = GOAL_STANDARDIZATION.apply(np.stack([r_g, b_g], -1))
+    if kind == "radar+nav":
+        return {"radar": image, "goal": goal, "nav": nav_vector(pos_ne, psi_rad, velocity_ne)}
+    return {"radar": image, "goal": goal}
 
 
 def _pad(a: NDArray[Any], width: int) -> NDArray[Any]:

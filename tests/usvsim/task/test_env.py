@@ -215,6 +215,7 @@ def test_kinds_parse_only_known_names():
         "radar",
         "radar+goal",
         "scene",
+        "radar+nav",
     ]
     assert [parse_action_kind(k) for k in ACTION_KINDS] == ["gaussian", "categorical"]
     with pytest.raises(ValueError, match="observation must be one of"):
