@@ -11,7 +11,7 @@ nearest obstacle, :mod:`usvsim.task.openwater` —, ``time_to_goal_s``, ``path_l
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -68,11 +68,16 @@ def evaluate_open_water(
     *,
     observation: ObservationKind = "positional",
     action: ActionKind = "gaussian",
+    on_decision: Callable[[OpenWaterBatch, int], Any] | None = None,
     **batch_kwargs: Any,
 ) -> list[OpenWaterRecord]:
     """Run ``helmsman`` on every episode (all in one batch) and record each one.
 
     ``batch_kwargs`` go to :class:`usvsim.task.openwater_batch.OpenWaterBatch` (plant, radar).
+    ``on_decision(batch, k)``, optional, runs after decision step k (0-based) before the next
+    action; it may steer the scene (e.g. reactive target vessels,
+    :mod:`usvsim.evaluation.colreg_rollout`) and return the observation the helmsman sees next
+    (None: the step's own).
     """
     n = len(episodes)
     if n == 0:
@@ -105,6 +110,9 @@ def evaluate_open_water(
         if not active.any():
             break
         obs = res.observation
+        if on_decision is not None:
+            replaced = on_decision(sim, k)
+            obs = obs if replaced is None else replaced
     records = []
     for i in range(n):
         path = traj[i, : n_steps[i] + 1]

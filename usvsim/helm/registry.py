@@ -10,6 +10,8 @@ name                         helmsman
 ``los-avoid``                :class:`baselines.avoid.AvoidHelmsman`, LOS + collision cone
 ``vo``                       :class:`baselines.velocity_obstacle.VOHelmsman`, LOS + velocity
                              obstacles with COLREG (Kuwata et al. 2014), ``scene`` observation
+``sb-mpc``                   :class:`baselines.sbmpc.SBMPCHelmsman`, scenario-based MPC with
+                             COLREG costs (Johansen et al. 2016), ``scene`` observation
 ``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``
 a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
 ===========================  ===================================================================
@@ -72,6 +74,12 @@ def _vo() -> Helmsman:
     return VOHelmsman()
 
 
+def _sbmpc() -> Helmsman:
+    from baselines.sbmpc import SBMPCHelmsman
+
+    return SBMPCHelmsman()
+
+
 def load_checkpoint_helmsman(path: str | Path) -> Helmsman:
     """The policy of a checkpoint file as a helmsman; ``ValueError`` if it cannot be read."""
     from learning.experiments.checkpoint import CheckpointError, load_helmsman
@@ -89,7 +97,12 @@ def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFact
     in it is one entry named by its stem. A trained policy named like a baseline raises
     ``ValueError`` rather than hiding it.
     """
-    helmsmen: dict[str, HelmsmanFactory] = {"los": _los, "los-avoid": _los_avoid, "vo": _vo}
+    helmsmen: dict[str, HelmsmanFactory] = {
+        "los": _los,
+        "los-avoid": _los_avoid,
+        "vo": _vo,
+        "sb-mpc": _sbmpc,
+    }
     folder = MODELS_DIR if models_dir is None else models_dir
     for path in sorted(folder.glob("*.pt")) if folder.is_dir() else []:
         if path.stem in helmsmen or path.stem in SANITY_HELMSMEN:

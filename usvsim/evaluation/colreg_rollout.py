@@ -1,0 +1,257 @@
+"""Open-water episodes recorded for COLREG scoring, with target vessels that may react.
+
+:func:`run_encounters` runs a helmsman on a set of open-water episodes
+(:func:`usvsim.evaluation.openwater.evaluate_open_water`, one batch) and returns the records
+with the own ship's and every target vessel's track sampled every ``sample_s`` seconds as
+:class:`usvsim.evaluation.colreg.EncounterTracks` (shapes: E episodes, K targets, T samples)::
+
+    own_north_east_m (E, T, 2)     own_course_rad, own_speed_mps (E, T): over ground
+    target_north_east_m (E, K, T, 2)   target_course_rad, target_speed_mps (E, K, T)
+    valid (E, T): sample inside the episode     target_valid (E, K): a vessel in that slot
+
+The own course and speed over ground are central differences of the true 0.1 s trajectory
+(one-sided at the ends). Target tracks come from each vessel's motion law
+(:func:`usvsim.task.openwater.vessel_motion`), with its parameters as they were during each
+decision period when the targets react. No Python loop over boats or targets in the sampling.
+
+Reactive targets (``reactive_targets=True``): after every decision each target vessel is steered
+by the project's ``vo`` helmsman (Kuwata et al. 2014, :mod:`baselines.velocity_obstacle`, its
+COLREG rule 14/15 terms on) from a ``scene`` observation of its own: the own ship (true state,
+radius half the beam of a 10.5 m hull rounded up to 5 m) and the other targets and obstacles of
+its episode, its goal far ahead on its initial course (it resumes that course once clear). The
+target's course becomes its course plus the chosen heading change (at most ±30° per 2 s
+decision, the task's own bound), applied at the decision instant; its speed is kept. Its motion
+is re-anchored so its position is continuous: ``p0 ← p(t) − U t (cos χ, sin χ)`` with the new
+course χ and zero turn rate. The helmsman then sees the scene as it is after the targets' choice.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from usvsim.common.angles import ssa
+from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
+from usvsim.task.openwater_batch import OpenWaterBatch, SceneDiscs, observe_scene
+
+__all__ = ["EncounterRun", "ReactiveTargets", "encounter_tracks", "run_encounters"]
+
+FloatArray = NDArray[np.float64]
+OWN_RADIUS_M = 5.0  # m, the own ship as the targets see it (a 10 m hull's disc, as theirs)
+GOAL_AHEAD_M = 10_000.0  # m, a reactive target's goal: this far along its initial course
+
+
+@dataclass(frozen=True)
+class EncounterRun:
+    """Records (:class:`usvsim.evaluation.openwater.OpenWaterRecord`) and their tracks."""
+
+    records: list[Any]
+    tracks: Any  # usvsim.evaluation.colreg.EncounterTracks
+
+
+class ReactiveTargets:
+    """Steers every target vessel of an :class:`OpenWaterBatch` with ``vo`` (module docstring).
+
+    Call as the ``on_decision`` hook of :func:`usvsim.evaluation.openwater.evaluate_open_water`;
+    :attr:`schedule` holds the vessels' motion parameters for each decision period.
+    """
+
+    def __init__(self, sim: OpenWaterBatch, helmsman: Any) -> None:
+        self.sim = sim
+        n, m = sim.vessel_ok.shape
+        self.n, self.m = n, m
+        self.helmsman = helmsman
+        self.helmsman.reset(n * m)
+        pos0, _ = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, np.zeros((n, m)))
+        u = np.stack([np.cos(sim.v_course), np.sin(sim.v_course)], axis=-1)
+        self.goal_ne = pos0 + GOAL_AHEAD_M * u  # (N, M, 2)
+        self.schedule: list[tuple[FloatArray, FloatArray, FloatArray]] = [
+            (sim.v_p0.copy(), sim.v_course.copy(), sim.v_turn.copy())
+        ]
+
+    def __call__(self, sim: OpenWaterBatch, k: int) -> Any:
+        """Steer the targets at the end of decision ``k``; return the helmsman's observation."""
+        n, m = self.n, self.m
+        if m == 0:
+            self.schedule.append(self.schedule[-1])
+            return None
+        t = (k + 1) * sim.base.decision_period_s
+        tt = np.full((n, m), t)
+        pos, vel = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, tt)
+        chi = sim.v_course + sim.v_turn * t
+        obs = self._observations(sim, pos, vel, chi)
+        action = np.asarray(self.helmsman.act(obs), dtype=np.float64).reshape(n, m)
+        new_chi = chi + action * sim.base.max_heading_change_rad
+        new_chi = np.where(sim.vessel_ok, ssa(new_chi), 0.0)
+        u = np.stack([np.cos(new_chi), np.sin(new_chi)], axis=-1)
+        sim.v_p0 = np.where(sim.vessel_ok[..., None], pos - (sim.v_speed * t)[..., None] * u, 0.0)
+        sim.v_course = new_chi
+        sim.v_turn = np.zeros_like(sim.v_turn)
+        self.schedule.append((sim.v_p0.copy(), sim.v_course.copy(), sim.v_turn.copy()))
+        return sim.observe(sim.observation_kind)
+
+    def _observations(
+        self, sim: OpenWaterBatch, pos: FloatArray, vel: FloatArray, chi: FloatArray
+    ) -> NDArray[np.float32]:
+        """``scene`` observations (N·M, ...) of every target: the own ship first, then the other
+        targets of its episode, then its static obstacles."""
+        n, m = self.n, self.m
+        x = sim.inner.state.x
+        psi = x[:, 2]
+        c, s = np.cos(psi), np.sin(psi)
+        own_v = np.stack([c * x[:, 3] - s * x[:, 4], s * x[:, 3] + c * x[:, 4]], axis=-1)
+        k_static = sim.centres.shape[1]
+        centres = np.concatenate(
+            [
+                np.broadcast_to(x[:, None, None, 0:2], (n, m, 1, 2)),
+                np.broadcast_to(pos[:, None], (n, m, m, 2)),
+                np.broadcast_to(sim.centres[:, None], (n, m, k_static, 2)),
+            ],
+            axis=2,
+        )
+        velocity = np.concatenate(
+            [
+                np.broadcast_to(own_v[:, None, None], (n, m, 1, 2)),
+                np.broadcast_to(vel[:, None], (n, m, m, 2)),
+                np.zeros((n, m, k_static, 2)),
+            ],
+            axis=2,
+        )
+        radii = np.concatenate(
+            [
+                np.full((n, m, 1), OWN_RADIUS_M),
+                np.broadcast_to(sim.v_radius[:, None], (n, m, m)),
+                np.broadcast_to(sim.radii[:, None], (n, m, k_static)),
+            ],
+            axis=2,
+        )
+        others = sim.vessel_ok[:, None, :] & ~np.eye(m, dtype=bool)[None]
+        valid = np.concatenate(
+            [
+                np.broadcast_to(sim.vessel_ok[:, :, None], (n, m, 1)),
+                others,
+                np.broadcast_to(sim.static_ok[:, None], (n, m, k_static)),
+            ],
+            axis=2,
+        )
+        j = valid.shape[2]
+        discs = SceneDiscs(
+            centres.reshape(n * m, j, 2), radii.reshape(n * m, j), velocity.reshape(n * m, j, 2),
+            valid.reshape(n * m, j),
+        )  # fmt: skip
+        return observe_scene(
+            "scene", pos.reshape(-1, 2), chi.reshape(-1), vel.reshape(-1, 2),
+            self.goal_ne.reshape(-1, 2), discs,
+        )  # fmt: skip
+
+
+def run_encounters(
+    helmsman: Any,
+    episodes: Sequence[OpenWaterEpisode],
+    *,
+    reactive_targets: bool = False,
+    sample_s: float = 1.0,
+    target_helmsman: Any = None,
+) -> EncounterRun:
+    """Run ``helmsman`` on ``episodes`` and record the tracks (module docstring).
+
+    ``target_helmsman``: what steers reactive targets (default ``vo`` from the registry).
+    """
+    from usvsim.evaluation.openwater import evaluate_open_water
+    from usvsim.helm.registry import helmsman_kinds, make_helmsman
+
+    obs_kind, act_kind = helmsman_kinds(helmsman)
+    hook: dict[str, ReactiveTargets] = {}
+
+    def on_decision(sim: OpenWaterBatch, k: int) -> Any:
+        if "r" not in hook:
+            hook["r"] = ReactiveTargets(sim, target_helmsman or make_helmsman("vo"))
+        return hook["r"](sim, k)
+
+    records = evaluate_open_water(
+        helmsman, episodes, observation=obs_kind, action=act_kind,
+        on_decision=on_decision if reactive_targets else None,
+    )  # fmt: skip
+    schedule = hook["r"].schedule if "r" in hook else None
+    return EncounterRun(records, encounter_tracks(records, sample_s, schedule))
+
+
+def encounter_tracks(
+    records: Sequence[Any],
+    sample_s: float = 1.0,
+    schedule: Sequence[tuple[FloatArray, FloatArray, FloatArray]] | None = None,
+    dt_s: float = 0.1,
+    decision_period_s: float = 2.0,
+) -> Any:
+    """:class:`usvsim.evaluation.colreg.EncounterTracks` of open-water records (module
+    docstring). ``schedule``: the vessels' (p0, course, turn rate) per decision period, as
+    :class:`ReactiveTargets` keeps it; None: each episode's vessels as drawn."""
+    from usvsim.evaluation.colreg import EncounterTracks
+
+    stride = round(sample_s / dt_s)
+    if stride < 1 or abs(stride * dt_s - sample_s) > 1e-9:
+        raise ValueError(f"sample_s must be a positive multiple of {dt_s} s, got {sample_s}")
+    e = len(records)
+    lengths = np.array([len(r.trajectory) for r in records])
+    steps = int(lengths.max())
+    full = np.empty((e, steps, 2))
+    for i, r in enumerate(records):  # ragged per-episode arrays into one padded block
+        full[i, : lengths[i]] = r.trajectory[:, 0:2]
+        full[i, lengths[i] :] = r.trajectory[-1, 0:2]
+    idx = np.arange(0, steps, stride)
+    lo, hi = np.maximum(idx - 1, 0), np.minimum(idx + 1, steps - 1)
+    hi_i = np.minimum(hi[None, :], lengths[:, None] - 1)  # one-sided at each episode's end
+    lo_i = np.minimum(lo[None, :], np.maximum(hi_i - 1, 0))
+    rows = np.arange(e)[:, None]
+    d = full[rows, hi_i] - full[rows, lo_i]
+    span = np.maximum(hi_i - lo_i, 1)[..., None] * dt_s
+    vel = d / span
+    own = full[:, idx]
+    valid = idx[None, :] < lengths[:, None]
+    t = idx * dt_s  # (T,)
+    episodes = [r.episode for r in records]
+    p0, course, speed, turn, ok = _vessel_arrays(episodes)
+    if schedule is None or ok.shape[1] == 0:
+        pos, v = vessel_motion(
+            p0[:, :, None], course[:, :, None], speed[:, :, None], turn[:, :, None],
+            np.broadcast_to(t, (*ok.shape, t.size)),
+        )  # fmt: skip
+    else:
+        seg = np.minimum((t // decision_period_s).astype(np.intp), len(schedule) - 1)
+        sp0 = np.stack([s[0] for s in schedule])[seg][:, :e]  # (T, E, K, 2)
+        sc = np.stack([s[1] for s in schedule])[seg][:, :e]
+        st = np.stack([s[2] for s in schedule])[seg][:, :e]
+        k = ok.shape[1]
+        sp0, sc, st = sp0[:, :, :k], sc[:, :, :k], st[:, :, :k]
+        tt = np.broadcast_to(t[:, None, None], sc.shape)
+        pos, v = vessel_motion(sp0, sc, np.broadcast_to(speed, sc.shape), st, tt)
+        pos, v = np.moveaxis(pos, 0, 2), np.moveaxis(v, 0, 2)  # (E, K, T, 2)
+    return EncounterTracks(
+        dt_s=sample_s,
+        own_north_east_m=own,
+        own_course_rad=np.arctan2(vel[..., 1], vel[..., 0]),
+        own_speed_mps=np.hypot(vel[..., 0], vel[..., 1]),
+        target_north_east_m=pos,
+        target_course_rad=np.arctan2(v[..., 1], v[..., 0]),
+        target_speed_mps=np.hypot(v[..., 0], v[..., 1]),
+        valid=valid,
+        target_valid=ok,
+    )
+
+
+def _vessel_arrays(
+    episodes: Sequence[OpenWaterEpisode],
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Each episode's vessels padded to K slots: p0 (E, K, 2), course, speed, turn (E, K), ok."""
+    e, k = len(episodes), max((len(ep.vessels) for ep in episodes), default=0)
+    table = np.zeros((e, k, 5))
+    ok = np.zeros((e, k), dtype=bool)
+    for i, ep in enumerate(episodes):  # per-episode dataclasses into arrays (not a hot path)
+        for j, v in enumerate(ep.vessels):
+            table[i, j] = (v.x0_n, v.y0_e, v.course_rad, v.speed_mps, v.turn_rate_radps)
+            ok[i, j] = True
+    return table[..., 0:2], table[..., 2], table[..., 3], table[..., 4], ok
