@@ -62,6 +62,7 @@ from learning.experiments.sweep_spec import (
     trial_dir_name,
 )
 from usvsim.common.fileio import atomic_write_text, remove_stale_temporaries
+from usvsim.common.splits import selection_mode
 
 __all__ = [
     "OBJECTIVE",
@@ -179,6 +180,7 @@ def run_trial(config: dict[str, Any]) -> dict[str, Any]:
     return trial_metrics(out)
 
 
+@selection_mode("sweep trial_metrics")
 def trial_metrics(out: Path) -> dict[str, Any]:
     """The validation-only metrics of a finished run folder (what Tune and the search see)."""
     curve = validation_curve(out / "log.csv")

@@ -42,9 +42,11 @@ from learning.experiments.run_log import VALIDATION_EPISODES
 from learning.experiments.setups import SETUPS
 from learning.experiments.sweep import OBJECTIVE, SweepSpec, trial_metrics, validation_curve
 from usvsim.common.fileio import atomic_savefig, atomic_write_text, json_safe
+from usvsim.common.splits import selection_mode
 
 __all__ = [
     "TrialRecord",
+    "best_by_validation",
     "bootstrap_intervals",
     "choose_shipped",
     "iqm",
@@ -146,6 +148,7 @@ def score_distribution(scores: np.ndarray, taus: np.ndarray) -> np.ndarray:
     return np.mean(x > np.asarray(taus, dtype=float)[None, :], axis=0)
 
 
+@selection_mode("choose_shipped")
 def choose_shipped(trials: Sequence[TrialRecord], rule: str) -> TrialRecord | None:
     """The trial that ships under ``rule``, using validation only.
 
@@ -263,7 +266,8 @@ def _arm_rows(
     return rows
 
 
-def _best_by_validation(trials: Sequence[TrialRecord]) -> dict[str, Any] | None:
+@selection_mode("best_by_validation")
+def best_by_validation(trials: Sequence[TrialRecord]) -> dict[str, Any] | None:
     """The search's answer: the finished trial with the best validation score (then best
     validation, then fewer iterations); held-out plays no part."""
     done = [t for t in trials if t.status == "finished"]
@@ -478,7 +482,7 @@ def write_report(root: Path, compare_shipped: bool = True) -> dict[str, Any]:
         "sessions": len(sessions),
         "arms": rows,
         "improvement": _improvement(trials),
-        "best_by_validation": _best_by_validation(trials),
+        "best_by_validation": best_by_validation(trials),
         "efficiency": {k: _curves(trials, k) for k in ("env_steps", "wall_time_s")},
         "trials": [
             {

@@ -65,6 +65,7 @@ from usvsim.common.fileio import (
     atomic_open,
     remove_stale_temporaries,
 )
+from usvsim.common.splits import selection_mode
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
 from usvsim.task.openwater_env import OpenWaterVectorEnv
@@ -122,6 +123,7 @@ def _checkpoint(
     )
 
 
+@selection_mode("validate_il")
 def validate_il(
     agent: GAILAgent,
     setup: ILSetup,
@@ -283,6 +285,7 @@ class _ILRun:
         )
 
 
+@selection_mode("train_il")  # training, validations, best.pt and early stops: no test episode
 def train_il(
     setup: ILSetup,
     out_dir: str | Path,

@@ -46,6 +46,7 @@ from learning.experiments.validation import (
     validation_record,
 )
 from usvsim.common.fileio import remove_stale_temporaries
+from usvsim.common.splits import selection_mode
 
 __all__ = [
     "COMMON_FIELDS",
@@ -217,6 +218,7 @@ def first_policy(setup: RLSetup, init_policy: str | Path = "") -> dict[str, Any]
     return None
 
 
+@selection_mode("train_rl")  # training, validations, best.pt and early stops: no test episode
 def train_rl(
     setup: RLSetup,
     out_dir: str | Path,

@@ -46,6 +46,7 @@ import numpy as np
 from learning.algorithms.base import Agent
 from learning.experiments.checkpoint import PolicyHelmsman
 from usvsim.common.fileio import atomic_write_text, json_safe
+from usvsim.common.splits import selection_mode
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
 from usvsim.evaluation.openwater import OpenWaterRecord, evaluate_open_water
 from usvsim.task.openwater import OpenWaterEpisode
@@ -121,6 +122,7 @@ def _sees_radar(setup: Any) -> bool:
     return _on_family(setup) and str(setup.observation).startswith("radar")
 
 
+@selection_mode("validate")
 def validate(
     agent: Agent, setup: Any, specs: Sequence[EpisodeSpec] | None = None
 ) -> dict[str, float]:
@@ -134,6 +136,7 @@ def validate(
     return summary
 
 
+@selection_mode("open_water_summary")
 def open_water_summary(agent: Agent, setup: Any) -> dict[str, float]:
     """The family set's ``family_*`` and the crowded set's ``crowded_*`` entries for a setup on
     the open-water family, and the harsh-radar set's ``radar_*`` entries for a radar one (module

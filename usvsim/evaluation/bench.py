@@ -92,6 +92,7 @@ class BenchArgs:
     suite: Literal["study", "stress"] = "study"  # stress: usvsim.evaluation.stress (named sets)
     sets: str = ""  # --suite stress: comma-separated stress sets; empty: all
     stress_episodes: int = field(default=100, metadata=bounds(ge=1, le=10_000))  # per stress set
+    split: Literal["validation", "test"] = "test"  # --suite stress: test reports; validation picks
     sweep: str = ""  # a usvsim sweep folder: its across-seed held-out IQM beside shipped models
 
     def check(self) -> None:
@@ -100,6 +101,8 @@ class BenchArgs:
             raise UserError(f"--scenario must be one of {SCENARIOS}, not {self.scenario!r}")
         if self.sets and self.suite != "stress":
             raise UserError("--sets needs --suite stress (the study's bench has no named sets)")
+        if self.split != "test" and self.suite != "stress":
+            raise UserError("--split needs --suite stress (the study's bench shows both splits)")
         if self.sweep:  # a folder that is not a sweep: one line before anything runs
             from usvsim.evaluation.bench_sweep import load_sweep
 

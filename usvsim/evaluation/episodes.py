@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from usvsim.common.splits import check_test_draw
 from usvsim.helm.protocol import Helmsman
 from usvsim.task.batch import ActionKind, PoleAvoidanceBatch
 from usvsim.task.observations import ObservationKind
@@ -85,7 +86,9 @@ def selection_episodes(
 
 
 def heldout_episodes(scenario: Scenario | None = None, n: int = 200) -> tuple[EpisodeSpec, ...]:
-    """``n`` held-out episodes drawn from their own seed (``HELDOUT_SEED``)."""
+    """``n`` held-out episodes drawn from their own seed (``HELDOUT_SEED``): a test split,
+    refused inside :func:`usvsim.common.splits.selection_mode`."""
+    check_test_draw("study held-out")
     return draw_episodes(np.random.default_rng(HELDOUT_SEED), scenario or Scenario(), n)
 
 

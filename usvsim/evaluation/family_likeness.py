@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from scipy.stats import wasserstein_distance
 
 from baselines.family_expert import FamilyExpertParams, run_family_expert
+from usvsim.common.splits import check_test_draw
 from usvsim.evaluation.likeness import Likeness, chamfer_m, heading_changes, pass_side
 from usvsim.evaluation.openwater import OpenWaterRecord
 from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
@@ -55,7 +56,9 @@ STEP_S = 0.1  # s, the plant step of the paths compared
 
 
 def family_held_out_episodes(n: int = 100) -> tuple[OpenWaterEpisode, ...]:
-    """The held-out family set: ``n`` episodes of the training family from their own seed."""
+    """The held-out family set: ``n`` episodes of the training family from their own seed (a
+    test split, refused inside :func:`usvsim.common.splits.selection_mode`)."""
+    check_test_draw("family held-out")
     return draw_family(OPEN_WATER_FAMILY, FAMILY_HELD_OUT_SEED, n)
 
 

@@ -6,6 +6,17 @@ drawn by :func:`usvsim.task.openwater.draw_open_water` from the set's own seed, 
 name, so adding a set moves no other) or, for ``study`` and ``waypoints``, the existing held-out
 episodes. Same seed and size → identical episodes → identical rows (tested).
 
+Two splits of every set (issue 37: validation splits choose, test splits report):
+
+* ``test`` (the default, the reported figures): the episodes above — seed CRC-32 of the set's
+  name, the study's 200 held-out episodes, the held-out waypoint courses. Drawing it inside
+  :func:`usvsim.common.splits.selection_mode` raises.
+* ``validation`` (what a choice between models or settings is made on): the same set drawn
+  from another seed stream, CRC-32 of ``"validation/<name>"`` (for ``study`` the study's
+  scenario by :func:`usvsim.task.scenario.draw_episodes`, for ``waypoints``
+  :func:`usvsim.task.waypoints.draw_course`, each from a ``default_rng`` of that seed); no
+  episode equals a test episode (tested on every set).
+
 The table (set × helmsman): success with its Wilson 95 % interval, collisions, the closest
 approach to any obstacle (pole-equivalent distance, :mod:`usvsim.task.openwater`: < 10 m fails),
 worst and median episode. ``stress.md``, ``stress.csv``, ``stress-heatmap.png`` (success, sets ×
@@ -18,14 +29,19 @@ import math
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Literal, get_args
 
+import numpy as np
+
+from usvsim.common.splits import check_test_draw
 from usvsim.task.openwater import OpenWaterScenario, draw_open_water, from_pole_episodes
 
-__all__ = ["STRESS_SETS", "StressSet", "stress_episodes", "stress_set_names"]
+__all__ = ["SPLITS", "STRESS_SETS", "Split", "StressSet", "stress_episodes", "stress_set_names"]
 
 DEG = math.pi / 180.0
 _CALM = OpenWaterScenario()  # the study's geometry and setting
+Split = Literal["validation", "test"]  # validation chooses, test reports (module docstring)
+SPLITS: tuple[str, ...] = get_args(Split)
 
 
 @dataclass(frozen=True)
@@ -39,8 +55,17 @@ class StressSet:
 
     @property
     def seed(self) -> int:
-        """The set's seed: CRC-32 of its name (stable when sets are added or reordered)."""
+        """The set's test seed: CRC-32 of its name (stable when sets are added or reordered)."""
         return zlib.crc32(self.name.encode())
+
+    def split_seed(self, split: Split) -> int:
+        """The seed of ``split``: :attr:`seed` for ``test``, CRC-32 of ``"validation/<name>"``
+        for ``validation`` (module docstring)."""
+        if split == "test":
+            return self.seed
+        if split == "validation":
+            return zlib.crc32(f"validation/{self.name}".encode())
+        raise ValueError(f"unknown split {split!r}; choose from {', '.join(SPLITS)}")
 
 
 def _s(**changes: Any) -> OpenWaterScenario:
@@ -170,8 +195,15 @@ def stress_set_names() -> tuple[str, ...]:
     return tuple(s.name for s in STRESS_SETS)
 
 
-def stress_episodes(stress_set: StressSet, n: int) -> Sequence[Any]:
-    """The ``n`` episodes of a set (open-water episodes, or waypoint courses)."""
+def stress_episodes(stress_set: StressSet, n: int, split: Split = "test") -> Sequence[Any]:
+    """The ``n`` episodes of a set's ``split`` (open-water episodes, or waypoint courses;
+    module docstring). The test split is refused inside
+    :func:`usvsim.common.splits.selection_mode`."""
+    if split == "validation":
+        return _validation_episodes(stress_set, n)
+    if split != "test":
+        raise ValueError(f"unknown split {split!r}; choose from {', '.join(SPLITS)}")
+    check_test_draw(f"stress {stress_set.name}")
     if stress_set.kind == "study":
         from usvsim.evaluation.episodes import heldout_episodes
 
@@ -182,6 +214,22 @@ def stress_episodes(stress_set: StressSet, n: int) -> Sequence[Any]:
         return heldout_courses(n=n)
     assert stress_set.scenario is not None
     return draw_open_water(stress_set.scenario, stress_set.seed, n)
+
+
+def _validation_episodes(stress_set: StressSet, n: int) -> Sequence[Any]:
+    """The validation split: the set drawn from :meth:`StressSet.split_seed` (validation)."""
+    seed = stress_set.split_seed("validation")
+    if stress_set.kind == "study":
+        from usvsim.task.scenario import Scenario, draw_episodes
+
+        return from_pole_episodes(draw_episodes(np.random.default_rng(seed), Scenario(), n))
+    if stress_set.kind == "waypoints":
+        from usvsim.task.waypoints import WaypointScenario, draw_course
+
+        rng = np.random.default_rng(seed)
+        return tuple(draw_course(rng, WaypointScenario()) for _ in range(n))
+    assert stress_set.scenario is not None
+    return draw_open_water(stress_set.scenario, seed, n)
 
 
 def evaluate_set(helmsman: Any, stress_set: StressSet, episodes: Sequence[Any]) -> list[Any]:
@@ -207,6 +255,7 @@ class StressResult:
     wall_s: float
     interrupted: bool = False
     skipped: tuple[str, ...] = ()
+    split: Split = "test"  # which split of every set (module docstring)
 
 
 def select_sets(names: Sequence[str]) -> tuple[StressSet, ...]:
@@ -226,8 +275,10 @@ def run_stress(
     n: int,
     progress: bool = True,
     skipped: Sequence[str] = (),
+    split: Split = "test",
 ) -> StressResult:
-    """Every helmsman of ``factories`` (label → factory) on ``n`` episodes of every set.
+    """Every helmsman of ``factories`` (label → factory) on ``n`` episodes of every set's
+    ``split`` (module docstring).
 
     Each set's episodes are drawn once and shared by all helmsmen; Ctrl-C ends the run early
     with the rows so far (``interrupted``).
@@ -246,7 +297,7 @@ def run_stress(
     interrupted = False
     try:
         for stress_set in sets:
-            episodes = stress_episodes(stress_set, n)
+            episodes = stress_episodes(stress_set, n, split)
             for name, factory in factories.items():
                 bar.set_postfix_str(f"{stress_set.name} / {name}")
                 t0 = time.perf_counter()
@@ -259,8 +310,16 @@ def run_stress(
         bar.close()
     return StressResult(
         tuple(rows), tuple(s.name for s in sets), tuple(factories), n,
-        time.perf_counter() - start, interrupted, tuple(skipped),
+        time.perf_counter() - start, interrupted, tuple(skipped), split,
     )  # fmt: skip
+
+
+_SPLIT_NOTE = {
+    "test": "Test split: the suite's reported figures (episodes of seed CRC-32 of the set's name, "
+    "the study's held-out episodes, the held-out waypoint courses); never used to choose.",
+    "validation": "Validation split: the sets drawn from other seeds (CRC-32 of "
+    '"validation/<set>"), for choosing between models or settings; not the reported figures.',
+}
 
 
 def _cell(row: Any) -> str:
@@ -274,9 +333,12 @@ def stress_markdown(result: StressResult) -> str:
     """The suite's table: one row per set, one column per helmsman (module docstring)."""
     by = {(r.episode_set, r.helmsman): r for r in result.rows}
     descriptions = {s.name: s.description for s in STRESS_SETS}
-    title = "# usvsim bench — stress suite" + (" (interrupted)" if result.interrupted else "")
+    title = f"# usvsim bench — stress suite, {result.split} split"
+    title += " (interrupted)" if result.interrupted else ""
     lines = [
         title,
+        "",
+        _SPLIT_NOTE[result.split],
         "",
         f"{result.episodes_per_set} episodes per set; each cell: success [Wilson 95 % interval], "
         "collisions, median closest approach (pole-equivalent distance to the nearest obstacle; "
@@ -303,6 +365,7 @@ def stress_json(result: StressResult, files: Sequence[str] = ()) -> str:
 
     payload = {
         "suite": "stress",
+        "split": result.split,
         "sets": list(result.sets),
         "helmsmen": list(result.helmsmen),
         "episodes_per_set": result.episodes_per_set,
@@ -332,13 +395,17 @@ def plot_heatmap(result: StressResult) -> Any:
     ax.set_xticks(range(len(result.helmsmen)), result.helmsmen, rotation=45, ha="right", fontsize=8)
     ax.set_yticks(range(len(result.sets)), result.sets, fontsize=8)
     fig.colorbar(image, ax=ax, label="success (%)")
-    ax.set_title(f"usvsim stress suite: success, {result.episodes_per_set} episodes per set")
+    ax.set_title(
+        f"usvsim stress suite ({result.split} split): success, "
+        f"{result.episodes_per_set} episodes per set"
+    )
     fig.tight_layout()
     return fig
 
 
 def write_stress(result: StressResult, out: Any, plots: bool = True) -> list[Any]:
-    """``stress.md``, ``stress.csv`` and ``stress-heatmap.png`` into ``out``, as one unit."""
+    """``stress.md``, ``stress.csv`` and ``stress-heatmap.png`` into ``out``, as one unit (the
+    validation split: ``stress-validation.*``, so it never replaces the reported test files)."""
     from pathlib import Path
 
     from usvsim.common.fileio import atomic_savefig, remove_stale_temporaries, staged_dir
@@ -348,9 +415,10 @@ def write_stress(result: StressResult, out: Any, plots: bool = True) -> list[Any
         return []
     out = Path(out)
     remove_stale_temporaries(out)
-    names = ["stress.md", "stress.csv"]
-    with staged_dir(out, "stress", replaces=("stress-heatmap.png",)) as staging:
-        (staging / "stress.csv").write_text(to_csv(result.rows))
+    stem = "stress" if result.split == "test" else f"stress-{result.split}"
+    names = [f"{stem}.md", f"{stem}.csv"]
+    with staged_dir(out, stem, replaces=(f"{stem}-heatmap.png",)) as staging:
+        (staging / f"{stem}.csv").write_text(to_csv(result.rows))
         if plots:
             from usvsim.common.mpl import use_file_backend_if_headless
 
@@ -358,17 +426,17 @@ def write_stress(result: StressResult, out: Any, plots: bool = True) -> list[Any
             import matplotlib.pyplot as plt
 
             fig = plot_heatmap(result)
-            atomic_savefig(fig, staging / "stress-heatmap.png", dpi=110)
+            atomic_savefig(fig, staging / f"{stem}-heatmap.png", dpi=110)
             plt.close(fig)
-            names.append("stress-heatmap.png")
-        (staging / "stress.md").write_text(stress_markdown(result))
+            names.append(f"{stem}-heatmap.png")
+        (staging / f"{stem}.md").write_text(stress_markdown(result))
     return [out / name for name in names]
 
 
 def run_stress_args(args: Any, progress: bool = True) -> StressResult:
     """The stress suite for ``usvsim bench`` options (:class:`usvsim.evaluation.bench.BenchArgs`):
     ``--helmsmen`` (empty: every available one; unreadable shipped models skipped), ``--sets``,
-    ``--stress-episodes``."""
+    ``--stress-episodes``, ``--split`` (validation | test, default test)."""
     import sys
 
     from usvsim.common.errors import UserError
@@ -386,4 +454,4 @@ def run_stress_args(args: Any, progress: bool = True) -> StressResult:
     factories, skipped = loadable_helmsmen(select_helmsmen(args.names()), bool(args.names()), warn)
     if not factories:
         raise UserError("no helmsman to compare: " + "; ".join(skipped))
-    return run_stress(factories, sets, args.stress_episodes, progress, skipped)
+    return run_stress(factories, sets, args.stress_episodes, progress, skipped, args.split)

@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from usvsim.common.splits import check_test_draw
 from usvsim.task.scenario import Scenario
 
 __all__ = [
@@ -151,6 +152,8 @@ def validation_courses(
 
 
 def heldout_courses(ws: WaypointScenario | None = None, n: int = 200) -> tuple[WaypointCourse, ...]:
-    """``n`` held-out courses from ``WAYPOINT_HELDOUT_SEED`` (a separate stream)."""
+    """``n`` held-out courses from ``WAYPOINT_HELDOUT_SEED`` (a separate stream): a test split,
+    refused inside :func:`usvsim.common.splits.selection_mode`."""
+    check_test_draw("waypoint held-out")
     rng = np.random.default_rng(WAYPOINT_HELDOUT_SEED)
     return tuple(draw_course(rng, ws or WaypointScenario()) for _ in range(n))
