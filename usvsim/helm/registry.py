@@ -12,6 +12,8 @@ name                         helmsman
                              obstacles with COLREG (Kuwata et al. 2014), ``scene`` observation
 ``sb-mpc``                   :class:`baselines.sbmpc.SBMPCHelmsman`, scenario-based MPC with
                              COLREG costs (Johansen et al. 2016), ``scene`` observation
+``vo-radar``                 :class:`baselines.vo_radar.VORadarHelmsman`: ``vo`` on the tracks of
+                             its radar (:mod:`usvsim.nav.tracker`), ``radar+nav`` observation
 ``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``
 a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
 ===========================  ===================================================================
@@ -74,6 +76,12 @@ def _vo() -> Helmsman:
     return VOHelmsman()
 
 
+def _vo_radar() -> Helmsman:
+    from baselines.vo_radar import VORadarHelmsman
+
+    return VORadarHelmsman()
+
+
 def _sbmpc() -> Helmsman:
     from baselines.sbmpc import SBMPCHelmsman
 
@@ -102,6 +110,7 @@ def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFact
         "los-avoid": _los_avoid,
         "vo": _vo,
         "sb-mpc": _sbmpc,
+        "vo-radar": _vo_radar,
     }
     folder = MODELS_DIR if models_dir is None else models_dir
     for path in sorted(folder.glob("*.pt")) if folder.is_dir() else []:

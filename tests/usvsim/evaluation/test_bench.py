@@ -23,11 +23,13 @@ from usvsim.helm.registry import available_helmsmen, make_helmsman
 
 def test_registry_lists_the_baselines(tmp_path: Path) -> None:
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "vo"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo", "vo-radar"]
     h = helmsmen["los-avoid"]()
     assert (h.observation, h.action) == ("positional", "gaussian")  # type: ignore[attr-defined]
     vo = helmsmen["vo"]()
     assert (vo.observation, vo.action) == ("scene", "gaussian")  # type: ignore[attr-defined]
+    vo_radar = helmsmen["vo-radar"]()
+    assert vo_radar.observation == "radar+nav"  # type: ignore[attr-defined]
 
 
 def test_make_helmsman_knows_every_kind_of_name(tmp_path: Path) -> None:
@@ -57,7 +59,7 @@ def test_registry_loads_models_with_the_checkpoint_module(
     fake.CheckpointError = ValueError  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "learning.experiments.checkpoint", fake)
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "vo", "trpo-positional"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo", "vo-radar", "trpo-positional"]
     assert helmsmen["trpo-positional"]() == "helmsman" and loaded == [
         tmp_path / "trpo-positional.pt"
     ]
