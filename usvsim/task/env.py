@@ -48,7 +48,13 @@ class PoleAvoidanceEnv(gym.Env):
 
     ## Rewards
     ``r = r_pole + r_goal`` from the TRUE distances at the end of the decision period
-    (:class:`usvsim.task.reward.GaussianReward`, pluggable); both terms in ``info``.
+    (:class:`usvsim.task.reward.GaussianReward`, pluggable); both terms in ``info``. With
+    d_pole, d_goal the distances (m) to the pole and to the goal (Vedeler 2019, the forms of
+    :mod:`usvsim.task.reward`)::
+
+        r_pole = -2 · exp(-½ (d_pole / 5 m)²)          ∈ (-2, 0)
+        r_goal = -1 + exp(-½ (d_goal / 100 m)²)        ∈ (-1, 0)
+
     ``reward_horizon="fixed"`` adds, on a terminating step, the discounted reward of staying
     there until the time limit (γ = ``gamma``), and reports leaving the area as ``terminated``:
     train with it, since every reward is negative and otherwise ramming the pole is the

@@ -251,8 +251,18 @@ class OpenWaterVectorEnv(VectorEnv):
     standardises the positional observation as in the pole task; the others are unchanged.
 
     ## Rewards
-    The study's reward on the nearest obstacle's pole-equivalent distance (module docstring);
-    ``info["reward_pole"]``, ``info["reward_goal"]``. ``reward_horizon="fixed"`` for training.
+    The study's reward (Vedeler 2019; :class:`usvsim.task.reward.GaussianReward`) with the pole
+    term on the nearest obstacle's pole-equivalent distance ``d = min_j |p - c_j| - R_j + 1 m``
+    (obstacle j's centre c_j and radius R_j, vessels where they are at that step), the
+    quantity of the success rule::
+
+        r = r_pole + r_goal
+        r_pole = -2 · exp(-½ (d / 5 m)²)               ∈ (-2, 0)
+        r_goal = -1 + exp(-½ (d_goal / 100 m)²)        ∈ (-1, 0)
+
+    ``info["reward_pole"]``, ``info["reward_goal"]``. ``reward_horizon="fixed"`` (train with
+    it) adds on a terminating step the discounted reward of staying there until the episode's
+    own time limit, as in :class:`usvsim.task.env.PoleAvoidanceEnv`.
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
