@@ -106,9 +106,9 @@ def plot_learning_curve(
     return_label: str = "training return\n(fixed-horizon)",
 ) -> None:
     """Training return (column ``return_key``) and validation successes against env steps."""
-    import matplotlib
+    from usvsim.common.mpl import use_file_backend_if_headless
 
-    matplotlib.use("Agg")
+    use_file_backend_if_headless()  # Agg, but a notebook's inline backend is left alone
     import matplotlib.pyplot as plt
 
     steps = np.array([r["env_steps"] for r in rows], dtype=float)
