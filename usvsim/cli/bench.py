@@ -20,6 +20,8 @@ def run_bench_command(args: BenchArgs) -> int:
     check_writable_dir(args.out, "--out")  # before the evaluation, not after it
     if args.suite == "stress":
         return _run_stress_command(args)
+    if args.suite == "colreg":
+        return _run_colreg_command(args)
     result = run_bench(args)
     files = write_results(result, Path(args.out), plots=not args.no_plots)
     sweep = load_sweep(args.sweep) if args.sweep else None
@@ -54,6 +56,31 @@ def _run_stress_command(args: BenchArgs) -> int:
     else:
         print(f"usvsim bench — stress suite, {result.episodes_per_set} episodes per set")
         print(format_table(result.rows))
+        written = ", ".join(f.name for f in files)
+        print(f"ran in {result.wall_s:.1f} s; results in {args.out}/ ({written})")
+    if result.interrupted:
+        kept = f"{len(result.rows)} rows written to {args.out}/" if result.rows else "nothing"
+        print(f"usvsim bench: interrupted; {kept}", file=sys.stderr, flush=True)
+        return INTERRUPTED
+    return 0
+
+
+def _run_colreg_command(args: BenchArgs) -> int:
+    """``usvsim bench --suite colreg`` (:mod:`usvsim.evaluation.colreg_suite`)."""
+    from usvsim.evaluation.colreg_suite import (
+        colreg_json,
+        colreg_table,
+        run_colreg_args,
+        write_colreg,
+    )
+
+    result = run_colreg_args(args)
+    files = write_colreg(result, Path(args.out), plots=not args.no_plots)
+    if args.json:
+        print(colreg_json(result, [str(f) for f in files]))
+    else:
+        print(f"usvsim bench — COLREG suite, {result.episodes_per_set} episodes per set")
+        print(colreg_table(result))
         written = ", ".join(f.name for f in files)
         print(f"ran in {result.wall_s:.1f} s; results in {args.out}/ ({written})")
     if result.interrupted:

@@ -89,20 +89,26 @@ class BenchArgs:
     json: bool = False  # print JSON only (stdout)
     no_plots: bool = False  # skip the path plots
     no_likeness: bool = False  # skip the expert-likeness columns (validation, pole scenario)
-    suite: Literal["study", "stress"] = "study"  # stress: usvsim.evaluation.stress (named sets)
-    sets: str = ""  # --suite stress: comma-separated stress sets; empty: all
+    # stress: usvsim.evaluation.stress (named sets); colreg: usvsim.evaluation.colreg_suite
+    suite: Literal["study", "stress", "colreg"] = "study"
+    sets: str = ""  # --suite stress | colreg: comma-separated sets; empty: all
     stress_episodes: int = field(default=100, metadata=bounds(ge=1, le=10_000))  # per stress set
     split: Literal["validation", "test"] = "test"  # --suite stress: test reports; validation picks
+    # --suite colreg: perturbed episodes per set (22 Imazu problems + trafficgen-1ts)
+    colreg_episodes: int = field(default=5, metadata=bounds(ge=1, le=1000))
+    reactive_targets: bool = False  # --suite colreg: targets steered by vo (default: hold course)
     sweep: str = ""  # a usvsim sweep folder: its across-seed held-out IQM beside shipped models
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
         if self.scenario not in SCENARIOS:
             raise UserError(f"--scenario must be one of {SCENARIOS}, not {self.scenario!r}")
-        if self.sets and self.suite != "stress":
-            raise UserError("--sets needs --suite stress (the study's bench has no named sets)")
-        if self.split != "test" and self.suite != "stress":
-            raise UserError("--split needs --suite stress (the study's bench shows both splits)")
+        if self.sets and self.suite not in ("stress", "colreg"):
+            raise UserError("--sets needs --suite stress or colreg (the study's has no named sets)")
+        if self.reactive_targets and self.suite != "colreg":
+            raise UserError("--reactive-targets needs --suite colreg")
+        if self.split != "test" and self.suite not in ("stress", "colreg"):
+            raise UserError("--split needs --suite stress or colreg (the study's shows both)")
         if self.sweep:  # a folder that is not a sweep: one line before anything runs
             from usvsim.evaluation.bench_sweep import load_sweep
 

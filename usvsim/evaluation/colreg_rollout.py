@@ -19,10 +19,16 @@ by the project's ``vo`` helmsman (Kuwata et al. 2014, :mod:`baselines.velocity_o
 COLREG rule 14/15 terms on) from a ``scene`` observation of its own: the own ship (true state,
 radius half the beam of a 10.5 m hull rounded up to 5 m) and the other targets and obstacles of
 its episode, its goal far ahead on its initial course (it resumes that course once clear). The
-target's course becomes its course plus the chosen heading change (at most ±30° per 2 s
-decision, the task's own bound), applied at the decision instant; its speed is kept. Its motion
-is re-anchored so its position is continuous: ``p0 ← p(t) − U t (cos χ, sin χ)`` with the new
-course χ and zero turn rate. The helmsman then sees the scene as it is after the targets' choice.
+A target that is the give-way vessel to the own ship (rules 15-16 from its side: the own ship on
+its starboard bow and a risk of collision) steers instead for a point behind the own ship's stern
+until the own ship is abaft its beam (:meth:`ReactiveTargets._give_way`): ``vo`` alone kept clear
+but crossed ahead in a third of the stand-on crossings measured (Imazu 4 and trafficgen CR-SO,
+25 episodes), as its COLREG term only acts while the present course is inside the velocity
+obstacle. The target's course becomes its course plus the chosen heading change (at most ±30°
+per 2 s decision, the task's own bound), applied at the decision instant; its speed is kept.
+Its motion is re-anchored so its position is continuous: ``p0 ← p(t) − U t (cos χ, sin χ)``
+with the new course χ and zero turn rate. The helmsman then sees the scene as it is after the
+targets' choice.
 """
 
 from __future__ import annotations
@@ -43,6 +49,13 @@ __all__ = ["EncounterRun", "ReactiveTargets", "encounter_tracks", "run_encounter
 FloatArray = NDArray[np.float64]
 OWN_RADIUS_M = 5.0  # m, the own ship as the targets see it (a 10 m hull's disc, as theirs)
 GOAL_AHEAD_M = 10_000.0  # m, a reactive target's goal: this far along its initial course
+SECTOR_RAD = np.radians(112.5)  # rad, 22.5° abaft the beam (COLREG rule 13)
+CROSS_MIN_RAD = np.radians(22.5)  # rad, courses within this of parallel or opposite: no crossing
+GIVE_WAY_CPA_M = 50.0  # m, closest approach that is a risk of collision (usvsim's choice: vo's
+# 25 m margin around two 5 m hulls plus a margin; the scorer's preferred passing distance
+# is of that order for a 10 m boat)
+GIVE_WAY_TCPA_S = 90.0  # s, risk assessed this far ahead (the Imazu targets meet after ~100 s)
+ASTERN_CLEARANCE_M = 30.0  # m, a give-way target aims this far behind the own ship's stern
 
 
 @dataclass(frozen=True)
@@ -72,6 +85,52 @@ class ReactiveTargets:
         self.schedule: list[tuple[FloatArray, FloatArray, FloatArray]] = [
             (sim.v_p0.copy(), sim.v_course.copy(), sim.v_turn.copy())
         ]
+        self.giving_way = np.zeros((n, m), dtype=bool)  # latched per target (rule 15/16)
+
+    def _give_way(
+        self,
+        own_p: FloatArray,
+        own_v: FloatArray,
+        pos: FloatArray,
+        vel: FloatArray,
+        chi: FloatArray,
+    ) -> FloatArray:
+        """Update :attr:`giving_way` and return each target's course to pass astern (rad).
+
+        A target gives way (rules 15-16, its own view) while the own ship is on its starboard
+        side forward of 22.5° abaft the beam (0 < β < 112.5°, Rule 13's sector), their courses
+        cross (22.5° < |Δχ| < 157.5°: not head-on, not overtaking) and its straight-line closest
+        approach is nearer than ``GIVE_WAY_CPA_M`` within ``GIVE_WAY_TCPA_S``; it holds that until
+        the own ship is abaft its beam (|β| > 112.5°). It then steers for a point
+        ``ASTERN_CLEARANCE_M`` behind the own ship's stern, which takes it astern.
+        """
+        rel = own_p[:, None, :] - pos  # (N, M, 2): target → own ship
+        beta = ssa(np.arctan2(rel[..., 1], rel[..., 0]) - chi)
+        chi_own = np.arctan2(own_v[:, 1], own_v[:, 0])[:, None]
+        d_chi = np.abs(ssa(chi_own - chi))
+        w = own_v[:, None, :] - vel  # own velocity relative to the target
+        ww = np.maximum(np.sum(w * w, axis=-1), 1e-9)
+        tcpa = -np.sum(rel * w, axis=-1) / ww
+        cpa = np.hypot(*np.moveaxis(rel + w * np.clip(tcpa, 0.0, None)[..., None], -1, 0))
+        enters = (
+            (beta > 0.0) & (beta < SECTOR_RAD) & (d_chi > CROSS_MIN_RAD)
+            & (d_chi < np.pi - CROSS_MIN_RAD) & (tcpa > 0.0) & (tcpa < GIVE_WAY_TCPA_S)
+            & (cpa < GIVE_WAY_CPA_M)
+        )  # fmt: skip
+        self.giving_way = self.sim.vessel_ok & (
+            enters | (self.giving_way & (np.abs(beta) < SECTOR_RAD))
+        )
+        speed = np.maximum(np.hypot(own_v[:, 0], own_v[:, 1]), 1e-6)[:, None, None]
+        stern = own_p[:, None, :] - ASTERN_CLEARANCE_M * own_v[:, None, :] / speed
+        to = stern - pos
+        return np.arctan2(to[..., 1], to[..., 0])
+
+    @staticmethod
+    def _own(sim: OpenWaterBatch) -> tuple[FloatArray, FloatArray]:
+        """The own ships' true positions (N, 2) m and velocities over ground (N, 2) m/s."""
+        x = sim.inner.state.x
+        c, s = np.cos(x[:, 2]), np.sin(x[:, 2])
+        return x[:, 0:2], np.stack([c * x[:, 3] - s * x[:, 4], s * x[:, 3] + c * x[:, 4]], -1)
 
     def __call__(self, sim: OpenWaterBatch, k: int) -> Any:
         """Steer the targets at the end of decision ``k``; return the helmsman's observation."""
@@ -84,8 +143,12 @@ class ReactiveTargets:
         pos, vel = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, tt)
         chi = sim.v_course + sim.v_turn * t
         obs = self._observations(sim, pos, vel, chi)
-        action = np.asarray(self.helmsman.act(obs), dtype=np.float64).reshape(n, m)
-        new_chi = chi + action * sim.base.max_heading_change_rad
+        bound = sim.base.max_heading_change_rad
+        turn = np.asarray(self.helmsman.act(obs), dtype=np.float64).reshape(n, m) * bound
+        own_p, own_v = self._own(sim)
+        aim = self._give_way(own_p, own_v, pos, vel, chi)
+        turn = np.where(self.giving_way, np.clip(ssa(aim - chi), -bound, bound), turn)
+        new_chi = chi + turn
         new_chi = np.where(sim.vessel_ok, ssa(new_chi), 0.0)
         u = np.stack([np.cos(new_chi), np.sin(new_chi)], axis=-1)
         sim.v_p0 = np.where(sim.vessel_ok[..., None], pos - (sim.v_speed * t)[..., None] * u, 0.0)
@@ -100,14 +163,11 @@ class ReactiveTargets:
         """``scene`` observations (N·M, ...) of every target: the own ship first, then the other
         targets of its episode, then its static obstacles."""
         n, m = self.n, self.m
-        x = sim.inner.state.x
-        psi = x[:, 2]
-        c, s = np.cos(psi), np.sin(psi)
-        own_v = np.stack([c * x[:, 3] - s * x[:, 4], s * x[:, 3] + c * x[:, 4]], axis=-1)
+        own_p, own_v = self._own(sim)
         k_static = sim.centres.shape[1]
         centres = np.concatenate(
             [
-                np.broadcast_to(x[:, None, None, 0:2], (n, m, 1, 2)),
+                np.broadcast_to(own_p[:, None, None], (n, m, 1, 2)),
                 np.broadcast_to(pos[:, None], (n, m, m, 2)),
                 np.broadcast_to(sim.centres[:, None], (n, m, k_static, 2)),
             ],

@@ -29,8 +29,9 @@ rules do not depend on the compass), and per target a course change (±3°), a s
 (0.95-1.05) and a start shift (±10 m north and east): the "small perturbations". The own ship
 starts at ``anchor + D (cos β, sin β)`` heading at the anchor (D = meeting_distance_m), the goal
 lies 2 D ahead of the start (colav-simulator: the own ship's waypoint far beyond the meeting),
-time limit 2 × 2 D / U_boat, area radius 3 D around the anchor. ``validation`` and ``test`` draw
-from different seeds: choose on the first, report on the second.
+time limit 2 × 2 D / U_boat, area radius 3 D around the anchor (the meeting point).
+``validation`` and ``test`` draw from different seeds: choose on the first, report on the
+second.
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ __all__ = [
     "ImazuConfig",
     "ImazuTarget",
     "imazu_episodes",
+    "perturbed_episode",
 ]
 
 Split = Literal["validation", "test"]
@@ -125,6 +127,7 @@ class ImazuConfig:
     goal_factor: float = 2.0  # -, goal 2 D ahead of the start
     time_factor: float = 2.0  # -, time limit = factor × |start goal| / U_boat
     area_factor: float = 3.0  # -, area radius = factor × D around the meeting point
+    rotate: bool = True  # turn each episode's whole scene by a uniform angle
 
     @property
     def length_scale(self) -> float:
@@ -164,38 +167,59 @@ def imazu_episodes(
 def _episode(
     rng: np.random.Generator, targets: tuple[ImazuTarget, ...], cfg: ImazuConfig
 ) -> OpenWaterEpisode:
+    return perturbed_episode(
+        rng,
+        targets,
+        cfg,
+        cfg.length_scale,
+        cfg.speed_scale,
+        cfg.goal_factor * cfg.meeting_distance_m,
+    )
+
+
+def perturbed_episode(
+    rng: np.random.Generator,
+    targets: tuple[ImazuTarget, ...],
+    cfg: ImazuConfig,
+    length_scale: float,
+    speed_scale: float,
+    goal_distance_m: float,
+) -> OpenWaterEpisode:
+    """One episode of a ship-scale encounter (``targets`` relative to the own ship's start, own
+    heading north), scaled by ``length_scale`` (boat m per ship m) and ``speed_scale``, drawn
+    from ``rng`` as the module docstring says; the goal ``goal_distance_m`` (boat m) ahead.
+    The jitters of ``cfg`` apply; a zero-jitter config with no rotation gives the encounter
+    exactly (used by :mod:`usvsim.evaluation.trafficgen_io`)."""
     noise_seed, radar_seed, dist_seed = (int(x) for x in rng.integers(2**63, size=3))
-    rot = float(rng.uniform(0.0, 2.0 * math.pi))  # own course; the scene turns with it
-    d = cfg.meeting_distance_m
+    rot = float(rng.uniform(0.0, 2.0 * math.pi)) if cfg.rotate else 0.0
     c, s = math.cos(rot), math.sin(rot)
-    start = np.zeros(2)
-    meet = start + d * np.array([c, s])
     vessels = []
     for tgt in targets:
         dc = rng.uniform(-cfg.course_jitter_rad, cfg.course_jitter_rad)
         fs = rng.uniform(1.0 - cfg.speed_jitter, 1.0 + cfg.speed_jitter)
         shift = rng.uniform(-cfg.position_jitter_m, cfg.position_jitter_m, size=2)
-        n_m, e_m = tgt.north_m * cfg.length_scale, tgt.east_m * cfg.length_scale
-        p0 = start + np.array([c * n_m - s * e_m, s * n_m + c * e_m]) + shift
+        n_m, e_m = tgt.north_m * length_scale, tgt.east_m * length_scale
+        p0 = np.array([c * n_m - s * e_m, s * n_m + c * e_m]) + shift
         course = math.remainder(math.radians(tgt.course_deg) + rot + dc, 2.0 * math.pi)
-        kind = _encounter_kind(tgt)
         vessels.append(
-            Vessel(float(p0[0]), float(p0[1]), course, tgt.speed_mps * cfg.speed_scale * fs,
-                   0.0, cfg.target_radius_m, kind)
+            Vessel(float(p0[0]), float(p0[1]), course, tgt.speed_mps * speed_scale * fs,
+                   0.0, cfg.target_radius_m, _encounter_kind(tgt))
         )  # fmt: skip
-    goal = start + cfg.goal_factor * d * np.array([c, s])
-    length = cfg.goal_factor * d
-    limit = 2.0 * math.ceil(cfg.time_factor * length / cfg.own_speed_mps / 2.0 - 1e-9)
+    # the anchor (area centre, the start's reference) lies half way to the goal
+    half = 0.5 * goal_distance_m
+    anchor = half * np.array([c, s])
+    goal = 2.0 * anchor
+    limit = 2.0 * math.ceil(cfg.time_factor * goal_distance_m / cfg.own_speed_mps / 2.0 - 1e-9)
     return OpenWaterEpisode(
-        anchor_ne=(float(meet[0]), float(meet[1])),
-        start=EpisodeSpec(0, d, (rot + math.pi) % (2.0 * math.pi), 0.0, noise_seed),
+        anchor_ne=(float(anchor[0]), float(anchor[1])),
+        start=EpisodeSpec(0, half, (rot + math.pi) % (2.0 * math.pi), 0.0, noise_seed),
         goal_ne=(float(goal[0]), float(goal[1])),
         obstacles=(),
         vessels=tuple(vessels),
         disturbance=EpisodeDisturbance(speed_mps=cfg.own_speed_mps, seed=dist_seed),
         radar_seed=radar_seed,
         time_limit_s=max(150.0, limit),
-        area_radius_m=cfg.area_factor * d,
+        area_radius_m=cfg.area_factor * half,
     )
 
 

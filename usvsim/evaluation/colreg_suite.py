@@ -1,0 +1,488 @@
+"""``usvsim bench --suite colreg``: every traffic-capable helmsman on the standard encounter sets,
+scored for success and COLREG compliance.
+
+Sets (:data:`COLREG_SETS`): ``imazu-01`` … ``imazu-22``, Imazu's problems scaled to the boat
+(:mod:`usvsim.evaluation.imazu`), and ``trafficgen-1ts``, DNV trafficgen's five one-target
+baseline situations (:mod:`usvsim.evaluation.trafficgen_io`, files in
+``usvsim/evaluation/data/trafficgen``; episode k runs situation k mod 5). Each set draws its
+``n`` perturbed episodes from its own seeds, the ``test`` split by default (``validation`` for
+choosing). ``reactive_targets`` (per set, or ``--reactive-targets`` for all) steers the target
+vessels with ``vo`` (:mod:`usvsim.evaluation.colreg_rollout`); by default they hold course and
+speed, as Imazu's problems are defined.
+
+Every episode is recorded as own-ship and target tracks and scored by
+:func:`usvsim.evaluation.colreg.evaluate_colreg` (Woerner et al. 2019). A row (set × helmsman):
+success with its Wilson 95 % interval (:mod:`usvsim.evaluation.bench`'s strict success),
+collisions, COLREG compliance (the share of scored encounters that pass) with its Wilson
+interval, the mean score and the violations per rule. Files: ``colreg.md``, ``colreg.csv``,
+``colreg-heatmap.png`` (success, compliance and collisions, sets × helmsmen); ``--json`` prints
+the same on stdout.
+
+Which helmsmen: every available one (:func:`usvsim.helm.registry.available_helmsmen`) except
+``los``, which never looks at traffic; ``--helmsmen`` names others.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+import zlib
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from usvsim.evaluation.stats import Proportion, proportion
+
+__all__ = [
+    "COLREG_SETS",
+    "TRAFFIC_BLIND",
+    "ColregRow",
+    "ColregSet",
+    "ColregSuiteResult",
+    "colreg_episodes",
+    "colreg_json",
+    "colreg_markdown",
+    "colreg_row",
+    "colreg_set_names",
+    "colreg_table",
+    "run_colreg",
+    "run_colreg_args",
+    "select_colreg_sets",
+    "write_colreg",
+]
+
+Split = Literal["validation", "test"]
+TRAFFIC_BLIND = ("los",)  # helmsmen that never look at traffic: left out by default
+TRAFFICGEN_DIR = Path(__file__).resolve().parent / "data" / "trafficgen"
+
+
+@dataclass(frozen=True)
+class ColregSet:
+    """A named encounter set: an Imazu problem or trafficgen situation files."""
+
+    name: str
+    description: str
+    imazu_problem: int = 0  # 1-22, or 0 for a trafficgen set
+    trafficgen_files: tuple[str, ...] = ()  # paths of situation files (trafficgen sets)
+    reactive_targets: bool = False  # targets steered by vo (module docstring)
+
+    def seed(self, split: Split) -> int:
+        """The set's seed for a split: CRC-32 of ``name/split``."""
+        return zlib.crc32(f"{self.name}/{split}".encode())
+
+
+_IMAZU_KINDS = {1: "head-on", 2: "crossing, give way", 3: "overtaking", 4: "crossing, stand on"}
+COLREG_SETS: tuple[ColregSet, ...] = (
+    *(
+        ColregSet(
+            f"imazu-{p:02d}",
+            f"Imazu problem {p}: "
+            + (_IMAZU_KINDS[p] if p in _IMAZU_KINDS else f"{1 + (p >= 12) + (p >= 5)} targets"),
+            imazu_problem=p,
+        )
+        for p in range(1, 23)
+    ),
+    ColregSet(
+        "trafficgen-1ts",
+        "DNV trafficgen's one-target baseline situations (HO, CR-GW, CR-SO, OT-GW, OT-SO)",
+        trafficgen_files=tuple(str(p) for p in sorted(TRAFFICGEN_DIR.glob("*.json"))),
+    ),
+)
+
+
+def colreg_set_names() -> tuple[str, ...]:
+    return tuple(s.name for s in COLREG_SETS)
+
+
+def select_colreg_sets(names: Sequence[str]) -> tuple[ColregSet, ...]:
+    """The sets named (all for an empty list), in the suite's order; ``UserError`` if unknown."""
+    from usvsim.common.errors import UserError
+
+    known = colreg_set_names()
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise UserError(f"unknown colreg set {unknown[0]!r}; choose from {', '.join(known)}")
+    return tuple(s for s in COLREG_SETS if not names or s.name in names)
+
+
+def colreg_episodes(cset: ColregSet, n: int, split: Split = "test") -> tuple[Any, ...]:
+    """The ``n`` episodes of a set (module docstring); ``UserError`` for a bad situation file."""
+    if cset.imazu_problem:
+        from usvsim.evaluation.imazu import imazu_episodes
+
+        return imazu_episodes(cset.imazu_problem, n, split)
+    from usvsim.evaluation.trafficgen_io import read_situation, situation_episodes
+
+    situations = [read_situation(f) for f in cset.trafficgen_files]
+    if not situations:
+        from usvsim.common.errors import UserError
+
+        raise UserError(f"colreg set {cset.name}: no trafficgen situation files")
+    seed = cset.seed(split)
+    return tuple(
+        situation_episodes(situations[k % len(situations)], np.random.default_rng([seed, k]))
+        for k in range(n)
+    )
+
+
+@dataclass(frozen=True)
+class ColregRow:
+    """One cell of the suite: a helmsman on one set."""
+
+    helmsman: str
+    episode_set: str
+    success: Proportion
+    collisions: int
+    compliance: Proportion  # passed / scored encounters (Woerner et al. 2019)
+    mean_score: float  # mean encounter score in [0, 1]; NaN without encounters
+    violations: dict[str, int] = field(default_factory=dict)  # failed encounters per rule
+    wall_s: float = 0.0  # s, evaluation and scoring of the set
+
+    def flat(self) -> dict[str, Any]:
+        """Flat dict for CSV and JSON."""
+        s, c = self.success, self.compliance
+        return {
+            "helmsman": self.helmsman,
+            "episode_set": self.episode_set,
+            "episodes": s.n,
+            "successes": s.successes,
+            "success_rate": s.rate,
+            "success_ci95_low": s.lower,
+            "success_ci95_high": s.upper,
+            "collisions": self.collisions,
+            "encounters": c.n,
+            "compliant": c.successes,
+            "compliance_rate": c.rate,
+            "compliance_ci95_low": c.lower,
+            "compliance_ci95_high": c.upper,
+            "mean_score": self.mean_score,
+            **{f"violations_{k}": v for k, v in sorted(self.violations.items())},
+            "wall_s": self.wall_s,
+        }
+
+
+def _empty() -> Proportion:
+    return Proportion(0, 0, math.nan, math.nan, math.nan)
+
+
+def colreg_compliance(result: Any) -> tuple[Proportion, float, dict[str, int]]:
+    """Compliance (passed / scored encounters), mean score and failures per rule of a
+    :class:`usvsim.evaluation.colreg.ColregResult` (its encounters other than "no risk")."""
+    from usvsim.evaluation.colreg import EncounterType
+
+    encounter = np.asarray(result.encounter)
+    scored = encounter != int(_no_risk(EncounterType))
+    passed = np.asarray(result.passed, dtype=bool) & scored
+    n, k = int(scored.sum()), int(passed.sum())
+    score = np.asarray(result.score, dtype=float)
+    mean = float(score[scored].mean()) if n else math.nan
+    failed = scored & ~passed
+    per_rule = {
+        EncounterType(t).name.lower(): int((failed & (encounter == t)).sum())
+        for t in np.unique(encounter[scored]).tolist()
+    }
+    return (proportion(k, n) if n else _empty()), mean, per_rule
+
+
+def _no_risk(kinds: Any) -> Any:
+    """The "no encounter" member of the scorer's EncounterType."""
+    for member in kinds:
+        if member.name.upper() in ("NONE", "NO_RISK", "NO_ENCOUNTER", "SAFE"):
+            return member
+    return next(iter(kinds))
+
+
+def colreg_row(helmsman: str, set_name: str, run: Any, wall_s: float) -> ColregRow:
+    """The row of an :class:`usvsim.evaluation.colreg_rollout.EncounterRun`, scored."""
+    from usvsim.evaluation.colreg import evaluate_colreg
+
+    compliance, mean, per_rule = colreg_compliance(evaluate_colreg(run.tracks))
+    ok = sum(bool(r.success) for r in run.records)
+    return ColregRow(
+        helmsman,
+        set_name,
+        proportion(ok, len(run.records)),
+        sum(bool(r.collision) for r in run.records),
+        compliance,
+        mean,
+        per_rule,
+        wall_s,
+    )
+
+
+@dataclass(frozen=True)
+class ColregSuiteResult:
+    """Rows (set × helmsman) and timing of one suite run."""
+
+    rows: tuple[ColregRow, ...]
+    sets: tuple[str, ...]
+    helmsmen: tuple[str, ...]
+    episodes_per_set: int
+    split: str
+    reactive_targets: bool
+    wall_s: float
+    interrupted: bool = False
+    skipped: tuple[str, ...] = ()
+
+    def pooled(self, helmsman: str, prefix: str = "imazu-") -> tuple[Proportion, Proportion]:
+        """Success and compliance of ``helmsman`` pooled over the sets named ``prefix*``."""
+        rows = [r for r in self.rows if r.helmsman == helmsman and r.episode_set.startswith(prefix)]
+        s = sum(r.success.successes for r in rows), sum(r.success.n for r in rows)
+        c = sum(r.compliance.successes for r in rows), sum(r.compliance.n for r in rows)
+        return (proportion(*s) if s[1] else _empty()), (proportion(*c) if c[1] else _empty())
+
+
+def run_colreg(
+    factories: dict[str, Any],
+    sets: Sequence[ColregSet],
+    n: int,
+    *,
+    split: Split = "test",
+    reactive_targets: bool = False,
+    progress: bool = True,
+    skipped: Sequence[str] = (),
+) -> ColregSuiteResult:
+    """Every helmsman of ``factories`` (label → factory) on ``n`` episodes of every set; a set's
+    episodes are drawn once for all helmsmen. Ctrl-C ends it early with the rows so far."""
+    from tqdm import tqdm
+
+    from usvsim.evaluation.colreg_rollout import run_encounters
+
+    start = time.perf_counter()
+    rows: list[ColregRow] = []
+    bar = tqdm(
+        total=len(sets) * len(factories),
+        desc="colreg",
+        unit="run",
+        file=sys.stderr,
+        disable=not progress,
+    )
+    interrupted = False
+    try:
+        episodes = {s.name: colreg_episodes(s, n, split) for s in sets}  # bad files fail first
+        for cset in sets:
+            for name, factory in factories.items():
+                bar.set_postfix_str(f"{cset.name} / {name}")
+                t0 = time.perf_counter()
+                run = run_encounters(
+                    factory(),
+                    episodes[cset.name],
+                    reactive_targets=reactive_targets or cset.reactive_targets,
+                )
+                rows.append(colreg_row(name, cset.name, run, time.perf_counter() - t0))
+                bar.update()
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.close()
+    return ColregSuiteResult(
+        tuple(rows),
+        tuple(s.name for s in sets),
+        tuple(factories),
+        n,
+        split,
+        reactive_targets,
+        time.perf_counter() - start,
+        interrupted,
+        tuple(skipped),
+    )
+
+
+def _pct(p: Proportion) -> str:
+    return "–" if p.n == 0 else p.format_percent()
+
+
+def colreg_markdown(result: ColregSuiteResult) -> str:
+    """The suite's tables: success, compliance and collisions (sets × helmsmen), then the
+    Imazu problems pooled per helmsman."""
+    by = {(r.episode_set, r.helmsman): r for r in result.rows}
+    descriptions = {s.name: s.description for s in COLREG_SETS}
+    head = "| set | " + " | ".join(result.helmsmen) + " |"
+    rule = "|---|" + "---|" * len(result.helmsmen)
+    lines = [
+        "# usvsim bench — COLREG suite" + (" (interrupted)" if result.interrupted else ""),
+        "",
+        f"{result.episodes_per_set} episodes per set ({result.split} split), targets "
+        + ("reactive (vo)" if result.reactive_targets else "holding course and speed")
+        + ". Each cell: success [Wilson 95 %] / COLREG compliance of the scored encounters "
+        "[Wilson 95 %] / collisions (usvsim.evaluation.colreg, after Woerner et al. 2019).",
+        "",
+        head,
+        rule,
+    ]
+    for s in result.sets:
+        cells = []
+        for h in result.helmsmen:
+            r = by.get((s, h))
+            cells.append(
+                "–" if r is None else f"{_pct(r.success)} / {_pct(r.compliance)} / {r.collisions}"
+            )
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "Imazu problems pooled:",
+        "",
+        "| helmsman | success | compliance |",
+        "|---|---|---|",
+    ]
+    for h in result.helmsmen:
+        s_p, c_p = result.pooled(h)
+        lines.append(f"| {h} | {_pct(s_p)} | {_pct(c_p)} |")
+    lines += ["", "Sets:", ""]
+    lines += [f"- `{s}`: {descriptions.get(s, '')}" for s in result.sets]
+    lines += ["", f"Run time {result.wall_s:.0f} s.", ""]
+    return "\n".join(lines)
+
+
+def colreg_table(result: ColregSuiteResult) -> str:
+    """Fixed-width terminal summary: per helmsman the Imazu sets pooled, then the other sets."""
+    others = [s for s in result.sets if not s.startswith("imazu-")]
+    head = ["helmsman", "Imazu success", "Imazu compliance", "coll."]
+    head += [f"{s} success / compliance" for s in others]
+    by = {(r.episode_set, r.helmsman): r for r in result.rows}
+    lines = [head]
+    for h in result.helmsmen:
+        s_p, c_p = result.pooled(h)
+        coll = sum(r.collisions for r in result.rows if r.helmsman == h)
+        cells = [h, _pct(s_p), _pct(c_p), str(coll)]
+        for s in others:
+            r = by.get((s, h))
+            cells.append("–" if r is None else f"{_pct(r.success)} / {_pct(r.compliance)}")
+        lines.append(cells)
+    widths = [max(len(row[i]) for row in lines) for i in range(len(head))]
+    text = [
+        "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip() for row in lines
+    ]
+    text.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(text)
+
+
+def colreg_json(result: ColregSuiteResult, files: Sequence[str] = ()) -> str:
+    """Machine-readable result (NaN and ±inf as null), with the pooled Imazu figures."""
+    import json
+
+    from usvsim.common.fileio import json_safe
+
+    pooled = {}
+    for h in result.helmsmen:
+        s_p, c_p = result.pooled(h)
+        pooled[h] = {"success": asdict(s_p), "compliance": asdict(c_p)}
+    payload = {
+        "suite": "colreg",
+        "sets": list(result.sets),
+        "helmsmen": list(result.helmsmen),
+        "episodes_per_set": result.episodes_per_set,
+        "split": result.split,
+        "reactive_targets": result.reactive_targets,
+        "rows": [r.flat() for r in result.rows],
+        "imazu_pooled": pooled,
+        "wall_s": result.wall_s,
+        "files": list(files),
+        "interrupted": result.interrupted,
+        "skipped": list(result.skipped),
+    }
+    return json.dumps(json_safe(payload), indent=2, allow_nan=False)
+
+
+def plot_colreg_heatmap(result: ColregSuiteResult) -> Any:
+    """Success (%), compliance (%) and collisions as three heat maps, sets × helmsmen."""
+    import matplotlib.pyplot as plt
+
+    by = {(r.episode_set, r.helmsman): r for r in result.rows}
+    panels = (
+        ("success (%)", lambda r: 100.0 * r.success.rate, "RdYlGn", 100.0),
+        ("COLREG compliance (%)", lambda r: 100.0 * r.compliance.rate, "RdYlGn", 100.0),
+        ("collisions", lambda r: float(r.collisions), "Reds_r", float(result.episodes_per_set)),
+    )
+    h, s = len(result.helmsmen), len(result.sets)
+    fig, axes = plt.subplots(1, 3, figsize=(3.0 + 3 * 0.55 * h, 1.5 + 0.3 * s), sharey=True)
+    for ax, (label, value, cmap, vmax) in zip(axes, panels, strict=True):
+        grid = np.array(
+            [
+                [value(by[(st, hm)]) if (st, hm) in by else np.nan for hm in result.helmsmen]
+                for st in result.sets
+            ]
+        )
+        cmap_obj = plt.get_cmap(cmap if label != "collisions" else "Reds")
+        image = ax.imshow(grid, cmap=cmap_obj, vmin=0.0, vmax=vmax, aspect="auto")
+        for (i, j), v in np.ndenumerate(grid):
+            if np.isfinite(v):
+                ax.text(j, i, f"{v:.0f}", ha="center", va="center", fontsize=6)
+        ax.set_xticks(range(h), result.helmsmen, rotation=60, ha="right", fontsize=7)
+        ax.set_yticks(range(s), result.sets, fontsize=7)
+        ax.set_title(label, fontsize=9)
+        fig.colorbar(image, ax=ax, fraction=0.05)
+    fig.suptitle(f"usvsim COLREG suite, {result.episodes_per_set} episodes per set")
+    fig.tight_layout()
+    return fig
+
+
+def write_colreg(result: ColregSuiteResult, out: Any, plots: bool = True) -> list[Path]:
+    """``colreg.md``, ``colreg.csv`` and ``colreg-heatmap.png`` into ``out``, as one unit."""
+    import csv
+    import io
+
+    from usvsim.common.fileio import atomic_savefig, remove_stale_temporaries, staged_dir
+
+    if not result.rows:
+        return []
+    out = Path(out)
+    remove_stale_temporaries(out)
+    names = ["colreg.md", "colreg.csv"]
+    flat = [r.flat() for r in result.rows]
+    keys = list(dict.fromkeys(k for row in flat for k in row))
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=keys, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(flat)
+    with staged_dir(out, "colreg", replaces=("colreg-heatmap.png",)) as staging:
+        (staging / "colreg.csv").write_text(buffer.getvalue())
+        if plots:
+            from usvsim.common.mpl import use_file_backend_if_headless
+
+            use_file_backend_if_headless()
+            import matplotlib.pyplot as plt
+
+            fig = plot_colreg_heatmap(result)
+            atomic_savefig(fig, staging / "colreg-heatmap.png", dpi=110)
+            plt.close(fig)
+            names.append("colreg-heatmap.png")
+        (staging / "colreg.md").write_text(colreg_markdown(result))
+    return [out / name for name in names]
+
+
+def run_colreg_args(args: Any, progress: bool = True) -> ColregSuiteResult:
+    """The suite for ``usvsim bench`` options (:class:`usvsim.evaluation.bench.BenchArgs`):
+    ``--helmsmen`` (empty: every available one but :data:`TRAFFIC_BLIND`), ``--sets``,
+    ``--colreg-episodes``, ``--reactive-targets``."""
+    from usvsim.common.errors import UserError
+    from usvsim.common.options import check_bounds
+    from usvsim.evaluation.bench import loadable_helmsmen
+    from usvsim.helm.registry import select_helmsmen
+
+    check_bounds(args)
+    args.check()
+    sets = select_colreg_sets([n.strip() for n in args.sets.split(",") if n.strip()])
+
+    def warn(message: str) -> None:
+        print(message, file=sys.stderr, flush=True)
+
+    chosen = select_helmsmen(args.names())
+    if not args.names():
+        chosen = {k: v for k, v in chosen.items() if k not in TRAFFIC_BLIND}
+    factories, skipped = loadable_helmsmen(chosen, bool(args.names()), warn)
+    if not factories:
+        raise UserError("no helmsman to compare: " + "; ".join(skipped))
+    return run_colreg(
+        factories,
+        sets,
+        args.colreg_episodes,
+        split=args.split,
+        reactive_targets=args.reactive_targets,
+        progress=progress,
+        skipped=skipped,
+    )
