@@ -1,8 +1,10 @@
-"""``usvsim evaluate CHECKPOINT``: a trained policy on the validation and held-out episode sets.
+"""``usvsim evaluate MODEL``: a trained policy on the validation and held-out episode sets.
 
-Loads the checkpoint (:func:`learning.experiments.checkpoint.load_checkpoint`, precise errors
-for a bad file), runs its deterministic policy on the study's 15 validation episodes and on the 200
-held-out episodes (:mod:`usvsim.evaluation.episodes`), and prints one table::
+``MODEL`` is a shipped model's name (``rl-gaussian-positional``: ``usvsim/models/<name>.pt``, the
+names ``usvsim bench`` takes) or the path of a checkpoint file. Loads the checkpoint
+(:func:`learning.experiments.checkpoint.load_checkpoint`, precise errors for a bad file), runs its
+deterministic policy on the study's 15 validation episodes and on the 200 held-out episodes
+(:mod:`usvsim.evaluation.episodes`), and prints one table::
 
     set         episodes  success  collision  min d_pole m (min / median)  mean t_goal s
     validation        15  15/15 (100.0 %)  0  ...
@@ -10,6 +12,10 @@ held-out episodes (:mod:`usvsim.evaluation.episodes`), and prints one table::
 ``min d_pole`` is each episode's closest approach to the pole (true positions, every 0.1 s);
 the table gives its minimum and median over all episodes of the set, and the minimum over the
 successful ones.
+
+``--json`` prints the same as JSON instead, and nothing else on stdout (as ``usvsim bench --json``
+and ``usvsim perf --json``); ``--json-out PATH`` writes it to a file (the deprecated ``--json
+PATH`` still does, with a warning).
 
 ``--video PATH`` (``.gif``, or ``.mp4`` with moviepy: ``pip install "usvsim[video]"``) also
 records the validation episodes chosen by ``--video-episodes`` (indices, e.g. ``0,3,7``, or
@@ -24,6 +30,7 @@ import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -37,8 +44,9 @@ from learning.experiments.checkpoint import (
     load_agent,
     load_checkpoint,
 )
+from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_write_text, check_writable_file, json_safe
-from usvsim.common.options import bounds
+from usvsim.common.options import bounds, legacy_path
 from usvsim.evaluation.episodes import (
     EpisodeRecord,
     evaluate,
@@ -50,17 +58,28 @@ from usvsim.task.env import PoleAvoidanceEnv
 from usvsim.task.render import write_video
 from usvsim.task.scenario import EpisodeSpec
 
-__all__ = ["EvaluateArgs", "episode_frames", "evaluation_row", "format_table", "run"]
+__all__ = [
+    "EvaluateArgs",
+    "checkpoint_path",
+    "episode_frames",
+    "evaluation_row",
+    "format_table",
+    "run",
+]
 
 
 @dataclass(frozen=True)
 class EvaluateArgs:
-    """Evaluate a trained policy checkpoint on the validation (15) and held-out episodes."""
+    """Evaluate a trained policy (a shipped model or a checkpoint) on the validation (15) and
+    held-out episodes."""
 
-    checkpoint: str  # path of a .pt checkpoint, e.g. usvsim/models/rl-gaussian-positional.pt
+    checkpoint: str  # a shipped model's name (rl-gaussian-positional) or a .pt checkpoint path
     heldout: int = field(default=200, metadata=bounds(ge=0, le=100_000))  # 0: validation only
     episodes: bool = False  # also print one line per validation episode
-    json: str = ""  # also write the table as JSON to this path (NaN, e.g. no success: null)
+    json: bool = field(  # print the table as JSON only (stdout; NaN, e.g. no success: null)
+        default=False, metadata=legacy_path("json_out")
+    )
+    json_out: str = ""  # also write the table as JSON to this path
     threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
     video: str = ""  # also write the chosen validation episodes as a video (.gif or .mp4)
     video_episodes: str = "0"  # validation episodes for --video: indices 0..14 (e.g. 0,3) or all
@@ -137,13 +156,28 @@ def _video_episodes(text: str, n: int) -> list[int]:
     return chosen
 
 
+def checkpoint_path(model: str) -> str:
+    """The checkpoint file of ``model``: a shipped model's name (as ``usvsim bench`` takes it,
+    ``usvsim/models/<name>.pt``) or a path; :class:`UserError` naming both kinds otherwise."""
+    from usvsim.helm.registry import MODELS_DIR
+
+    shipped = MODELS_DIR / f"{model}.pt"
+    if "/" not in model and shipped.is_file():
+        return str(shipped)
+    if Path(model).exists() or model.endswith(".pt"):
+        return model  # a missing or unreadable file: load_checkpoint names what is wrong
+    names = ", ".join(sorted(p.stem for p in MODELS_DIR.glob("*.pt")))
+    raise UserError(f"unknown model {model!r}; choose a shipped model ({names}) or a .pt file")
+
+
 def run(args: EvaluateArgs) -> int:
     """Run ``usvsim evaluate`` (module docstring); 0 on success."""
     torch.set_num_threads(max(1, args.threads))
     if args.heldout < 0:
         raise SystemExit("usvsim evaluate: --heldout must be >= 0")
-    if args.json:
-        check_writable_file(args.json, "--json")  # before the episodes, not after them
+    path = checkpoint_path(args.checkpoint)
+    if args.json_out:
+        check_writable_file(args.json_out, "--json-out")  # before the episodes, not after them
     video_episodes: list[int] = []
     if args.video:
         if not args.video.lower().endswith((".gif", ".mp4")):
@@ -153,8 +187,8 @@ def run(args: EvaluateArgs) -> int:
         video_episodes = _video_episodes(args.video_episodes, len(validation_episodes()))
         check_writable_file(args.video, "--video")
     try:
-        ckpt = load_checkpoint(args.checkpoint)
-        agent = load_agent(ckpt, args.checkpoint)
+        ckpt = load_checkpoint(path)
+        agent = load_agent(ckpt, path)
     except CheckpointError as err:
         raise SystemExit(f"usvsim evaluate: {err}") from None
     observation, action = checkpoint_kinds(ckpt)
@@ -168,18 +202,21 @@ def run(args: EvaluateArgs) -> int:
         rows.append(evaluation_row(name, records))
         if name == "validation" and args.episodes:
             per_episode = format_records(records)
-    print(
-        f"{args.checkpoint}: setup {ckpt.setup} ({ckpt.observation}, {ckpt.action}), "
-        f"iteration {agent.iteration}, {agent.env_steps:,} env steps, "
-        f"git {ckpt.git_revision}"
-    )
-    print(format_table(rows))
-    if per_episode:
-        print(per_episode)
-    if args.json:
-        payload = {"checkpoint": args.checkpoint, "setup": ckpt.setup, "rows": rows}
-        text = json.dumps(json_safe(payload), indent=2, allow_nan=False)
-        atomic_write_text(args.json, text + "\n")
+    payload = {"checkpoint": path, "setup": ckpt.setup, "rows": rows}
+    text = json.dumps(json_safe(payload), indent=2, allow_nan=False)
+    if args.json:  # stdout holds the JSON and nothing else
+        print(text)
+    else:
+        print(
+            f"{path}: setup {ckpt.setup} ({ckpt.observation}, {ckpt.action}), "
+            f"iteration {agent.iteration}, {agent.env_steps:,} env steps, "
+            f"git {ckpt.git_revision}"
+        )
+        print(format_table(rows))
+        if per_episode:
+            print(per_episode)
+    if args.json_out:
+        atomic_write_text(args.json_out, text + "\n")
     if args.video:
         specs = validation_episodes()
         frames: list[NDArray[np.uint8]] = []
@@ -190,6 +227,9 @@ def run(args: EvaluateArgs) -> int:
             write_video(frames, args.video, fps=5)
         except ImportError as err:
             raise SystemExit(f"usvsim evaluate: {err}") from None
-        print(f"video: {args.video} (validation episodes {video_episodes}, {len(frames)} frames)")
+        print(
+            f"video: {args.video} (validation episodes {video_episodes}, {len(frames)} frames)",
+            file=sys.stderr if args.json else sys.stdout,
+        )
     sys.stdout.flush()
     return 0

@@ -81,7 +81,7 @@ class SweepArgs:
     address: str = ""  # an existing Ray cluster, e.g. ray://head:10001; "": local Ray
     out: str = ""  # sweep folder; default usvsim-results/sweep/<name>
     report_only: bool = False  # only (re)write the report from the trials run so far
-    no_shipped: bool = False  # skip evaluating usvsim's shipped models for the comparison
+    shipped: bool = True  # evaluate usvsim's shipped models for the comparison
 
 
 def _fail(message: str) -> SystemExit:
@@ -164,7 +164,7 @@ def run(args: SweepArgs) -> int:
     if args.report_only:
         if not (root / "trials.json").is_file():
             raise _fail(f"{root} holds no sweep (no trials.json)")
-        _print_summary(write_report(root, compare_shipped=not args.no_shipped), root)
+        _print_summary(write_report(root, compare_shipped=args.shipped), root)
         return 0
     where = SweepRun(root, address=args.address, max_concurrent=args.max_concurrent)
     print(
@@ -177,7 +177,7 @@ def run(args: SweepArgs) -> int:
         trials = run_sweep(spec, dataclasses.replace(where, say=_say))
     except ValueError as err:
         raise _fail(str(err)) from None
-    report = write_report(root, compare_shipped=not args.no_shipped)
+    report = write_report(root, compare_shipped=args.shipped)
     _print_summary(report, root)
     crashed = [t["dir"] for t in trials if t["status"] == "crashed"]
     pending = [t["dir"] for t in trials if t["status"] == "not run"]

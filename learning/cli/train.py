@@ -97,14 +97,14 @@ from usvsim.common.options import bounds
 
 INTERRUPTED = 130  # exit status after Ctrl-C / SIGTERM
 
-__all__ = ["TrainArgs", "command_of", "outcome", "run"]
+__all__ = ["TrainArgs", "command_of", "outcome", "run", "setup_table"]
 
 
 @dataclass(frozen=True)
 class TrainArgs:
     """Train a steering policy: rl-* by TRPO (rl-*-ppo by PPO), il-* by GAIL (with early stop)."""
 
-    setup: str  # {rl,il}-{gaussian,categorical}-{positional,radar}; rl-*-ppo: PPO, not TRPO
+    setup: str  # one of the setups listed below (rl-*: TRPO or PPO, il-*: GAIL)
     seed: int = field(default=0, metadata=bounds(ge=0, lt=2**32))  # networks, sampling, episodes
     iterations: int = field(default=0, metadata=bounds(ge=0))  # iteration budget; 0: the setup's
     validate_every: int = field(default=0, metadata=bounds(ge=0))  # every K iterations; 0: setup's
@@ -131,6 +131,11 @@ class TrainArgs:
     harsh_radar_copies: int = field(  # il-*-radar-ow: K harsh-radar copies per demo; 0: setup's
         default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
     )
+
+    @classmethod
+    def cli_epilog(cls) -> str:
+        """The end of ``usvsim train --help``: every registered setup (:func:`setup_table`)."""
+        return setup_table()
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
@@ -191,6 +196,27 @@ class TrainArgs:
                 raise UserError(
                     "--harsh-radar-copies starts a new run; --resume keeps the run's own"
                 )
+
+
+def setup_table() -> str:
+    """Every registered setup (:data:`learning.experiments.setups.SETUPS`, then
+    :data:`learning.experiments.il_setups.IL_SETUPS`), one line each: algorithm, task,
+    observation, action, and ``*`` where a trained model of it ships in ``usvsim/models``."""
+    from usvsim.helm.registry import MODELS_DIR
+
+    setups: list[Any] = [*SETUPS.values(), *IL_SETUPS.values()]
+    width = max(len(s.name) for s in setups) + 2
+    lines = [
+        f"setups ({len(setups)}; * = a trained model ships in usvsim/models under that name):",
+        f"  {'setup':<{width}}{'algorithm':<11}{'task':<12}{'observation':<13}action",
+    ]
+    for s in setups:
+        algorithm = f"{s.algorithm}+gail" if s.name.startswith("il-") else s.algorithm
+        mark = "*" if (MODELS_DIR / f"{s.name}.pt").is_file() else " "
+        lines.append(
+            f"{mark} {s.name:<{width}}{algorithm:<11}{s.task:<12}{s.observation:<13}{s.action}"
+        )
+    return "\n".join(lines)
 
 
 def _fail(message: str) -> SystemExit:

@@ -23,7 +23,7 @@ def run_bench_command(args: BenchArgs) -> int:
     if args.suite == "colreg":
         return _run_colreg_command(args)
     result = run_bench(args)
-    files = write_results(result, Path(args.out), plots=not args.no_plots)
+    files = write_results(result, Path(args.out), plots=args.plots)
     sweep = load_sweep(args.sweep) if args.sweep else None
     if args.json:
         text = to_json(result, [str(f) for f in files])
@@ -50,7 +50,7 @@ def _run_stress_command(args: BenchArgs) -> int:
     from usvsim.evaluation.stress import run_stress_args, stress_json, write_stress
 
     result = run_stress_args(args)
-    files = write_stress(result, Path(args.out), plots=not args.no_plots)
+    files = write_stress(result, Path(args.out), plots=args.plots)
     if args.json:
         print(stress_json(result, [str(f) for f in files]))
     else:
@@ -75,7 +75,7 @@ def _run_colreg_command(args: BenchArgs) -> int:
     )
 
     result = run_colreg_args(args)
-    files = write_colreg(result, Path(args.out), plots=not args.no_plots)
+    files = write_colreg(result, Path(args.out), plots=args.plots)
     if args.json:
         print(colreg_json(result, [str(f) for f in files]))
     else:

@@ -22,7 +22,9 @@ non-finite loss)
 ==============================================  =============================================
 
 ``usvsim --debug CMD ...`` (or ``--debug`` anywhere) shows the Python traceback of a user error
-instead of the one line.
+instead of the one line; ``usvsim --version`` prints the installed package's version. A command's
+options class may add text after its options in ``--help`` with a ``cli_epilog()`` classmethod
+(``usvsim train --help`` lists every setup).
 """
 
 from __future__ import annotations
@@ -33,13 +35,19 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
-from usvsim.cli.args import USAGE_ERROR, OneLineParser, add_dataclass_arguments, check_options
+from usvsim.cli.args import (
+    USAGE_ERROR,
+    HelpFormatter,
+    OneLineParser,
+    add_dataclass_arguments,
+    check_options,
+)
 from usvsim.common.errors import UserError
 from usvsim.common.interrupt import interrupt_signals
 
 INTERRUPTED = 130  # exit status after Ctrl-C or SIGTERM (128 + SIGINT, the shell's convention)
 
-__all__ = ["COMMANDS", "Command", "build_parser", "main"]
+__all__ = ["COMMANDS", "Command", "build_parser", "main", "package_version"]
 
 
 class Command(NamedTuple):
@@ -117,18 +125,39 @@ def _command(name: str) -> tuple[type, Callable[[Any], int]]:
     return _resolve(command.options), _resolve(command.runner)
 
 
+def package_version() -> str:
+    """The installed usvsim's version (its metadata; the source tree's if not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("usvsim")
+    except PackageNotFoundError:
+        from usvsim import __version__
+
+        return __version__
+
+
 def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
     """The parser; only the ``chosen`` command's options are built (its module imported)."""
     parser = OneLineParser(
         prog="usvsim",
         description="usvsim: learn and test steering policies for unmanned surface vehicles.",
     )
+    parser.add_argument("--version", action="version", version=f"usvsim {package_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (_, _, summary) in COMMANDS.items():
         if name == chosen:
             cls, _ = _command(name)
             doc = (cls.__doc__ or summary).strip().splitlines()[0]
-            add_dataclass_arguments(sub.add_parser(name, help=summary, description=doc), cls)
+            epilog = getattr(cls, "cli_epilog", None)
+            command = sub.add_parser(
+                name,
+                help=summary,
+                description=doc,
+                epilog=epilog() if callable(epilog) else None,
+                formatter_class=HelpFormatter,
+            )
+            add_dataclass_arguments(command, cls)
         else:
             sub.add_parser(name, help=summary, add_help=False)
     return parser

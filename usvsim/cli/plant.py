@@ -63,7 +63,7 @@ class PerfArgs:
 
     json: bool = False  # print JSON only
     seconds: float = field(default=1.0, metadata=bounds(gt=0, le=3600))  # per figure, s
-    no_env: bool = False  # skip the environment figures
+    env: bool = True  # also measure the environments (--no-env: the plant only)
     profile: bool = False  # only profile decision steps: where a step's time goes
 
 
@@ -154,7 +154,7 @@ def run_perf(args: PerfArgs) -> int:
         from usvsim.evaluation.perf import profile_steps
 
         return _print_profile(profile_steps(max(args.seconds, 1.0)), args.json)
-    result = measure(args.seconds, env=not args.no_env)
+    result = measure(args.seconds, env=args.env)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0

@@ -18,9 +18,18 @@ from typing import Any
 
 from usvsim.common.errors import UserError
 
-__all__ = ["BOUNDS_KEY", "bounds", "check_bounds", "describe_bounds", "flag"]
+__all__ = [
+    "BOUNDS_KEY",
+    "LEGACY_PATH_KEY",
+    "bounds",
+    "check_bounds",
+    "describe_bounds",
+    "flag",
+    "legacy_path",
+]
 
 BOUNDS_KEY = "usvsim.bounds"
+LEGACY_PATH_KEY = "usvsim.legacy_path"
 
 
 def bounds(
@@ -38,6 +47,16 @@ def bounds(
     """
     spec = {"ge": ge, "gt": gt, "le": le, "lt": lt}
     return {BOUNDS_KEY: ({k: v for k, v in spec.items() if v is not None}, zero_ok)}
+
+
+def legacy_path(path_field: str) -> dict[str, Any]:
+    """Field metadata of a switch that once took a path (``--json PATH``, now ``--json-out``).
+
+    The switch still accepts the old form for backward compatibility: ``--json PATH`` warns that
+    it is deprecated and means ``--json-out PATH`` (the switch itself stays off); ``--json``
+    alone is the switch. ``path_field`` names the field that now holds the path.
+    """
+    return {LEGACY_PATH_KEY: path_field}
 
 
 def flag(name: str) -> str:

@@ -87,8 +87,8 @@ class BenchArgs:
     heldout: int = field(default=200, metadata=bounds(ge=1, le=100_000))  # held-out episodes
     out: str = "usvsim-results/bench"  # results folder: Markdown, CSV and path plots
     json: bool = False  # print JSON only (stdout)
-    no_plots: bool = False  # skip the path plots
-    no_likeness: bool = False  # skip the expert-likeness columns (validation, pole scenario)
+    plots: bool = True  # write the path plots (--no-plots: skip them)
+    likeness: bool = True  # the expert-likeness columns (validation, pole scenario)
     # stress: usvsim.evaluation.stress (named sets); colreg: usvsim.evaluation.colreg_suite
     suite: Literal["study", "stress", "colreg"] = "study"
     sets: str = ""  # --suite stress | colreg: comma-separated sets; empty: all
@@ -297,7 +297,7 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
 
 def _expert_reference(args: BenchArgs, specs: Sequence[Any]) -> Any:
     """The expert model's paths on the validation starts, or None where it does not apply."""
-    if args.no_likeness or args.scenario != "pole":
+    if not args.likeness or args.scenario != "pole":
         return None
     from usvsim.evaluation.likeness import expert_reference
 

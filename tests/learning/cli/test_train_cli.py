@@ -160,7 +160,7 @@ def test_setups_train_on_the_fixed_reward_horizon_with_their_gamma() -> None:
 def test_evaluate_prints_the_table(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert run(_args(tmp_path, iterations=1)) == 0
     out_json = tmp_path / "eval.json"
-    args = EvaluateArgs(str(tmp_path / "latest.pt"), heldout=4, json=str(out_json))
+    args = EvaluateArgs(str(tmp_path / "latest.pt"), heldout=4, json_out=str(out_json))
     assert run_evaluate(args) == 0
     text = capsys.readouterr().out
     assert "validation" in text and "held-out" in text

@@ -141,10 +141,10 @@ def test_outputs_are_checked_before_the_work(tmp_path: Path, capsys) -> None:
     _one_line_error(capsys, "--out", "cannot create the folder")
     assert main(["train", "rl-gaussian-positional", "--out", str(a_file)]) == 2
     _one_line_error(capsys, "usvsim train: --out", "is a file")
-    assert main(["evaluate", str(MODEL), "--json", str(tmp_path)]) == 2
-    _one_line_error(capsys, f"--json {tmp_path}: is a folder, not a file")
-    assert main(["evaluate", str(MODEL), "--json", str(a_file / "x.json")]) == 2
-    _one_line_error(capsys, "--json", "is a file, not a folder")
+    assert main(["evaluate", str(MODEL), "--json-out", str(tmp_path)]) == 2
+    _one_line_error(capsys, f"--json-out {tmp_path}: is a folder, not a file")
+    assert main(["evaluate", str(MODEL), "--json-out", str(a_file / "x.json")]) == 2
+    _one_line_error(capsys, "--json-out", "is a file, not a folder")
 
 
 def test_resume_refuses_a_conflicting_seed_or_n_envs(tmp_path: Path, capsys) -> None:
@@ -165,7 +165,7 @@ def test_evaluate_json_has_null_not_nan(tmp_path: Path, monkeypatch, capsys) -> 
     real = evaluate.evaluation_row
     monkeypatch.setattr(evaluate, "evaluation_row", no_success)
     out = tmp_path / "e.json"
-    assert main(["evaluate", str(MODEL), "--heldout", "0", "--json", str(out)]) == 0
+    assert main(["evaluate", str(MODEL), "--heldout", "0", "--json-out", str(out)]) == 0
     text = out.read_text()
     assert "NaN" not in text
     assert json.loads(text)["rows"][0]["min_pole_distance_successful_m"] is None

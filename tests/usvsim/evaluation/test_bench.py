@@ -73,8 +73,8 @@ def test_bench_args_follow_the_cli_conventions() -> None:
         "heldout",
         "out",
         "json",
-        "no_plots",
-        "no_likeness",
+        "plots",
+        "likeness",
         "suite",
         "sets",
         "stress_episodes",
@@ -103,7 +103,7 @@ def test_literal_fields_accept_only_their_values(capsys: pytest.CaptureFixture[s
 def test_bench_json_parses_and_has_every_helmsman(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert run(BenchArgs(json=True, heldout=20, out=str(tmp_path), no_plots=True)) == 0
+    assert run(BenchArgs(json=True, heldout=20, out=str(tmp_path), plots=False)) == 0
     payload = json.loads(capsys.readouterr().out)  # stdout holds the JSON and nothing else
     rows = payload["rows"]
     assert {r["helmsman"] for r in rows} == set(available_helmsmen())

@@ -32,7 +32,7 @@ def test_names_and_paths_alike_duplicates_once(tmp_path: Path) -> None:
 
 
 def test_duplicated_helmsman_gives_one_row_per_set() -> None:
-    result = run_bench(BenchArgs(helmsmen="los,los", heldout=3, no_likeness=True), progress=False)
+    result = run_bench(BenchArgs(helmsmen="los,los", heldout=3, likeness=False), progress=False)
     assert [(r.helmsman, r.episode_set) for r in result.rows] == [
         ("los", "validation"),
         ("los", "held-out"),
@@ -42,7 +42,7 @@ def test_duplicated_helmsman_gives_one_row_per_set() -> None:
 def test_a_corrupt_shipped_model_is_skipped_not_fatal(tmp_path, monkeypatch, capsys) -> None:
     (tmp_path / "broken.pt").write_bytes(b"\x00" * 100)
     monkeypatch.setattr(registry, "MODELS_DIR", tmp_path)
-    result = run_bench(BenchArgs(heldout=3, no_likeness=True), progress=False)
+    result = run_bench(BenchArgs(heldout=3, likeness=False), progress=False)
     assert {r.helmsman for r in result.rows} == {"los", "los-avoid", "vo", "vo-radar"}
     assert len(result.skipped) == 1 and result.skipped[0].startswith("broken: ")
     assert "usvsim bench: skipping broken:" in capsys.readouterr().err
@@ -61,7 +61,7 @@ def test_interrupted_bench_keeps_the_finished_sets(monkeypatch, tmp_path: Path) 
         return real(*args, **kwargs)
 
     monkeypatch.setattr(bench, "summarize_set", summarize_then_interrupt)
-    args = BenchArgs(helmsmen="los,los-avoid", heldout=3, no_likeness=True)
+    args = BenchArgs(helmsmen="los,los-avoid", heldout=3, likeness=False)
     result = run_bench(args, progress=False)
     assert result.interrupted and [r.episode_set for r in result.rows] == ["validation"]
     files = write_results(result, tmp_path, plots=False)
@@ -75,7 +75,7 @@ def test_results_replace_the_older_set_as_one_unit(tmp_path: Path) -> None:
     (tmp_path / ".bench.md.abc.tmp").write_text("left by a killed writer")
     (tmp_path / ".staging-bench").mkdir()
     (tmp_path / "notes.txt").write_text("the user's")
-    result = run_bench(BenchArgs(helmsmen="los", heldout=3, no_likeness=True), progress=False)
+    result = run_bench(BenchArgs(helmsmen="los", heldout=3, likeness=False), progress=False)
     write_results(result, tmp_path, plots=True)
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == [
