@@ -47,6 +47,7 @@ __all__ = [
     "SANITY_HELMSMEN",
     "HelmsmanFactory",
     "available_helmsmen",
+    "checkpoint_facts",
     "helmsman_kinds",
     "load_checkpoint_helmsman",
     "make_helmsman",
@@ -96,6 +97,30 @@ def load_checkpoint_helmsman(path: str | Path) -> Helmsman:
         return load_helmsman(path)
     except CheckpointError as err:
         raise UserError(str(err)) from None
+
+
+def checkpoint_facts(path: str | Path) -> dict[str, Any]:
+    """What a checkpoint file records about itself, for its model card
+    (:mod:`usvsim.evaluation.model_cards`): setup, observation, action, algorithm, seed,
+    code_commit (git revision), best_iteration (of its validation record, or None), date
+    (YYYY-MM-DD, UTC). ``UserError`` if it cannot be read."""
+    from learning.experiments.checkpoint import CheckpointError, load_checkpoint
+
+    try:
+        ckpt = load_checkpoint(path)
+    except CheckpointError as err:
+        raise UserError(str(err)) from None
+    validation = ckpt.validation or {}
+    return {
+        "setup": ckpt.setup,
+        "observation": ckpt.observation,
+        "action": ckpt.action,
+        "algorithm": ckpt.algorithm,
+        "seed": int(ckpt.train_args.get("seed", ckpt.agent.get("config", {}).get("seed", 0))),
+        "code_commit": ckpt.git_revision,
+        "best_iteration": validation.get("iteration"),
+        "date": ckpt.created_utc[:10],
+    }
 
 
 def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFactory]:
