@@ -96,6 +96,11 @@ COMMANDS: dict[str, Command] = {
         "learning.cli.evaluate:run",
         "evaluate a trained checkpoint",
     ),
+    "models": Command(
+        "usvsim.evaluation.model_cards:ModelsArgs",
+        "usvsim.cli.models:run_models_command",
+        "the shipped models' cards: what each is, provenance, recommended per use",
+    ),
     "sitl": Command(
         "usvsim.mavlink.sitl:SitlArgs",
         "usvsim.cli.mavlink:run_sitl",

@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -66,7 +66,9 @@ __all__ = [
     "cards_table",
     "check_cards",
     "load_cards",
+    "models_report",
     "recommend",
+    "recommendation_mismatches",
     "stress_summary",
 ]
 
@@ -202,8 +204,8 @@ def check_cards(models_dir: Path | None = None) -> dict[str, ModelCard]:
     ------
     UserError
         One line for the first problem: a file without a card, a card without a file, a card
-        field that disagrees with the checkpoint, or two recommended models for one use and
-        family.
+        field that disagrees with the checkpoint, two recommended models for one use and
+        family, or two cards with one proposed name.
     """
     from usvsim.helm.registry import checkpoint_facts
 
@@ -223,6 +225,14 @@ def check_cards(models_dir: Path | None = None) -> dict[str, ModelCard]:
                     f"the file says {facts[key]!r}"
                 )
     _check_recommended(cards)
+    seen: dict[str, str] = {}
+    for name, card in cards.items():
+        if card.proposed_name in seen:
+            raise UserError(
+                f"model card {name}: field 'proposed_name' {card.proposed_name!r} is also "
+                f"{seen[card.proposed_name]}'s"
+            )
+        seen[card.proposed_name] = name
     return cards
 
 
@@ -415,9 +425,9 @@ def models_report(args: ModelsArgs, models_dir: Path | None = None) -> str:
     )
 
 
-def card_problems(cards: Sequence[ModelCard]) -> list[str]:
-    """Names of cards whose recommended marks differ from :func:`recommend`'s (for tests and
-    the card builder)."""
-    rule = recommend({c.name: c for c in cards})
-    marked = {(c.use, c.family): c.name for c in cards for _ in c.recommended}
-    return sorted({*rule.values()} ^ {*marked.values()})
+def recommendation_mismatches(cards: Mapping[str, ModelCard]) -> list[str]:
+    """Models whose ``recommended`` marks differ from what :func:`recommend` gives (sorted);
+    empty when the marks follow the rule."""
+    rule = set(recommend(cards).values())
+    marked = {name for name, c in cards.items() if c.recommended}
+    return sorted(rule ^ marked)
