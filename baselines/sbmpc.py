@@ -26,11 +26,16 @@ its present velocity v_i. Samples t_s = Δt, 2Δt, …, T. Cost (the paper's eq.
     μ_i^k(t)  = CLOSE ∧ STARBOARD ∧ (HEAD-ON ∨ (CROSSED ∧ ¬OVERTAKEN))   (rules 14 and 15)
     f(χ)      = K_χ χ² + K_Δχ,{sb,port} (χ − χ_last)²      (χ in rad; starboard χ > 0)
 
-with d the distance from the obstacle's edge, and the predicates of the paper at each sample:
-CLOSE d ≤ d_close; STARBOARD the obstacle's bearing from the own course is to starboard;
-HEAD-ON |v_0|, |v_i| > 0.05 m/s, v_0·v_i < −cos φ_HO |v_0||v_i| and the obstacle ahead,
+with d the distance from the obstacle's edge, and the predicates of the paper: CLOSE d ≤ d_close
+and STARBOARD (the obstacle's bearing from the predicted own course is to starboard) at each
+sample; HEAD-ON |v_i| > 0.05 m/s, v_0·v_i < −cos φ_HO |v_0||v_i| and the obstacle ahead,
 v_0·L > cos φ_AH |v_0||L|; CROSSED v_0·v_i < cos φ_CR |v_0||v_i|; OVERTAKEN v_0·v_i >
-cos φ_OT |v_0||v_i|. Static obstacles (|v_i| < 0.3 m/s) get the collision term only. The paper's
+cos φ_OT |v_0||v_i|. One departure from the paper: the last three classify the encounter from
+the *present* own velocity v_0(t_0), not the predicted one. With the predicted one, a 30° turn to
+port away from a vessel crossing from 45° on the starboard bow made the courses "not crossed"
+(60° apart < φ_CR) and so escaped the COLREG cost: SB-MPC chose it (tested); the rules that
+apply are fixed by the encounter, as the scorer classifies it, not by the manoeuvre.
+Static obstacles (|v_i| < 0.3 m/s) get the collision term only. The paper's
 transitional cost (a term that discourages leaving a passing manoeuvre half done) is not used.
 
 Parameters (:class:`SBMPCConfig`): the angles and weights of the published set in NTNU's
@@ -154,16 +159,21 @@ def sbmpc_offsets(
     collision = cfg.k_coll * rel2 * risk
     speed_i = np.hypot(v_obs[..., 0], v_obs[..., 1])  # (N, K)
     moving = speed_i > cfg.moving_speed_mps
+    # the encounter (head-on, crossed, overtaken) from the present velocities (N, 1, K, 1), the
+    # side (starboard) and range (close) along each behaviour's prediction (N, C, K, S)
+    v_now = np.stack([u, v], axis=-1)[:, None, None, None, :]
     n0, ni = speed[:, None, None, None], speed_i[:, None, :, None]
-    dot = np.sum(vo * vi, axis=-1)
+    dot = np.sum(v_now * vi, axis=-1)
+    ahead = np.sum(v_now * p_obs[:, None, :, None, :], axis=-1) > (
+        math.cos(cfg.phi_ah_rad) * n0 * r[:, None, :, None]
+    )
+    head_on = (dot < -math.cos(cfg.phi_ho_rad) * n0 * ni) & ahead & (ni > 0.05)
+    crossed = dot < math.cos(cfg.phi_cr_rad) * n0 * ni
+    overtaken = dot > math.cos(cfg.phi_ot_rad) * n0 * ni
     close = d_edge <= cfg.d_close_m
     bearing = np.arctan2(los[..., 1], los[..., 0])
     alpha = np.arctan2(vo[..., 1], vo[..., 0])
     starboard = ssa(bearing - alpha) > 0
-    ahead = np.sum(vo * los, axis=-1) > math.cos(cfg.phi_ah_rad) * n0 * dist
-    head_on = (dot < -math.cos(cfg.phi_ho_rad) * n0 * ni) & ahead & (ni > 0.05)
-    crossed = dot < math.cos(cfg.phi_cr_rad) * n0 * ni
-    overtaken = dot > math.cos(cfg.phi_ot_rad) * n0 * ni
     mu = close & starboard & (head_on | (crossed & ~overtaken)) & moving[:, None, :, None]
     hazard = np.where(valid[:, None, :, None], collision + cfg.kappa * mu, 0.0)
     worst = hazard.max(axis=(2, 3), initial=0.0)  # (N, C)

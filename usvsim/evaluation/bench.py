@@ -97,6 +97,7 @@ class BenchArgs:
     # --suite colreg: perturbed episodes per set (22 Imazu problems + trafficgen-1ts)
     colreg_episodes: int = field(default=5, metadata=bounds(ge=1, le=1000))
     reactive_targets: bool = False  # --suite colreg: targets steered by vo (default: hold course)
+    trafficgen: str = ""  # --suite colreg: trafficgen situation file or folder (trafficgen-user)
     sweep: str = ""  # a usvsim sweep folder: its across-seed held-out IQM beside shipped models
 
     def check(self) -> None:
@@ -105,8 +106,8 @@ class BenchArgs:
             raise UserError(f"--scenario must be one of {SCENARIOS}, not {self.scenario!r}")
         if self.sets and self.suite not in ("stress", "colreg"):
             raise UserError("--sets needs --suite stress or colreg (the study's has no named sets)")
-        if self.reactive_targets and self.suite != "colreg":
-            raise UserError("--reactive-targets needs --suite colreg")
+        if (self.reactive_targets or self.trafficgen) and self.suite != "colreg":
+            raise UserError("--reactive-targets and --trafficgen need --suite colreg")
         if self.split != "test" and self.suite not in ("stress", "colreg"):
             raise UserError("--split needs --suite stress or colreg (the study's shows both)")
         if self.sweep:  # a folder that is not a sweep: one line before anything runs

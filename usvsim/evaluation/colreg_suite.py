@@ -52,6 +52,7 @@ __all__ = [
     "run_colreg",
     "run_colreg_args",
     "select_colreg_sets",
+    "user_trafficgen_set",
     "write_colreg",
 ]
 
@@ -107,6 +108,25 @@ def select_colreg_sets(names: Sequence[str]) -> tuple[ColregSet, ...]:
     if unknown:
         raise UserError(f"unknown colreg set {unknown[0]!r}; choose from {', '.join(known)}")
     return tuple(s for s in COLREG_SETS if not names or s.name in names)
+
+
+def user_trafficgen_set(path: str) -> ColregSet:
+    """The set ``trafficgen-user`` of a situation file or a folder of them (``--trafficgen``);
+    every file is read and checked now: ``UserError`` (one line naming the file and field)."""
+    from usvsim.common.errors import UserError
+    from usvsim.evaluation.trafficgen_io import read_situation
+
+    p = Path(path)
+    files = sorted(p.glob("*.json")) if p.is_dir() else [p]
+    if not p.exists() or not files:
+        raise UserError(f"--trafficgen {path}: no such file, or a folder without .json files")
+    for f in files:
+        read_situation(f)
+    return ColregSet(
+        "trafficgen-user",
+        f"trafficgen situations from {path}",
+        trafficgen_files=tuple(str(f) for f in files),
+    )
 
 
 def colreg_episodes(cset: ColregSet, n: int, split: Split = "test") -> tuple[Any, ...]:
@@ -471,6 +491,8 @@ def run_colreg_args(args: Any, progress: bool = True) -> ColregSuiteResult:
     def warn(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
+    if args.trafficgen:  # the user's files: every one read (and checked) before anything runs
+        sets = (*sets, user_trafficgen_set(args.trafficgen))
     chosen = select_helmsmen(args.names())
     if not args.names():
         chosen = {k: v for k, v in chosen.items() if k not in TRAFFIC_BLIND}
