@@ -82,6 +82,7 @@ class SweepArgs:
     out: str = ""  # sweep folder; default usvsim-results/sweep/<name>
     report_only: bool = False  # only (re)write the report from the trials run so far
     shipped: bool = True  # evaluate usvsim's shipped models for the comparison
+    tensorboard: str = ""  # also each trial's TensorBoard scalars in DIR/<trial>; "": none
 
 
 def _fail(message: str) -> SystemExit:
@@ -159,6 +160,10 @@ def run(args: SweepArgs) -> int:
     from usvsim.common.options import check_bounds
 
     check_bounds(args)  # the ranges of the fields (usvsim.cli checked them already)
+    if args.tensorboard:
+        from learning.experiments.run_log import check_tensorboard
+
+        check_tensorboard()
     spec = spec_of(args)
     root = Path(args.out or f"usvsim-results/sweep/{spec.name}")
     if args.report_only:
@@ -166,7 +171,12 @@ def run(args: SweepArgs) -> int:
             raise _fail(f"{root} holds no sweep (no trials.json)")
         _print_summary(write_report(root, compare_shipped=args.shipped), root)
         return 0
-    where = SweepRun(root, address=args.address, max_concurrent=args.max_concurrent)
+    where = SweepRun(
+        root,
+        address=args.address,
+        max_concurrent=args.max_concurrent,
+        tensorboard=args.tensorboard,
+    )
     print(
         f"usvsim sweep {spec.name}: {len(spec.setups)} setups x {len(spec.seeds)} seeds"
         f"{' x grid' if spec.grid else ''} ({spec.search}), folder {root}; "

@@ -65,6 +65,10 @@ whatever the policy sees, e.g. beside a radar policy
 (:attr:`learning.imitation.discriminator.GAILConfig.disc_observation`; stored in the
 checkpoints).
 
+``--tensorboard DIR`` also writes every ``log.csv`` row as TensorBoard scalars into
+``DIR/<name of the output folder>`` (``tensorboard --logdir DIR`` shows runs side by side; tags
+and steps: :mod:`learning.experiments.run_log`; needs ``pip install "usvsim[tensorboard]"``).
+
 ``--harsh-radar-copies K`` (il-*-radar-ow only, a new run): every demonstration also enters the
 expert data K times with its radar at the family's harshest level, and K/(K+1) of the training
 episodes are drawn from that harsh-radar family
@@ -86,6 +90,7 @@ import torch
 from learning.algorithms.rollout import NonFiniteError
 from learning.experiments.checkpoint import CheckpointError, NonFiniteWeightsError, load_checkpoint
 from learning.experiments.il_setups import IL_SETUPS, MAX_HARSH_RADAR_COPIES, get_il_setup
+from learning.experiments.run_log import check_tensorboard
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
 from learning.experiments.train_rl import first_policy, train_rl
@@ -131,6 +136,7 @@ class TrainArgs:
     harsh_radar_copies: int = field(  # il-*-radar-ow: K harsh-radar copies per demo; 0: setup's
         default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
     )
+    tensorboard: str = ""  # also TensorBoard scalars in DIR/<out folder's name>; "": none
 
     @classmethod
     def cli_epilog(cls) -> str:
@@ -144,6 +150,8 @@ class TrainArgs:
                 f"unknown setup {self.setup!r}; RL setups: {', '.join(SETUPS)}; "
                 f"IL setups: {', '.join(IL_SETUPS)}"
             )
+        if self.tensorboard:
+            check_tensorboard()
         if self.demos and not self.setup.startswith("il-"):
             raise UserError(f"--demos is for the il-* setups, not {self.setup!r}")
         if self.demos and not Path(self.demos).is_dir():
@@ -344,10 +352,17 @@ def _run_il(args: TrainArgs) -> int:
             time_budget_s=args.time_budget_s,
             quiet=args.quiet,
             command=command_of(args),
+            tensorboard=_board(args, out),
         ),
         setup.name,
         out,
     )
+
+
+def _board(args: TrainArgs, out: Path) -> str:
+    """The run's TensorBoard folder: ``--tensorboard DIR``'s subfolder named as ``out`` (runs
+    side by side in one TensorBoard, as SB3's ``tensorboard_log``); "" without the option."""
+    return str(Path(args.tensorboard) / out.resolve().name) if args.tensorboard else ""
 
 
 def _train_and_report(train: Callable[[], RunResult], name: str, out: Path) -> int:
@@ -422,6 +437,7 @@ def run(args: TrainArgs) -> int:
             train_args=dataclasses.asdict(args),
             command=command_of(args),
             init_policy=args.init_policy,
+            tensorboard=_board(args, out),
         ),
         setup.name,
         out,

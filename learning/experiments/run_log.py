@@ -5,6 +5,15 @@ the validations (:class:`Milestones`), reading a log back for ``--resume``
 (:func:`read_log_rows`) and the tqdm bar (:func:`progress_bar`, :func:`advance`). The columns
 and the run itself are :mod:`learning.experiments.train_rl`'s (RL) and
 :mod:`learning.experiments.train_il`'s (IL).
+
+With a TensorBoard folder (``usvsim train --tensorboard DIR``, ``usvsim sweep --tensorboard
+DIR``) :class:`RunLog` also writes every row as TensorBoard scalars (torch's
+:class:`~torch.utils.tensorboard.SummaryWriter`; ``pip install "usvsim[tensorboard]"``), as
+Stable-Baselines3 and CleanRL do: one scalar per ``log.csv`` column, tagged
+:func:`scalar_tag` (``train/mean_return``, ``validation/val_successes``, ``time/rollout_s``),
+at step ``env_steps`` (the x axis of ``curve.png``; validation columns on validation
+iterations only). A resumed run hides the events its checkpoint had not reached
+(``purge_step``), as it drops those rows of ``log.csv``.
 """
 
 from __future__ import annotations
@@ -20,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_savefig, atomic_write_text
 
 __all__ = [
@@ -27,9 +37,11 @@ __all__ = [
     "Milestones",
     "RunLog",
     "advance",
+    "check_tensorboard",
     "plot_learning_curve",
     "progress_bar",
     "read_log_rows",
+    "scalar_tag",
 ]
 
 VALIDATION_EPISODES = 15
@@ -60,12 +72,35 @@ class Milestones:
         return ""
 
 
+def scalar_tag(column: str) -> str:
+    """The TensorBoard tag of a ``log.csv`` column, grouped as SB3 groups its scalars:
+    ``validation/`` for ``val_*``, ``time/`` for the wall-clock columns (``*_s``), ``train/``
+    for the rest."""
+    if column.startswith("val_"):
+        return f"validation/{column}"
+    return f"time/{column}" if column.endswith("_s") else f"train/{column}"
+
+
+def check_tensorboard(option: str = "--tensorboard") -> None:
+    """Raise :class:`UserError` (naming ``option`` and the extra to install) where torch's
+    TensorBoard writer cannot be imported; called before a run starts."""
+    try:
+        from torch.utils.tensorboard import SummaryWriter  # noqa: F401
+    except ImportError:
+        raise UserError(
+            f'{option} needs the tensorboard package: pip install "usvsim[tensorboard]"'
+        ) from None
+
+
 class RunLog:
-    """A run's ``log.csv`` (one row per iteration, ``fields`` columns) and ``curve.png``.
+    """A run's ``log.csv`` (one row per iteration, ``fields`` columns) and ``curve.png``, and
+    with ``tensorboard`` (a folder) its TensorBoard scalars (module docstring).
 
     ``return_key`` names the column plotted as the training return and ``return_label`` its
     axis label. Both files are rewritten atomically; :meth:`plot_due` limits the plot (the
     slow part) to once per 30 s of a long run, and an unchanged log is not plotted again.
+    :meth:`write_scalars` adds the rows not yet in the event file (call it once per iteration,
+    after the row is complete); :meth:`close` writes the rest and closes the event file.
     """
 
     def __init__(
@@ -76,14 +111,43 @@ class RunLog:
         rows: list[dict[str, Any]],
         return_key: str = "mean_return",
         return_label: str = "training return\n(fixed-horizon)",
+        tensorboard: str | Path | None = None,
     ) -> None:
         self.out, self.fields, self.title, self.rows = out, tuple(fields), title, rows
         self.return_key, self.return_label = return_key, return_label
         self.last_plot = 0.0
         self.plotted_rows = -1  # len(rows) at the last plot
+        self.scalar_rows = len(rows)  # rows already in the event file (a resumed run's kept ones)
+        self.tensorboard: Any = None
+        if tensorboard:
+            from torch.utils.tensorboard import SummaryWriter
+
+            # a resumed run redoes the iterations after its checkpoint: hide their old events
+            purge = int(rows[-1]["env_steps"]) + 1 if rows else None
+            self.tensorboard = SummaryWriter(log_dir=str(tensorboard), purge_step=purge)
 
     def plot_due(self) -> bool:
         return time.monotonic() - self.last_plot > 30.0
+
+    def write_scalars(self) -> None:
+        """Add the rows not yet written to the TensorBoard event file (none without one)."""
+        if self.tensorboard is None:
+            return
+        for row in self.rows[self.scalar_rows :]:
+            step = int(row["env_steps"])
+            for column in self.fields:
+                value = _scalar(row.get(column))
+                if column != "env_steps" and value is not None:
+                    self.tensorboard.add_scalar(scalar_tag(column), value, step)
+        self.scalar_rows = len(self.rows)
+        self.tensorboard.flush()
+
+    def close(self) -> None:
+        """Write the last scalars and close the event file (a no-op without one, or twice)."""
+        if self.tensorboard is not None:
+            self.write_scalars()
+            self.tensorboard.close()
+            self.tensorboard = None
 
     def write(self, plot: bool = True) -> None:
         buf = io.StringIO()
@@ -91,11 +155,23 @@ class RunLog:
         writer.writeheader()
         writer.writerows(self.rows)
         atomic_write_text(self.out / "log.csv", buf.getvalue())
+        self.write_scalars()
         if plot and len(self.rows) != self.plotted_rows:
             self.last_plot, self.plotted_rows = time.monotonic(), len(self.rows)
             plot_learning_curve(
                 self.rows, self.out / "curve.png", self.title, self.return_key, self.return_label
             )
+
+
+def _scalar(value: Any) -> float | None:
+    """A log cell as a TensorBoard scalar; None for an empty cell (a non-validation iteration's
+    validation columns) or one that is not a number."""
+    if value is None or value == "":
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
 
 
 def plot_learning_curve(

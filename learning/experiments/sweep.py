@@ -134,10 +134,12 @@ def _train(config: Mapping[str, Any], out: Path) -> None:
         "quiet": True,
         "command": command,
     }
+    board = str(config.get("tensorboard", ""))  # _trainable's; "": none
     if isinstance(setup, ILSetup):
-        train_il(setup, out, threads=threads, log=lambda _: None, **common)
+        train_il(setup, out, threads=threads, log=lambda _: None, tensorboard=board, **common)
     else:
-        train_rl(setup, out, train_args={**common, "overrides": overrides}, **common)
+        args = {**common, "overrides": overrides}
+        train_rl(setup, out, train_args=args, tensorboard=board, **common)
 
 
 def _evaluate_heldout(out: Path, n: int) -> dict[str, Any]:
@@ -206,6 +208,9 @@ class SweepRun:
     max_concurrent: int = 0  # trials at once; 0: as many as the CPUs allow
     progress_every_s: float = 30.0
     say: Any = field(default=print)  # one line of progress
+    # a folder: each trial also writes TensorBoard scalars into <tensorboard>/<trial> ("": none;
+    # learning.experiments.run_log.RunLog)
+    tensorboard: str = ""
 
 
 def _param_space(spec: SweepSpec, root: Path) -> dict[str, Any]:
@@ -233,18 +238,24 @@ def _param_space(spec: SweepSpec, root: Path) -> dict[str, Any]:
     return space
 
 
-def _trainable(spec: SweepSpec) -> Any:
+def _trainable(spec: SweepSpec, tensorboard: str = "") -> Any:
     """The Tune function of a trial: :func:`run_trial` in a daemon thread, a progress report
     to Tune every :data:`REPORT_EVERY_S` (so Tune can stop the trial between two reports: a
     Ctrl-C ends the sweep within seconds, the run keeps its last ``latest.pt``), then the
-    final metrics. An exception of the run fails the trial (Tune: ERROR, reported)."""
+    final metrics. An exception of the run fails the trial (Tune: ERROR, reported).
+    ``tensorboard`` (a folder, :attr:`SweepRun.tensorboard`): the trial's TensorBoard scalars
+    go to its subfolder named as the trial's run folder."""
     from ray import tune
+
+    board = str(Path(tensorboard).resolve()) if tensorboard else ""  # trials run elsewhere
 
     def trial(config: dict[str, Any]) -> None:
         config = dict(config)
         config["dir"] = trial_dir_name(
             config["setup"], int(config["seed"]), config["overrides"], config["search"]
         )
+        if board:
+            config["tensorboard"] = str(Path(board) / config["dir"])
         out = Path(config["root"]) / "runs" / config["dir"]
         outcome: dict[str, Any] = {}
 
@@ -326,7 +337,7 @@ def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
         where.say(f"continuing the sweep in {where.root} (Tune state in {storage})")
         return tune.Tuner.restore(
             str(storage / "sweep"),
-            trainable=_trainable(spec),
+            trainable=_trainable(spec, where.tensorboard),
             resume_unfinished=True,
             resume_errored=True,
         )
@@ -338,7 +349,7 @@ def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
     else:
         search_alg = SessionLimitedGenerator(random_state=spec.search_seed)
     return tune.Tuner(
-        _trainable(spec),
+        _trainable(spec, where.tensorboard),
         param_space=_param_space(spec, where.root),
         tune_config=tune.TuneConfig(
             search_alg=search_alg,

@@ -165,6 +165,7 @@ class _ILRun:
         rows: list[dict[str, Any]],
         history: list[dict[str, Any]],
         say: Callable[[str], None],
+        tensorboard: str | Path = "",
     ) -> None:
         """``train_args`` go into the checkpoints and ``summary.json``; the rest: train_il's."""
         self.setup, self.out, self.train_args, self.say = setup, out, train_args, say
@@ -178,6 +179,7 @@ class _ILRun:
             rows,
             "env_return",
             "env return (handcrafted,\nfinished episodes)",
+            tensorboard=tensorboard,
         )
         self.history = list(history)
         self.milestones = Milestones()
@@ -301,6 +303,7 @@ def train_il(
     command: str = "",
     demos_dir: str | Path | None = None,
     log: Callable[[str], None] = print,
+    tensorboard: str | Path = "",
 ) -> ILRunResult:
     """Train ``setup`` by GAIL, writing into ``out_dir`` the files of ``usvsim train``
     (:mod:`learning.cli.train`; ``log.csv`` columns :data:`IL_CSV_FIELDS`).
@@ -315,7 +318,9 @@ def train_il(
     has taken ``time_budget_s`` of wall-clock (0: no limit; ``log.csv``'s ``wall_time_s``,
     a resumed part counted on from its checkpoint's). ``quiet``: no progress bar; ``log``
     prints one line per validation. ``threads``: torch CPU threads (on 2 shared cores, 2
-    threads made an iteration 20× slower than 1 when measured).
+    threads made an iteration 20× slower than 1 when measured). ``tensorboard`` (a folder; "":
+    none): also every ``log.csv`` row as TensorBoard scalars there
+    (:class:`learning.experiments.run_log.RunLog`).
 
     Raises ``CheckpointError`` when ``resume`` finds no usable checkpoint of ``setup``, and
     ``NonFiniteError`` / ``NonFiniteWeightsError`` (after writing ``log.csv``) when an update
@@ -366,10 +371,12 @@ def train_il(
         rows=rows,
         history=history,
         say=say,
+        tensorboard=tensorboard,
     )
 
     def callback(s: IterationStats, agent: GAILAgent) -> bool:
         stop = run.on_iteration(s, agent)
+        run.log.write_scalars()  # the iteration's row, complete (validation included)
         advance(bar, s.mean_return, s.kl, run.history[-1] if run.history else None)
         return stop
 
@@ -404,6 +411,7 @@ def train_il(
     finally:
         bar.close()
         run.log.write()
+        run.log.close()
     return run.result(*done, run.wall_offset_s + run.session_s())
 
 

@@ -104,9 +104,10 @@ class _Run:
         validate_every: int,
         stop_after: int,
         time_budget_s: float,
+        tensorboard: str | Path = "",
     ) -> None:
         self.setup, self.out, self.train_args = setup, out, train_args
-        self.log = RunLog(out, csv_fields(setup), setup.name, rows)
+        self.log = RunLog(out, csv_fields(setup), setup.name, rows, tensorboard=tensorboard)
         self.rows = self.log.rows
         self.history: list[dict[str, Any]] = []
         self.best: tuple[bool, int, float] | None = None
@@ -233,6 +234,7 @@ def train_rl(
     train_args: dict[str, Any] | None = None,
     command: str = "",
     init_policy: str | Path = "",
+    tensorboard: str | Path = "",
 ) -> RunResult:
     """Train ``setup`` into ``out_dir`` (module docstring).
 
@@ -247,7 +249,9 @@ def train_rl(
     continues from ``out_dir/latest.pt`` with the setup, hyperparameters and seed stored
     there (the ``seed`` argument is then ignored; ``summary.json`` records the seed really
     used) and keeps ``log.csv`` up to its iteration.
-    ``train_args`` go into the checkpoints, ``command`` into ``summary.json``.
+    ``train_args`` go into the checkpoints, ``command`` into ``summary.json``. ``tensorboard``
+    (a folder; "": none): also every ``log.csv`` row as TensorBoard scalars there
+    (:class:`learning.experiments.run_log.RunLog`).
 
     Ctrl-C (``KeyboardInterrupt``, also SIGTERM under ``usvsim``) ends the run like a stop rule:
     ``log.csv`` and ``summary.json`` are written (stop reason ``"interrupted"``,
@@ -283,6 +287,7 @@ def train_rl(
         validate_every=validate_every,
         stop_after=stop_after,
         time_budget_s=time_budget_s,
+        tensorboard=tensorboard,
     )
     r.restore(history)
     start_iteration = int(state["iteration"]) if state is not None else 0
@@ -290,6 +295,7 @@ def train_rl(
 
     def callback(stats: IterationStats, agent: Agent) -> bool:
         stop = r.on_iteration(stats, agent)
+        r.log.write_scalars()  # the iteration's row, complete (validation included)
         advance(bar, stats.mean_return, stats.kl, r.history[-1] if r.history else None)
         return stop
 
@@ -301,6 +307,7 @@ def train_rl(
         iterations, env_steps = agent.iteration, agent.env_steps
     except (NonFiniteError, NonFiniteWeightsError) as err:
         r.log.write()
+        r.log.close()
         raise type(err)(f"{err}; stopped at iteration {len(r.rows) + 1}") from err
     except KeyboardInterrupt:
         r.stop_reason = "interrupted"
@@ -311,4 +318,5 @@ def train_rl(
         bar.close()
     wall = r.wall_offset_s + time.perf_counter() - t0
     r.log.write()
+    r.log.close()
     return r.result(iterations, env_steps, wall, config.seed, command)
