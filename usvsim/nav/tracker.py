@@ -21,7 +21,11 @@ and runs, for all boats and all track slots together (arrays (N, M, ...), M = ``
    tested equal to it on one track), their radius as an exponential mean of the detections'.
 5. **Manage**: the last ``n_window`` frames' hits are kept as bits; a tentative track is
    *confirmed* once ``m_hits`` of them are hits (M of N), and dropped once it can no longer get
-   there. A confirmed track is dropped after ``max_misses`` consecutive misses while its
+   there. A track whose second frame repeats its first detection's position (χ² of the
+   difference ≤ ``static_confirm_gate``: a static return; clutter seldom lights the same spot
+   twice) is confirmed at once, on probation: it is dropped if its first N frames do not hold
+   M hits. A boat that starts 30 m from a pole has no time for three frames. A confirmed track
+   is dropped after ``max_misses`` consecutive misses while its
    predicted position lies in the radar's view; out of view (astern, beyond range) it coasts
    on its model for up to ``max_coast`` frames. An unassociated detection starts a tentative
    track in a free slot (position the detection, velocity 0 with σ = ``init_speed_sigma_mps``).
@@ -75,6 +79,14 @@ class TrackerConfig:
     tentative_cost: float = 4.0  # added to a tentative track's pairs: confirmed ones pick first
     m_hits: int = 3  # M of N confirmation
     n_window: int = 4
+    # χ²₂ gate of a second hit that repeats the first one's position (a static return): such a
+    # track is confirmed at once, on probation until its N-th frame (0: M of N only)
+    static_confirm_gate: float = 9.21
+    # m: a new detection nearer than this is confirmed at once, on probation (0: off)
+    immediate_range_m: float = 0.0
+    # the first frame after a reset confirms its detections at once, on probation: the radar
+    # of a boat at sea has been tracking before an episode starts
+    confirm_first_frame: bool = True
     max_misses: int = 3  # consecutive misses in view that drop a confirmed track
     max_coast: int = 15  # frames a confirmed track coasts out of view (30 s)
     init_speed_sigma_mps: float = 3.0  # m/s, σ of a new track's velocity (vessels ≤ 4 m/s)
@@ -159,7 +171,10 @@ class RadarTracker:
         self.misses = np.zeros((n_boats, m), dtype=np.int64)  # consecutive
         self.coast = np.zeros((n_boats, m), dtype=np.int64)  # frames out of view, no hit
         self.track_id = np.full((n_boats, m), -1, dtype=np.int64)
+        self.origin = np.zeros((n_boats, m, 2))  # m, a track's first detection
+        self.origin_cov = np.broadcast_to(np.eye(2), (n_boats, m, 2, 2)).copy()
         self._next_id = np.zeros(n_boats, dtype=np.int64)
+        self.frames = np.zeros(n_boats, dtype=np.int64)  # frames since the reset
         self.last_detections: Detections | None = None
 
     @property
@@ -181,9 +196,11 @@ class RadarTracker:
         self.p = np.where(active[..., None, None], p, self.p)
         pair = self._associate(det)  # (N, M) detection index or -1
         hit = pair >= 0
+        fast = self._static_second_hit(det, pair, hit)
         self._update_tracks(det, pair, hit)
-        self._manage(hit, active, own_pos_ne, own_psi_rad)
+        self._manage(hit, active, fast, own_pos_ne, own_psi_rad)
         self._start_tracks(det, pair)
+        self.frames += 1
         return self.targets()
 
     def _associate(self, det: Detections) -> NDArray[np.intp]:
@@ -219,6 +236,22 @@ class RadarTracker:
             c3[b, :, j] = np.inf
         return pair
 
+    def _static_second_hit(
+        self, det: Detections, pair: NDArray[np.intp], hit: NDArray[np.bool_]
+    ) -> NDArray[np.bool_]:
+        """Tentative tracks whose second frame's detection repeats the first one's position
+        within ``static_confirm_gate`` (χ² of the difference under both covariances)."""
+        gate = self.config.static_confirm_gate
+        if gate <= 0:
+            return np.zeros_like(hit)
+        rows = np.arange(self.n_boats)[:, None]
+        j = np.maximum(pair, 0)
+        diff = det.position_ne[rows, j] - self.origin
+        d2 = np.einsum(
+            "...i,...ij,...j->...", diff, inv2(det.covariance[rows, j] + self.origin_cov), diff
+        )
+        return hit & (self.status == _TENTATIVE) & (self.age == 1) & (d2 <= gate)
+
     def _update_tracks(
         self, det: Detections, pair: NDArray[np.intp], hit: NDArray[np.bool_]
     ) -> None:
@@ -243,6 +276,7 @@ class RadarTracker:
         self,
         hit: NDArray[np.bool_],
         active: NDArray[np.bool_],
+        fast: NDArray[np.bool_],
         own_pos_ne: FloatArray,
         own_psi_rad: FloatArray,
     ) -> None:
@@ -256,8 +290,10 @@ class RadarTracker:
         n_hits = _popcount(self.hits)
         frames = np.minimum(self.age, cfg.n_window)
         tentative = self.status == _TENTATIVE
-        confirm = tentative & (n_hits >= cfg.m_hits)
-        hopeless = tentative & (n_hits + (cfg.n_window - frames) < cfg.m_hits)
+        confirm = tentative & ((n_hits >= cfg.m_hits) | fast)
+        # tentative and young (within their first N frames) tracks that cannot reach M of N
+        young = tentative | ((self.status == _CONFIRMED) & (self.age <= cfg.n_window))
+        hopeless = young & (n_hits + (cfg.n_window - frames) < cfg.m_hits)
         hopeless |= tentative & (self.age >= cfg.n_window) & ~confirm
         lost = (self.status == _CONFIRMED) & (
             (self.misses >= cfg.max_misses) | (self.coast > cfg.max_coast)
@@ -291,7 +327,10 @@ class RadarTracker:
         p0[:, 2, 2] = p0[:, 3, 3] = cfg.init_speed_sigma_mps**2
         self.p[b, t] = p0
         self.radius[b, t] = det.radius_m[b, j]
-        self.status[b, t] = _TENTATIVE
+        self.origin[b, t], self.origin_cov[b, t] = det.position_ne[b, j], det.covariance[b, j]
+        near = det.range_m[b, j] < cfg.immediate_range_m
+        near |= cfg.confirm_first_frame & (self.frames[b] == 0)
+        self.status[b, t] = np.where(near, _CONFIRMED, _TENTATIVE)
         self.hits[b, t] = 1
         self.age[b, t] = 1
         self.misses[b, t] = 0

@@ -130,3 +130,20 @@ def test_clean_radar_tracks_every_obstacle_in_view_within_3_decisions() -> None:
     assert checked > 500  # (disc, decision) pairs checked
     assert err.max() < position_bound_m
     assert np.median(err) < 1.0
+
+
+def test_confirmation_rules_first_frame_static_repeat_and_probation() -> None:
+    """Frame 1: every return is confirmed at once (on probation); afterwards a return that
+    repeats its position is confirmed on its 2nd frame; a one-frame return is gone by frame 3
+    (probation: 3 of the first 4 frames)."""
+    tracker = RadarTracker(RADAR)
+    tracker.reset(1)
+    pole = _frame(np.array([[80.0]]), np.array([[0.3]]), np.array([[1.0]]))
+    blip = _frame(np.array([[120.0]]), np.array([[-0.5]]), np.array([[1.0]]))
+    empty = np.zeros_like(pole)
+    own, psi = np.zeros((1, 2)), np.zeros(1)
+    assert tracker.update(blip, own, psi).valid.sum() == 1  # first frame: confirmed at once
+    assert tracker.update(empty, own, psi).valid.sum() == 1  # one miss: still on probation
+    assert tracker.update(pole, own, psi).valid.sum() == 0  # 1 of 3 frames: dropped; pole new
+    assert tracker.update(pole, own, psi).valid.sum() == 1  # the pole's 2nd frame, same spot
+    assert tracker.update(blip, own, psi).valid.sum() == 1  # a later blip is only tentative
