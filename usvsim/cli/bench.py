@@ -67,12 +67,8 @@ def _run_stress_command(args: BenchArgs) -> int:
 
 def _run_colreg_command(args: BenchArgs) -> int:
     """``usvsim bench --suite colreg`` (:mod:`usvsim.evaluation.colreg_suite`)."""
-    from usvsim.evaluation.colreg_suite import (
-        colreg_json,
-        colreg_table,
-        run_colreg_args,
-        write_colreg,
-    )
+    from usvsim.evaluation.colreg_report import colreg_json, colreg_table, write_colreg
+    from usvsim.evaluation.colreg_suite import run_colreg_args
 
     result = run_colreg_args(args)
     files = write_colreg(result, Path(args.out), plots=args.plots)

@@ -14,9 +14,9 @@ Every episode is recorded as own-ship and target tracks and scored by
 :func:`usvsim.evaluation.colreg.evaluate_colreg` (Woerner et al. 2019). A row (set × helmsman):
 success with its Wilson 95 % interval (:mod:`usvsim.evaluation.bench`'s strict success),
 collisions, COLREG compliance (the share of scored encounters that pass) with its Wilson
-interval, the mean score and the violations per rule. Files: ``colreg.md``, ``colreg.csv``,
-``colreg-heatmap.png`` (success, compliance and collisions, sets × helmsmen); ``--json`` prints
-the same on stdout.
+interval, the mean score and the violations per rule. Files
+(:mod:`usvsim.evaluation.colreg_report`): ``colreg.md``, ``colreg.csv``, ``colreg-heatmap.png``
+(success, compliance and collisions, sets × helmsmen); ``--json`` prints the same on stdout.
 
 Which helmsmen: every available one (:func:`usvsim.helm.registry.available_helmsmen`) except
 ``los``, which never looks at traffic; ``--helmsmen`` names others.
@@ -29,7 +29,7 @@ import sys
 import time
 import zlib
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
@@ -43,17 +43,16 @@ __all__ = [
     "ColregRow",
     "ColregSet",
     "ColregSuiteResult",
+    "colreg_columns",
+    "colreg_compliance",
     "colreg_episodes",
-    "colreg_json",
-    "colreg_markdown",
     "colreg_row",
     "colreg_set_names",
-    "colreg_table",
     "run_colreg",
     "run_colreg_args",
+    "scored_mask",
     "select_colreg_sets",
     "user_trafficgen_set",
-    "write_colreg",
 ]
 
 Split = Literal["validation", "test"]
@@ -189,13 +188,21 @@ def _empty() -> Proportion:
     return Proportion(0, 0, math.nan, math.nan, math.nan)
 
 
+def scored_mask(result: Any) -> np.ndarray:
+    """(E, K) bool: the encounters of a :class:`usvsim.evaluation.colreg.ColregResult` that a rule
+    applies to (every classified one but "no risk")."""
+    from usvsim.evaluation.colreg import EncounterType
+
+    return np.asarray(result.encounter) != int(_no_risk(EncounterType))
+
+
 def colreg_compliance(result: Any) -> tuple[Proportion, float, dict[str, int]]:
     """Compliance (passed / scored encounters), mean score and failures per rule of a
-    :class:`usvsim.evaluation.colreg.ColregResult` (its encounters other than "no risk")."""
+    :class:`usvsim.evaluation.colreg.ColregResult` (:func:`scored_mask`)."""
     from usvsim.evaluation.colreg import EncounterType
 
     encounter = np.asarray(result.encounter)
-    scored = encounter != int(_no_risk(EncounterType))
+    scored = scored_mask(result)
     passed = np.asarray(result.passed, dtype=bool) & scored
     n, k = int(scored.sum()), int(passed.sum())
     score = np.asarray(result.score, dtype=float)
@@ -214,6 +221,23 @@ def _no_risk(kinds: Any) -> Any:
         if member.name.upper() in ("NONE", "NO_RISK", "NO_ENCOUNTER", "SAFE"):
             return member
     return next(iter(kinds))
+
+
+def colreg_columns(tracks: Any) -> dict[str, Any]:
+    """The COLREG columns of a stress-suite row (:class:`usvsim.evaluation.bench.BenchRow`) for
+    the tracks of its episodes: encounters, compliant ones, rate with its Wilson interval, mean
+    score."""
+    from usvsim.evaluation.colreg import evaluate_colreg
+
+    compliance, mean, _ = colreg_compliance(evaluate_colreg(tracks))
+    return {
+        "colreg_encounters": compliance.n,
+        "colreg_compliant": compliance.successes,
+        "colreg_compliance_rate": compliance.rate,
+        "colreg_compliance_ci95_low": compliance.lower,
+        "colreg_compliance_ci95_high": compliance.upper,
+        "colreg_mean_score": mean,
+    }
 
 
 def colreg_row(helmsman: str, set_name: str, run: Any, wall_s: float) -> ColregRow:
@@ -310,169 +334,6 @@ def run_colreg(
         interrupted,
         tuple(skipped),
     )
-
-
-def _pct(p: Proportion) -> str:
-    return "–" if p.n == 0 else p.format_percent()
-
-
-def colreg_markdown(result: ColregSuiteResult) -> str:
-    """The suite's tables: success, compliance and collisions (sets × helmsmen), then the
-    Imazu problems pooled per helmsman."""
-    by = {(r.episode_set, r.helmsman): r for r in result.rows}
-    descriptions = {s.name: s.description for s in COLREG_SETS}
-    head = "| set | " + " | ".join(result.helmsmen) + " |"
-    rule = "|---|" + "---|" * len(result.helmsmen)
-    lines = [
-        "# usvsim bench — COLREG suite" + (" (interrupted)" if result.interrupted else ""),
-        "",
-        f"{result.episodes_per_set} episodes per set ({result.split} split), targets "
-        + ("reactive (vo)" if result.reactive_targets else "holding course and speed")
-        + ". Each cell: success [Wilson 95 %] / COLREG compliance of the scored encounters "
-        "[Wilson 95 %] / collisions (usvsim.evaluation.colreg, after Woerner et al. 2019).",
-        "",
-        head,
-        rule,
-    ]
-    for s in result.sets:
-        cells = []
-        for h in result.helmsmen:
-            r = by.get((s, h))
-            cells.append(
-                "–" if r is None else f"{_pct(r.success)} / {_pct(r.compliance)} / {r.collisions}"
-            )
-        lines.append(f"| {s} | " + " | ".join(cells) + " |")
-    lines += [
-        "",
-        "Imazu problems pooled:",
-        "",
-        "| helmsman | success | compliance |",
-        "|---|---|---|",
-    ]
-    for h in result.helmsmen:
-        s_p, c_p = result.pooled(h)
-        lines.append(f"| {h} | {_pct(s_p)} | {_pct(c_p)} |")
-    lines += ["", "Sets:", ""]
-    lines += [f"- `{s}`: {descriptions.get(s, '')}" for s in result.sets]
-    lines += ["", f"Run time {result.wall_s:.0f} s.", ""]
-    return "\n".join(lines)
-
-
-def colreg_table(result: ColregSuiteResult) -> str:
-    """Fixed-width terminal summary: per helmsman the Imazu sets pooled, then the other sets."""
-    others = [s for s in result.sets if not s.startswith("imazu-")]
-    head = ["helmsman", "Imazu success", "Imazu compliance", "coll."]
-    head += [f"{s} success / compliance" for s in others]
-    by = {(r.episode_set, r.helmsman): r for r in result.rows}
-    lines = [head]
-    for h in result.helmsmen:
-        s_p, c_p = result.pooled(h)
-        coll = sum(r.collisions for r in result.rows if r.helmsman == h)
-        cells = [h, _pct(s_p), _pct(c_p), str(coll)]
-        for s in others:
-            r = by.get((s, h))
-            cells.append("–" if r is None else f"{_pct(r.success)} / {_pct(r.compliance)}")
-        lines.append(cells)
-    widths = [max(len(row[i]) for row in lines) for i in range(len(head))]
-    text = [
-        "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip() for row in lines
-    ]
-    text.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(text)
-
-
-def colreg_json(result: ColregSuiteResult, files: Sequence[str] = ()) -> str:
-    """Machine-readable result (NaN and ±inf as null), with the pooled Imazu figures."""
-    import json
-
-    from usvsim.common.fileio import json_safe
-
-    pooled = {}
-    for h in result.helmsmen:
-        s_p, c_p = result.pooled(h)
-        pooled[h] = {"success": asdict(s_p), "compliance": asdict(c_p)}
-    payload = {
-        "suite": "colreg",
-        "sets": list(result.sets),
-        "helmsmen": list(result.helmsmen),
-        "episodes_per_set": result.episodes_per_set,
-        "split": result.split,
-        "reactive_targets": result.reactive_targets,
-        "rows": [r.flat() for r in result.rows],
-        "imazu_pooled": pooled,
-        "wall_s": result.wall_s,
-        "files": list(files),
-        "interrupted": result.interrupted,
-        "skipped": list(result.skipped),
-    }
-    return json.dumps(json_safe(payload), indent=2, allow_nan=False)
-
-
-def plot_colreg_heatmap(result: ColregSuiteResult) -> Any:
-    """Success (%), compliance (%) and collisions as three heat maps, sets × helmsmen."""
-    import matplotlib.pyplot as plt
-
-    by = {(r.episode_set, r.helmsman): r for r in result.rows}
-    panels = (
-        ("success (%)", lambda r: 100.0 * r.success.rate, "RdYlGn", 100.0),
-        ("COLREG compliance (%)", lambda r: 100.0 * r.compliance.rate, "RdYlGn", 100.0),
-        ("collisions", lambda r: float(r.collisions), "Reds_r", float(result.episodes_per_set)),
-    )
-    h, s = len(result.helmsmen), len(result.sets)
-    fig, axes = plt.subplots(1, 3, figsize=(3.0 + 3 * 0.55 * h, 1.5 + 0.3 * s), sharey=True)
-    for ax, (label, value, cmap, vmax) in zip(axes, panels, strict=True):
-        grid = np.array(
-            [
-                [value(by[(st, hm)]) if (st, hm) in by else np.nan for hm in result.helmsmen]
-                for st in result.sets
-            ]
-        )
-        cmap_obj = plt.get_cmap(cmap if label != "collisions" else "Reds")
-        image = ax.imshow(grid, cmap=cmap_obj, vmin=0.0, vmax=vmax, aspect="auto")
-        for (i, j), v in np.ndenumerate(grid):
-            if np.isfinite(v):
-                ax.text(j, i, f"{v:.0f}", ha="center", va="center", fontsize=6)
-        ax.set_xticks(range(h), result.helmsmen, rotation=60, ha="right", fontsize=7)
-        ax.set_yticks(range(s), result.sets, fontsize=7)
-        ax.set_title(label, fontsize=9)
-        fig.colorbar(image, ax=ax, fraction=0.05)
-    fig.suptitle(f"usvsim COLREG suite, {result.episodes_per_set} episodes per set")
-    fig.tight_layout()
-    return fig
-
-
-def write_colreg(result: ColregSuiteResult, out: Any, plots: bool = True) -> list[Path]:
-    """``colreg.md``, ``colreg.csv`` and ``colreg-heatmap.png`` into ``out``, as one unit."""
-    import csv
-    import io
-
-    from usvsim.common.fileio import atomic_savefig, remove_stale_temporaries, staged_dir
-
-    if not result.rows:
-        return []
-    out = Path(out)
-    remove_stale_temporaries(out)
-    names = ["colreg.md", "colreg.csv"]
-    flat = [r.flat() for r in result.rows]
-    keys = list(dict.fromkeys(k for row in flat for k in row))
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=keys, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(flat)
-    with staged_dir(out, "colreg", replaces=("colreg-heatmap.png",)) as staging:
-        (staging / "colreg.csv").write_text(buffer.getvalue())
-        if plots:
-            from usvsim.common.mpl import use_file_backend_if_headless
-
-            use_file_backend_if_headless()
-            import matplotlib.pyplot as plt
-
-            fig = plot_colreg_heatmap(result)
-            atomic_savefig(fig, staging / "colreg-heatmap.png", dpi=110)
-            plt.close(fig)
-            names.append("colreg-heatmap.png")
-        (staging / "colreg.md").write_text(colreg_markdown(result))
-    return [out / name for name in names]
 
 
 def run_colreg_args(args: Any, progress: bool = True) -> ColregSuiteResult:
