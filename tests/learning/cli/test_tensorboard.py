@@ -12,10 +12,14 @@ import pytest
 pytest.importorskip("tensorboard")
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
+# the tiny GAIL setup of the IL command's tests (a fixture), validated on 5 episodes
+from test_train_il_cli import reference, tiny  # noqa: F401
+
 from learning.cli.train import TrainArgs, run
 from learning.experiments.run_log import scalar_tag
 from learning.experiments.setups import get_setup
 from learning.experiments.sweep import _train
+from learning.experiments.train_il import IL_CSV_FIELDS
 from learning.experiments.train_rl import csv_fields
 from usvsim.cli import main
 
@@ -68,6 +72,20 @@ def test_train_writes_every_csv_column_as_scalars(tmp_path: Path) -> None:
         assert [s.step for s in scalars] == steps
         expected = [float(r[column]) for r in rows]
         assert [s.value for s in scalars] == pytest.approx(expected, rel=1e-6, abs=1e-6)
+
+
+@pytest.mark.usefixtures("tiny")
+def test_il_train_writes_its_columns_as_scalars(tmp_path: Path) -> None:
+    out, board = tmp_path / "run", tmp_path / "tb"
+    assert run(_args(out, board, setup="il-gaussian-positional", validate_every=2)) == 0
+    acc = _scalars(board / "run")
+    columns = [c for c in IL_CSV_FIELDS if c != "env_steps"]
+    assert sorted(acc.Tags()["scalars"]) == sorted(scalar_tag(c) for c in columns)
+    steps = [int(r["env_steps"]) for r in _csv(out / "log.csv")]
+    assert len(steps) == 2
+    assert [s.step for s in acc.Scalars("train/env_return")] == steps
+    assert [s.step for s in acc.Scalars("train/disc_loss")] == steps
+    assert [s.step for s in acc.Scalars("validation/val_path_distance_m")] == steps[1:]
 
 
 def test_resume_continues_the_scalars_without_repeating_steps(tmp_path: Path) -> None:
