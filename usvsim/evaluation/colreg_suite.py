@@ -185,7 +185,8 @@ class ColregRow:
 
 
 def _empty() -> Proportion:
-    return Proportion(0, 0, math.nan, math.nan, math.nan)
+    """No trials: rate and interval NaN (shown as "–")."""
+    return Proportion(0, 0, math.nan, math.nan, math.nan, 0.95)
 
 
 def scored_mask(result: Any) -> np.ndarray:
