@@ -243,12 +243,14 @@ def replace_readme_section(
 
 
 def merge_models_json(results: list[dict[str, Any]], machine: dict[str, Any]) -> dict[str, Any]:
-    """``models.json`` with the entries of ``results`` replacing those of the same setup."""
+    """``models.json`` with the entries of ``results`` replacing those of the same setup; an
+    entry's model card is kept (``usvsim models`` then names the fields the new file changed)."""
     path = MODELS_DIR / "models.json"
     models: dict[str, Any] = json.loads(path.read_text())["models"] if path.is_file() else {}
     for r in results:
+        card = models.get(r["setup"], {}).get("card")
         models[r["setup"]] = {**r, "checkpoint": f"usvsim/models/{r['setup']}.pt",
-                              "machine": machine}  # fmt: skip
+                              "machine": machine, **({"card": card} if card else {})}  # fmt: skip
     return {"models": dict(sorted(models.items()))}
 
 

@@ -70,6 +70,9 @@ __all__ = [
     "recommend",
     "recommendation_mismatches",
     "stress_summary",
+    "with_recommendations",
+    "with_stress_figures",
+    "write_cards",
 ]
 
 USES: dict[str, str] = {
@@ -272,6 +275,48 @@ def stress_summary(stress: Mapping[str, Any], helmsman: str) -> dict[str, Any]:
     }
 
 
+def with_stress_figures(
+    cards: Mapping[str, ModelCard], stress: Mapping[str, Any]
+) -> dict[str, ModelCard]:
+    """The cards with a stress JSON's figures (:func:`stress_summary`) under
+    ``validation["stress"]`` or ``test["stress"]``, by the JSON's ``split``; cards of models the
+    JSON has no rows for are unchanged."""
+    from dataclasses import replace
+
+    split = stress.get("split", "test")
+    where = "validation" if split == "validation" else "test"
+    out = dict(cards)
+    for name, card in cards.items():
+        summary = stress_summary(stress, name)
+        if summary:
+            out[name] = replace(card, **{where: {**getattr(card, where), "stress": summary}})
+    return out
+
+
+def with_recommendations(cards: Mapping[str, ModelCard]) -> dict[str, ModelCard]:
+    """The cards with their ``recommended`` marks set by :func:`recommend` (validation only)."""
+    from dataclasses import replace
+
+    chosen = recommend(cards)
+    return {
+        name: replace(card, recommended=(card.use,) if chosen.get((card.use, card.family)) == name
+                      else ())
+        for name, card in cards.items()
+    }  # fmt: skip
+
+
+def write_cards(cards: Mapping[str, ModelCard], models_dir: Path | None = None) -> None:
+    """Put ``cards`` into ``models.json`` (each entry's ``"card"``; the rest of the file kept),
+    written atomically."""
+    from usvsim.common.fileio import atomic_write_text
+
+    path = _models_dir(models_dir) / "models.json"
+    data = json.loads(path.read_text())
+    for name, card in cards.items():
+        data["models"].setdefault(name, {})["card"] = card.to_json()
+    atomic_write_text(path, json.dumps(data, indent=2) + "\n")
+
+
 def _score(card: ModelCard) -> tuple[float, float, str]:
     """The rule's key (higher first; the name breaks ties alphabetically)."""
     stress = card.validation.get("stress", {})
@@ -357,7 +402,7 @@ def cards_markdown(cards: Mapping[str, ModelCard]) -> str:
         "",
         "| " + " | ".join(_HEADER) + " |",
         "|" + "---|" * len(_HEADER),
-        *("| " + " | ".join(f"`{r[0]}`", *r[1:]) + " |" for r in _rows(cards)),
+        *("| " + " | ".join((f"`{r[0]}`", *r[1:])) + " |" for r in _rows(cards)),
         "",
     ]
     for name, c in sorted(cards.items()):
