@@ -58,12 +58,29 @@ GIVE_WAY_TCPA_S = 90.0  # s, risk assessed this far ahead (the Imazu targets mee
 ASTERN_CLEARANCE_M = 30.0  # m, a give-way target aims this far behind the own ship's stern
 
 
+Schedule = list[tuple[FloatArray, FloatArray, FloatArray]]
+
+
 @dataclass(frozen=True)
 class EncounterRun:
-    """Records (:class:`usvsim.evaluation.openwater.OpenWaterRecord`) and their tracks."""
+    """Records (:class:`usvsim.evaluation.openwater.OpenWaterRecord`) and their tracks;
+    ``schedule`` the reactive vessels' motion per decision period (None: not reactive)."""
 
     records: list[Any]
     tracks: Any  # usvsim.evaluation.colreg.EncounterTracks
+    schedule: Schedule | None = None
+    sample_s: float = 1.0
+
+    def part(self, episodes: slice) -> EncounterRun:
+        """The run of a contiguous part of its episodes (tracks recomputed for that part), so
+        that several sets can share one batch."""
+        schedule = None
+        if self.schedule is not None:
+            schedule = [(p[episodes], c[episodes], t[episodes]) for p, c, t in self.schedule]
+        records = self.records[episodes]
+        return EncounterRun(
+            records, encounter_tracks(records, self.sample_s, schedule), schedule, self.sample_s
+        )
 
 
 class ReactiveTargets:
@@ -237,7 +254,7 @@ def run_encounters(
         on_decision=on_decision if reactive_targets else None,
     )  # fmt: skip
     schedule = hook["r"].schedule if "r" in hook else None
-    return EncounterRun(records, encounter_tracks(records, sample_s, schedule))
+    return EncounterRun(records, encounter_tracks(records, sample_s, schedule), schedule, sample_s)
 
 
 def encounter_tracks(

@@ -292,13 +292,14 @@ def run_colreg(
     skipped: Sequence[str] = (),
 ) -> ColregSuiteResult:
     """Every helmsman of ``factories`` (label → factory) on ``n`` episodes of every set; a set's
-    episodes are drawn once for all helmsmen. Ctrl-C ends it early with the rows so far."""
+    episodes are drawn once for all helmsmen, and a helmsman runs all its sets in one batch
+    (``wall_s`` of a row: the batch's time over its sets). Ctrl-C ends it early with the
+    helmsmen finished so far."""
     from tqdm import tqdm
 
     from usvsim.evaluation.colreg_rollout import run_encounters
 
     start = time.perf_counter()
-    rows: list[ColregRow] = []
     bar = tqdm(
         total=len(sets) * len(factories),
         desc="colreg",
@@ -307,23 +308,30 @@ def run_colreg(
         disable=not progress,
     )
     interrupted = False
+    rows_by: dict[tuple[str, str], ColregRow] = {}
     try:
         episodes = {s.name: colreg_episodes(s, n, split) for s in sets}  # bad files fail first
-        for cset in sets:
-            for name, factory in factories.items():
-                bar.set_postfix_str(f"{cset.name} / {name}")
+        groups = [[s for s in sets if (reactive_targets or s.reactive_targets) == flag]
+                  for flag in (False, True)]  # fmt: skip
+        for name, factory in factories.items():
+            # every set of a helmsman in one batch (one model load, one vectorised rollout)
+            for flag, group in zip((False, True), groups, strict=True):
+                if not group:
+                    continue
+                bar.set_postfix_str(f"{name} ({len(group)} sets)")
                 t0 = time.perf_counter()
-                run = run_encounters(
-                    factory(),
-                    episodes[cset.name],
-                    reactive_targets=reactive_targets or cset.reactive_targets,
-                )
-                rows.append(colreg_row(name, cset.name, run, time.perf_counter() - t0))
-                bar.update()
+                batch = [e for s in group for e in episodes[s.name]]
+                run = run_encounters(factory(), batch, reactive_targets=flag)
+                wall = (time.perf_counter() - t0) / len(group)
+                for i, cset in enumerate(group):
+                    part = run.part(slice(i * n, (i + 1) * n))
+                    rows_by[(cset.name, name)] = colreg_row(name, cset.name, part, wall)
+                    bar.update()
     except KeyboardInterrupt:
         interrupted = True
     finally:
         bar.close()
+    rows = [rows_by[(s.name, h)] for s in sets for h in factories if (s.name, h) in rows_by]
     return ColregSuiteResult(
         tuple(rows),
         tuple(s.name for s in sets),
