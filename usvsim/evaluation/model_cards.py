@@ -65,6 +65,7 @@ __all__ = [
     "cards_markdown",
     "cards_table",
     "check_cards",
+    "default_helmsmen",
     "load_cards",
     "models_report",
     "recommend",
@@ -315,6 +316,24 @@ def write_cards(cards: Mapping[str, ModelCard], models_dir: Path | None = None) 
     for name, card in cards.items():
         data["models"].setdefault(name, {})["card"] = card.to_json()
     atomic_write_text(path, json.dumps(data, indent=2) + "\n")
+
+
+def default_helmsmen(models_dir: Path | None = None) -> list[str]:
+    """The helmsmen ``usvsim bench`` compares when none are named: every classical baseline and
+    the recommended models, in the registry's order; ``[]`` (every available helmsman, as
+    ``--helmsmen all``) where no card can be read or none is recommended."""
+    from usvsim.helm.registry import available_helmsmen
+
+    folder = _models_dir(models_dir)
+    try:
+        cards = load_cards(folder)
+    except UserError:
+        return []
+    recommended = {name for name, card in cards.items() if card.recommended}
+    if not recommended:
+        return []
+    files = {p.stem for p in folder.glob("*.pt")}
+    return [n for n in available_helmsmen(folder) if n not in files or n in recommended]
 
 
 def _score(card: ModelCard) -> tuple[float, float, str]:

@@ -43,6 +43,7 @@ from usvsim.task.batch import ActionKind, parse_action_kind
 from usvsim.task.observations import ObservationKind, parse_observation_kind
 
 __all__ = [
+    "ALL",
     "MODELS_DIR",
     "SANITY_HELMSMEN",
     "HelmsmanFactory",
@@ -57,6 +58,7 @@ __all__ = [
 HelmsmanFactory = Callable[[], Helmsman]
 MODELS_DIR = Path(__file__).resolve().parents[1] / "models"
 SANITY_HELMSMEN = ("straight", "random")
+ALL = "all"  # --helmsmen all: every available helmsman, every shipped file
 
 
 def _los() -> Helmsman:
@@ -139,7 +141,7 @@ def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFact
     }
     folder = MODELS_DIR if models_dir is None else models_dir
     for path in sorted(folder.glob("*.pt")) if folder.is_dir() else []:
-        if path.stem in helmsmen or path.stem in SANITY_HELMSMEN:
+        if path.stem in helmsmen or path.stem in (*SANITY_HELMSMEN, ALL):
             raise ValueError(f"trained model {path.stem!r} clashes with a baseline's name")
         helmsmen[path.stem] = partial(load_checkpoint_helmsman, path)
     return helmsmen
@@ -180,8 +182,8 @@ def select_helmsmen(
 ) -> dict[str, HelmsmanFactory]:
     """Label → factory of each helmsman in ``names`` (names of the table or checkpoint paths).
 
-    Duplicates are dropped (first one kept, order kept); an empty ``names`` selects every
-    :func:`available_helmsmen`. A checkpoint path is labelled by its file stem
+    Duplicates are dropped (first one kept, order kept); an empty ``names`` or ``["all"]``
+    selects every :func:`available_helmsmen`. A checkpoint path is labelled by its file stem
     (``runs/a/best.pt`` -> ``best``); nothing is loaded yet.
 
     Raises
@@ -190,7 +192,7 @@ def select_helmsmen(
         For an unknown name, or two different paths or names with the same label.
     """
     registry = available_helmsmen()
-    if not names:
+    if not names or list(names) == [ALL]:
         return dict(registry)
     chosen: dict[str, HelmsmanFactory] = {}
     sources: dict[str, str] = {}

@@ -197,3 +197,20 @@ def test_markdown_page_has_every_model_and_the_rule() -> None:
     assert page.startswith("# Shipped models")
     assert all(f"## `{name}`" in page for name in SHIPPED)
     assert model_cards.RECOMMENDATION_RULE in page
+
+
+def test_default_helmsmen_are_the_baselines_and_the_recommended_models(
+    tmp_path: Path, monkeypatch
+) -> None:
+    from usvsim.evaluation.model_cards import default_helmsmen
+    from usvsim.helm.registry import available_helmsmen, select_helmsmen
+
+    folder = _one_model_dir(tmp_path, monkeypatch)
+    shutil.copy(MODELS_DIR / "il-gaussian-positional.pt", folder / "il-gaussian-positional.pt")
+    assert default_helmsmen() == []  # no model recommended: every available one
+    _edit_card(folder, recommended=["study-positional"])
+    names = default_helmsmen()
+    assert SMALL in names and "il-gaussian-positional" not in names
+    assert {"los", "los-avoid", "vo"} <= set(names)
+    assert list(select_helmsmen(["all"])) == list(available_helmsmen())
+    assert "il-gaussian-positional" in select_helmsmen(["all"])
