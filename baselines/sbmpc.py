@@ -140,7 +140,7 @@ def sbmpc_offsets(
     chi = phi_goal[:, None] + offsets[None, :]  # (N, C), relative to the heading
     speed = np.maximum(np.hypot(u, v), 0.5)
     course = np.arctan2(v, u)
-    t = cfg.dt_s * np.arange(1, math.floor(cfg.horizon_s / cfg.dt_s + 1e-9) + 1)  # (S,)
+    t = cfg.dt_s * np.arange(1, math.floor(cfg.horizon_s / cfg.dt_s + 1e-9) + 1, dtype=float)
     p0, v0 = _own_prediction(cfg, speed, course, chi, t)  # (N, C, S, 2)
     r, phi, radius = slots[..., 0], slots[..., 1], slots[..., 2]
     valid = slots[..., 5] > 0.5

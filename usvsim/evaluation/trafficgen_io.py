@@ -182,7 +182,7 @@ def read_situation(path: str | Path) -> Situation:
             *pts[-1],
         )
 
-    title = data.get("title") if isinstance(data.get("title"), str) else p.stem
+    title = str(data["title"]) if isinstance(data.get("title"), str) else p.stem
     return Situation(title, state(own), tuple(state(t) for t in tgts), (lat0, lon0))
 
 
@@ -247,8 +247,8 @@ def write_situation(
     sog = own_speed / scale.speed / KNOT_MPS
 
     def ship(
-        p0: Sequence[float],
-        p1: Sequence[float],
+        p0: Sequence[float] | np.ndarray,
+        p1: Sequence[float] | np.ndarray,
         sog_kn: float,
         hdg: float,
         length: float,
