@@ -5,6 +5,8 @@ This module is the command line only: options, the sweep's definition from flags
 messages and exit codes (0: every trial finished; 1: a trial crashed; 130: interrupted by
 Ctrl-C or SIGTERM, run the same command again to continue). Every numeric option has a range
 (``bounds`` metadata, checked before anything runs; the same ranges hold for a ``--config`` file).
+``--tensorboard DIR``: each trial also writes its ``log.csv`` rows as TensorBoard scalars into
+``DIR/<trial>`` (named as its run folder; :mod:`learning.experiments.run_log`).
 """
 
 from __future__ import annotations

@@ -61,7 +61,7 @@ class ManoeuvreArgs:
 class PerfArgs:
     """Measure plant (and environment) throughput."""
 
-    json: bool = False  # print JSON only
+    json: bool = False  # print JSON only (stdout)
     seconds: float = field(default=1.0, metadata=bounds(gt=0, le=3600))  # per figure, s
     env: bool = True  # also measure the environments (--no-env: the plant only)
     profile: bool = False  # only profile decision steps: where a step's time goes
