@@ -1,0 +1,166 @@
+"""Result tables generated from the JSON that ``usvsim bench --json`` and
+``usvsim bench --suite stress --json`` write (committed under ``docs/data/``), so the pages
+cannot drift from the data."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+STRESS_COMMAND = "usvsim bench --suite stress --json > docs/data/stress.json"
+BENCH_COMMAND = "usvsim bench --json --no-plots > docs/data/bench.json"
+
+
+def load(name: str) -> dict[str, Any]:
+    """``docs/data/NAME.json``."""
+    return json.loads((DATA / f"{name}.json").read_text())
+
+
+def _pct(row: dict[str, Any]) -> str:
+    return f"{100.0 * row['success_rate']:.0f}"
+
+
+def _ci(row: dict[str, Any]) -> str:
+    return (
+        f"{100.0 * row['success_rate']:.1f} % "
+        f"[{100.0 * row['success_ci95_low']:.1f}, {100.0 * row['success_ci95_high']:.1f}]"
+    )
+
+
+def _m(value: float | None, digits: int = 1) -> str:
+    return "–" if value is None else f"{value:.{digits}f}"
+
+
+def stress_summary(stress: dict[str, Any]) -> str:
+    """Per helmsman: sets at ≥ 95 %, mean and worst success over the sets, the `everything` set."""
+    sets = stress["sets"]
+    lines = [
+        f"| helmsman | sets ≥ 95 % (of {len(sets)}) | mean success | worst set | `everything` |",
+        "|---|---|---|---|---|",
+    ]
+    summary = []
+    for h in stress["helmsmen"]:
+        rows = [r for r in stress["rows"] if r["helmsman"] == h]
+        rates = [r["success_rate"] for r in rows]
+        worst = min(rows, key=lambda r: r["success_rate"])
+        every = next((r for r in rows if r["episode_set"] == "everything"), None)
+        n95 = sum(rate >= 0.95 for rate in rates)
+        summary.append((n95, sum(rates) / len(rates), h, worst, every))
+    for n95, mean, h, worst, every in sorted(summary, key=lambda s: (-s[0], -s[1])):
+        lines.append(
+            f"| `{h}` | {n95} | {100.0 * mean:.1f} % | {worst['episode_set']} "
+            f"{_pct(worst)} % | {_pct(every) + ' %' if every else '–'} |"
+        )
+    return "\n".join(lines)
+
+
+def stress_table(stress: dict[str, Any]) -> str:
+    """Success (%) per set and helmsman, collisions in brackets where any."""
+    by = {(r["episode_set"], r["helmsman"]): r for r in stress["rows"]}
+    helmsmen = stress["helmsmen"]
+    lines = [
+        "| set | " + " | ".join(helmsmen) + " |",
+        "|---" * (len(helmsmen) + 1) + "|",
+    ]
+    for s in stress["sets"]:
+        cells = []
+        for h in helmsmen:
+            r = by.get((s, h))
+            if r is None:
+                cells.append("–")
+            else:
+                cells.append(_pct(r) + (f" ({r['collisions']})" if r["collisions"] else ""))
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def bench_table(bench: dict[str, Any]) -> str:
+    """The study-task table: validation and held-out rows per helmsman."""
+    sets = list(bench["episode_sets"])
+    by = {(r["episode_set"], r["helmsman"]): r for r in bench["rows"]}
+    helmsmen = list(dict.fromkeys(r["helmsman"] for r in bench["rows"]))
+    head = " | ".join(f"{s} ({bench['episode_sets'][s]}) success [95 % CI]" for s in sets)
+    lines = [
+        f"| helmsman | {head} | held-out min / median d_pole (m) | t_goal (s) | path (m) |",
+        "|---" * (len(sets) + 4) + "|",
+    ]
+    last = sets[-1]
+    for h in helmsmen:
+        cells = [_ci(by[(s, h)]) if (s, h) in by else "–" for s in sets]
+        r = by.get((last, h), {})
+        lines.append(
+            f"| `{h}` | " + " | ".join(cells) + " | "
+            f"{_m(r.get('min_pole_distance_min_m'))} / {_m(r.get('min_pole_distance_median_m'))}"
+            f" | {_m(r.get('time_to_goal_mean_s'))} | {_m(r.get('path_length_mean_m'), 0)} |"
+        )
+    return "\n".join(lines)
+
+
+def results_page() -> str:
+    """The Results page."""
+    stress, bench = load("stress"), load("bench")
+    return f"""# Results
+
+Generated when this site is built from the JSON files in `docs/data/`, which the tools wrote;
+nothing here is typed by hand. To reproduce them (from the repository root):
+
+```bash
+{BENCH_COMMAND}
+{STRESS_COMMAND}
+python benchmarks/readme_figures.py   # the README's figure from docs/data/stress.json
+```
+
+## The study's task
+
+`usvsim bench`: every helmsman on the study's validation episodes and on held-out episodes
+(success with a 95 % Wilson interval; distances and times on the last set, times and paths over
+successful episodes). Columns: [Benchmarks](guide/benchmarks.md).
+
+{bench_table(bench)}
+
+## The stress suite
+
+`usvsim bench --suite stress`: {stress["episodes_per_set"]} episodes per set; what each set
+perturbs is on the [Benchmarks](guide/benchmarks.md) page.
+
+### Summary per helmsman
+
+{stress_summary(stress)}
+
+### Success per set (%)
+
+Collisions in brackets where any.
+
+{stress_table(stress)}
+
+![Stress-suite heat map and one episode](assets/readme-figure.png)
+"""
+
+
+def model_zoo() -> str:
+    """The shipped models (``usvsim/models/models.json``): how each was trained and scored."""
+    root = Path(__file__).resolve().parents[2]
+    models = json.loads((root / "usvsim" / "models" / "models.json").read_text())["models"]
+    lines = [
+        "| model | trained by | observation | action | held-out success | training run | command |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name in sorted(models):
+        m = models[name]
+        parts = name.split("-")
+        algo = "TRPO (RL)" if parts[0] == "rl" else "GAIL (IL)"
+        heldout = m.get("evaluation", {}).get("held-out", {})
+        ok = f"{heldout['successes']}/{heldout['episodes']}" if heldout else "–"
+        summary = m.get("summary", {})
+        run = (
+            f"{summary['iterations']} it, {summary['wall_time_s']:.0f} s"
+            if "iterations" in summary and "wall_time_s" in summary
+            else "–"
+        )
+        command = m.get("command", "–")
+        lines.append(
+            f"| `{name}` | {algo} | {parts[2]} | {parts[1]} | {ok} | {run} | `{command}` |"
+        )
+    return "\n".join(lines)
