@@ -41,3 +41,11 @@ def test_vo_radar_reads_only_the_radar_and_avoids_like_vo() -> None:
     # vo: 20/20 on these episodes; measured vo-radar 20/20 (29/30 on 30)
     assert sum(r.success for r in records) >= 18
     assert not any(r.collision for r in records)
+
+
+def test_stress_table_labels_each_column_by_what_it_perceives() -> None:
+    from usvsim.evaluation.stress import run_stress, select_sets, stress_markdown
+    from usvsim.helm.registry import select_helmsmen
+
+    result = run_stress(select_helmsmen(["vo", "vo-radar"]), select_sets(["study"]), 2, False)
+    assert "| set | vo [true scene] | vo-radar [radar tracks] |" in stress_markdown(result)

@@ -54,6 +54,7 @@ import numpy as np
 from usvsim.common.errors import UserError
 from usvsim.common.options import bounds, check_bounds
 from usvsim.evaluation.stats import Proportion, finite_mean, finite_median, proportion
+from usvsim.task.observations import PERCEPTION
 
 __all__ = [
     "SCENARIOS",
@@ -157,6 +158,7 @@ class BenchRow:
     expert_path_distance_m: float = math.nan  # mean distance to the nearest expert path, m
     expert_side_agreement: float = math.nan  # fraction of expert samples passing the same side
     expert_action_distance_deg: float = math.nan  # Wasserstein distance of 2 s heading changes
+    perceives: str = ""  # what the helmsman sees of the obstacles (observations.PERCEPTION)
 
     def flat(self) -> dict[str, Any]:
         """Flat dict for CSV and JSON (the proportion spread into columns)."""
@@ -278,6 +280,7 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
             evaluator = evaluate if args.scenario == "pole" else evaluate_waypoints
             recs = evaluator(helmsman, sets[set_name], observation=obs_kind, action=act_kind)
             row = summarize_set(name, set_name, recs, time.perf_counter() - t0)
+            row = replace(row, perceives=PERCEPTION[obs_kind])
             if reference is not None and set_name == "validation":
                 row = _with_likeness(row, recs, reference)
             rows.append(row)
@@ -323,6 +326,7 @@ def _num(x: float, fmt: str) -> str:
 
 _HEADER = (
     "helmsman",
+    "perceives",
     "set",
     "n",
     "success [95 % CI]",
@@ -338,6 +342,7 @@ _HEADER = (
 def _cells(row: BenchRow) -> tuple[str, ...]:
     return (
         row.helmsman,
+        row.perceives,
         row.episode_set,
         str(row.success.n),
         row.success.format_percent(),

@@ -34,6 +34,7 @@ from typing import Any, Literal, get_args
 import numpy as np
 
 from usvsim.common.splits import check_test_draw
+from usvsim.task.observations import PERCEPTION
 from usvsim.task.openwater import OpenWaterScenario, draw_open_water, from_pole_episodes
 
 __all__ = ["SPLITS", "STRESS_SETS", "Split", "StressSet", "stress_episodes", "stress_set_names"]
@@ -289,6 +290,7 @@ def run_stress(
     from tqdm import tqdm
 
     from usvsim.evaluation.bench import summarize_set
+    from usvsim.helm.registry import helmsman_kinds
 
     start = time.perf_counter()
     rows: list[Any] = []
@@ -301,8 +303,11 @@ def run_stress(
             for name, factory in factories.items():
                 bar.set_postfix_str(f"{stress_set.name} / {name}")
                 t0 = time.perf_counter()
-                records = evaluate_set(factory(), stress_set, episodes)
-                rows.append(summarize_set(name, stress_set.name, records, time.perf_counter() - t0))
+                helmsman = factory()
+                records = evaluate_set(helmsman, stress_set, episodes)
+                row = summarize_set(name, stress_set.name, records, time.perf_counter() - t0)
+                perceives = PERCEPTION[helmsman_kinds(helmsman)[0]]
+                rows.append(replace(row, perceives=perceives))
                 bar.update()
     except KeyboardInterrupt:
         interrupted = True
@@ -342,9 +347,11 @@ def stress_markdown(result: StressResult) -> str:
         "",
         f"{result.episodes_per_set} episodes per set; each cell: success [Wilson 95 % interval], "
         "collisions, median closest approach (pole-equivalent distance to the nearest obstacle; "
-        "success needs >= 10 m from every obstacle, usvsim.task.openwater).",
+        "success needs >= 10 m from every obstacle, usvsim.task.openwater). Each column says "
+        "in brackets what the helmsman perceives of the obstacles: the truth (the nearest, or "
+        "the whole scene) or the radar (its image, or the tracks of usvsim.nav.tracker).",
         "",
-        "| set | " + " | ".join(result.helmsmen) + " |",
+        "| set | " + " | ".join(_perceives_labels(result)) + " |",
         "|---|" + "---|" * len(result.helmsmen),
     ]
     for s in result.sets:
@@ -354,6 +361,12 @@ def stress_markdown(result: StressResult) -> str:
     lines += [f"- `{s}`: {descriptions[s]}" for s in result.sets]
     lines += ["", f"Run time {result.wall_s:.0f} s.", ""]
     return "\n".join(lines)
+
+
+def _perceives_labels(result: StressResult) -> list[str]:
+    """Column labels: each helmsman with what it perceives, e.g. ``vo-radar [radar tracks]``."""
+    seen = {r.helmsman: r.perceives for r in result.rows if getattr(r, "perceives", "")}
+    return [f"{h} [{seen[h]}]" if h in seen else h for h in result.helmsmen]
 
 
 def stress_json(result: StressResult, files: Sequence[str] = ()) -> str:

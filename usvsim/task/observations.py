@@ -54,6 +54,7 @@ from usvsim.task.radar import RadarConfig, UniformSource, render_radar
 __all__ = [
     "GOAL_STANDARDIZATION",
     "OBSERVATION_KINDS",
+    "PERCEPTION",
     "POSITIONAL_STANDARDIZATION",
     "SCENE_FEATURES",
     "SCENE_K",
@@ -71,6 +72,15 @@ __all__ = [
 
 ObservationKind = Literal["positional", "radar", "radar+goal", "scene", "radar+nav"]
 OBSERVATION_KINDS: tuple[str, ...] = get_args(ObservationKind)
+# what a helmsman of each kind perceives of the obstacles: the truth (exact, from the simulator's
+# scene) or the radar image; the label of its rows in the bench and stress tables (issue 37)
+PERCEPTION: dict[str, str] = {
+    "positional": "true nearest",
+    "scene": "true scene",
+    "radar": "radar image",
+    "radar+goal": "radar image",
+    "radar+nav": "radar tracks",
+}
 FloatArray = NDArray[np.float64]
 
 

@@ -23,7 +23,7 @@ from usvsim.helm.registry import available_helmsmen, make_helmsman
 
 def test_registry_lists_the_baselines(tmp_path: Path) -> None:
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "vo", "vo-radar"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo", "sb-mpc", "vo-radar"]
     h = helmsmen["los-avoid"]()
     assert (h.observation, h.action) == ("positional", "gaussian")  # type: ignore[attr-defined]
     vo = helmsmen["vo"]()
@@ -59,7 +59,7 @@ def test_registry_loads_models_with_the_checkpoint_module(
     fake.CheckpointError = ValueError  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "learning.experiments.checkpoint", fake)
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "vo", "vo-radar", "trpo-positional"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo", "sb-mpc", "vo-radar", "trpo-positional"]
     assert helmsmen["trpo-positional"]() == "helmsman" and loaded == [
         tmp_path / "trpo-positional.pt"
     ]

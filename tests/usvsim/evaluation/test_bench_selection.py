@@ -43,7 +43,8 @@ def test_a_corrupt_shipped_model_is_skipped_not_fatal(tmp_path, monkeypatch, cap
     (tmp_path / "broken.pt").write_bytes(b"\x00" * 100)
     monkeypatch.setattr(registry, "MODELS_DIR", tmp_path)
     result = run_bench(BenchArgs(heldout=3, likeness=False), progress=False)
-    assert {r.helmsman for r in result.rows} == {"los", "los-avoid", "vo", "vo-radar"}
+    assert {r.helmsman for r in result.rows} == {"los", "los-avoid", "vo", "sb-mpc", "vo-radar"}
+    assert {r.helmsman: r.perceives for r in result.rows}["vo-radar"] == "radar tracks"
     assert len(result.skipped) == 1 and result.skipped[0].startswith("broken: ")
     assert "usvsim bench: skipping broken:" in capsys.readouterr().err
     with pytest.raises(UserError, match="--helmsmen broken"):  # named: an error
