@@ -35,6 +35,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from usvsim.common.splits import check_test_draw
 from usvsim.evaluation.stats import Proportion, proportion
 
 __all__ = [
@@ -50,7 +51,6 @@ __all__ = [
     "colreg_set_names",
     "run_colreg",
     "run_colreg_args",
-    "scored_mask",
     "select_colreg_sets",
     "user_trafficgen_set",
 ]
@@ -141,6 +141,8 @@ def colreg_episodes(cset: ColregSet, n: int, split: Split = "test") -> tuple[Any
         from usvsim.common.errors import UserError
 
         raise UserError(f"colreg set {cset.name}: no trafficgen situation files")
+    if split == "test":
+        check_test_draw(cset.name)
     seed = cset.seed(split)
     return tuple(
         situation_episodes(situations[k % len(situations)], np.random.default_rng([seed, k]))
@@ -189,39 +191,21 @@ def _empty() -> Proportion:
     return Proportion(0, 0, math.nan, math.nan, math.nan, 0.95)
 
 
-def scored_mask(result: Any) -> np.ndarray:
-    """(E, K) bool: the encounters of a :class:`usvsim.evaluation.colreg.ColregResult` that a rule
-    applies to (every classified one but "no risk")."""
-    from usvsim.evaluation.colreg import EncounterType
-
-    return np.asarray(result.encounter) != int(_no_risk(EncounterType))
-
-
 def colreg_compliance(result: Any) -> tuple[Proportion, float, dict[str, int]]:
-    """Compliance (passed / scored encounters), mean score and failures per rule of a
-    :class:`usvsim.evaluation.colreg.ColregResult` (:func:`scored_mask`)."""
-    from usvsim.evaluation.colreg import EncounterType
+    """Compliance (passed / scored encounters, Wilson interval), mean score and per-rule counts
+    of a :class:`usvsim.evaluation.colreg.ColregResult`, from the scorer's own summary
+    (:func:`usvsim.evaluation.colreg.summarize_colreg`): per encounter type the failed
+    encounters (``<type>_failed``), per penalty component the encounters it hit."""
+    from usvsim.evaluation.colreg import summarize_colreg
 
-    encounter = np.asarray(result.encounter)
-    scored = scored_mask(result)
-    passed = np.asarray(result.passed, dtype=bool) & scored
-    n, k = int(scored.sum()), int(passed.sum())
-    score = np.asarray(result.score, dtype=float)
-    mean = float(score[scored].mean()) if n else math.nan
-    failed = scored & ~passed
+    summary = summarize_colreg(result)
     per_rule = {
-        EncounterType(t).name.lower(): int((failed & (encounter == t)).sum())
-        for t in np.unique(encounter[scored]).tolist()
+        f"{name}_failed": d["encounters"] - d["passed"]
+        for name, d in summary.by_type.items()
+        if d["encounters"]
     }
-    return (proportion(k, n) if n else _empty()), mean, per_rule
-
-
-def _no_risk(kinds: Any) -> Any:
-    """The "no encounter" member of the scorer's EncounterType."""
-    for member in kinds:
-        if member.name.upper() in ("NONE", "NO_RISK", "NO_ENCOUNTER", "SAFE"):
-            return member
-    return next(iter(kinds))
+    per_rule.update({name: n for name, n in summary.penalty_counts.items() if n})
+    return summary.compliance or _empty(), summary.mean_score, per_rule
 
 
 def colreg_columns(tracks: Any) -> dict[str, Any]:

@@ -43,6 +43,7 @@ from typing import Literal
 
 import numpy as np
 
+from usvsim.common.splits import check_test_draw
 from usvsim.task.disturbance import EpisodeDisturbance
 from usvsim.task.openwater import OpenWaterEpisode, Vessel
 from usvsim.task.scenario import EpisodeSpec
@@ -158,6 +159,8 @@ def imazu_episodes(
         raise ValueError(f"Imazu problem must be 1-{len(IMAZU_PROBLEMS)}, got {problem}")
     if n < 1 or split not in ("validation", "test"):
         raise ValueError(f"need n >= 1 and split validation|test, got {n}, {split!r}")
+    if split == "test":  # test splits report, validation splits choose (usvsim.common.splits)
+        check_test_draw(f"imazu-{problem:02d}")
     cfg = config or ImazuConfig()
     targets = IMAZU_PROBLEMS[problem - 1]
     seed = _seed(problem, split)

@@ -72,11 +72,10 @@ def _violating_share(habit: str, set_name: str, n: int) -> tuple[float, int]:
     """Share of the episodes with a scored encounter in which one failed, and how many."""
     from usvsim.evaluation.colreg import evaluate_colreg
     from usvsim.evaluation.colreg_rollout import run_encounters
-    from usvsim.evaluation.colreg_suite import scored_mask
 
     episodes = colreg_episodes(select_colreg_sets([set_name])[0], n)
     result = evaluate_colreg(run_encounters(_Probe(habit), episodes).tracks)
-    scored = scored_mask(result)
+    scored = result.scored
     failed = (scored & ~np.asarray(result.passed, dtype=bool)).any(axis=1)
     applies = scored.any(axis=1)
     return float(failed[applies].mean()), int(applies.sum())
@@ -112,3 +111,15 @@ def test_cli_colreg_suite_json(tmp_path: Path, capsys: pytest.CaptureFixture[str
     row = rows[("sb-mpc", "imazu-02")]
     assert 0.0 <= row["compliance_ci95_low"] <= row["compliance_rate"] <= 1.0
     assert {"colreg.md", "colreg.csv", "colreg-heatmap.png"} <= {p.name for p in tmp_path.iterdir()}
+
+
+def test_test_split_refused_in_selection_code() -> None:
+    from usvsim.common.splits import TestSplitInSelectionError, selection_mode
+
+    tg = select_colreg_sets(["trafficgen-1ts"])[0]
+    with selection_mode("a test"):
+        assert len(colreg_episodes(tg, 2, "validation")) == 2
+        with pytest.raises(TestSplitInSelectionError):
+            colreg_episodes(select_colreg_sets(["imazu-03"])[0], 2)
+        with pytest.raises(TestSplitInSelectionError):
+            colreg_episodes(tg, 2)
