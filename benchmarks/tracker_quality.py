@@ -9,6 +9,11 @@ decision its confirmed tracks are compared with the true discs at that time
     python benchmarks/tracker_quality.py                     # 30 episodes per set
     python benchmarks/tracker_quality.py --episodes 100 --sets radar-noise,moving-vessels
     python benchmarks/tracker_quality.py --image frame.npy   # the detections in one saved frame
+    python benchmarks/tracker_quality.py --compare stress.json more.json --reference vo-radar
+
+``--compare`` reads stress-suite JSON files (``usvsim bench --suite stress --json``) and names,
+for every helmsman against ``--reference``, the sets where its success rate differs from the
+reference's by more than both Wilson 95 % intervals (each rate outside the other's interval).
 
 ==========================  ===================================================================
 figure                      definition
@@ -217,6 +222,48 @@ def markdown(rows: Sequence[SetQuality], command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def separated(a: dict[str, Any], b: dict[str, Any]) -> int:
+    """+1 if row ``a``'s success is above ``b``'s by more than both Wilson intervals (each rate
+    outside the other's interval), -1 if below by as much, else 0."""
+    ra, rb = a["success_rate"], b["success_rate"]
+    if ra > b["success_ci95_high"] and rb < a["success_ci95_low"]:
+        return 1
+    if ra < b["success_ci95_low"] and rb > a["success_ci95_high"]:
+        return -1
+    return 0
+
+
+def compare_stress(paths: Sequence[str], reference: str) -> str:
+    """Markdown: per helmsman of the stress JSON files, the sets better / worse than
+    ``reference`` outside both intervals (``--compare``)."""
+    rows: dict[tuple[str, str], dict[str, Any]] = {}
+    for path in paths:
+        try:
+            payload = json.loads(Path(path).read_text())
+            for r in payload["rows"]:
+                rows[(r["helmsman"], r["episode_set"])] = r
+        except (OSError, ValueError, KeyError, TypeError) as err:
+            raise UserError(f"--compare {path}: not a stress-suite JSON file ({err})") from None
+    helmsmen = sorted({h for h, _ in rows} - {reference})
+    sets = [s for h, s in rows if h == reference]
+    if not sets:
+        raise UserError(f"--reference {reference}: no rows of it in the files")
+    lines = [
+        f"| helmsman | better than {reference} | worse than {reference} |",
+        "|---|---|---|",
+    ]
+    for h in helmsmen:
+        verdict: dict[int, list[str]] = {1: [], -1: []}
+        for s in sets:
+            if (h, s) in rows:
+                v = separated(rows[(h, s)], rows[(reference, s)])
+                if v:
+                    pa, pb = rows[(h, s)]["success_rate"], rows[(reference, s)]["success_rate"]
+                    verdict[v].append(f"{s} ({100 * pa:.0f} vs {100 * pb:.0f})")
+        lines.append(f"| {h} | {', '.join(verdict[1]) or '–'} | {', '.join(verdict[-1]) or '–'} |")
+    return "\n".join(lines) + "\n"
+
+
 def show_image(path: str, radar: RadarConfig) -> None:
     """Print the detections of a saved frame (.npy, (N, 1, rows, cols) or (N, rows, cols))."""
     try:
@@ -241,9 +288,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--sets", default="", help="comma-separated stress sets (default: all)")
     parser.add_argument("--out", default="tracker-quality", help="output folder")
     parser.add_argument("--image", default=None, help="a saved radar frame (.npy) to detect in")
+    parser.add_argument("--compare", nargs="+", default=None, help="stress-suite JSON files")
+    parser.add_argument("--reference", default="vo-radar", help="--compare: the reference")
     args = parser.parse_args(argv)
     radar = RadarConfig()
     try:
+        if args.compare is not None:
+            print(compare_stress(args.compare, args.reference), end="")
+            return 0
         if args.image is not None:
             show_image(args.image, radar)
             return 0
