@@ -30,10 +30,13 @@ are removed with the set they belonged to). ``--out`` is checked writable before
 stderr.
 
 ``--helmsmen`` takes names of :mod:`usvsim.helm.registry` and checkpoint paths alike (a path is
-labelled by its file stem); a name given twice runs once. With no ``--helmsmen``, a shipped model
-that cannot be read is skipped with a warning (the other helmsmen still run); a named one that
-cannot be read is an error. On Ctrl-C or SIGTERM the sets finished so far are written, marked
-"interrupted" (Markdown title, ``"interrupted": true`` in JSON).
+labelled by its file stem); a name given twice runs once. With no ``--helmsmen`` the bench
+compares the classical baselines with the models recommended in the model cards (``usvsim
+models``; every helmsman while none is marked), ``--helmsmen all`` every shipped file. Without
+``--helmsmen`` or with ``all``, a shipped model that cannot be read is skipped with a warning
+(the other helmsmen still run); a named one that cannot be read is an error. On Ctrl-C or
+SIGTERM the sets finished so far are written, marked "interrupted" (Markdown title,
+``"interrupted": true`` in JSON).
 """
 
 from __future__ import annotations
@@ -84,7 +87,7 @@ class BenchArgs:
     """Compare every available helmsman on the validation and held-out episodes (the table)."""
 
     scenario: ScenarioKind = "pole"  # pole (the study's task) | waypoints (courses with poles)
-    helmsmen: str = ""  # comma-separated names or checkpoint paths; empty: every available one
+    helmsmen: str = ""  # names or checkpoint paths; empty: baselines + recommended models; all
     heldout: int = field(default=200, metadata=bounds(ge=1, le=100_000))  # held-out episodes
     out: str = "usvsim-results/bench"  # results folder: Markdown, CSV and path plots
     json: bool = False  # print JSON only (stdout)
@@ -117,6 +120,17 @@ class BenchArgs:
             if self.suite != "study" or self.scenario != "pole":
                 raise UserError("--sweep goes with the pole scenario's study suite (its held-out)")
             load_sweep(self.sweep)
+
+    def selection(self) -> tuple[list[str], bool]:
+        """The names ``--helmsmen`` selects and whether the user named them: none → the
+        baselines and the recommended models (:func:`usvsim.evaluation.model_cards.
+        default_helmsmen`); ``all`` → every available helmsman (unreadable files skipped)."""
+        names = self.names()
+        if not names:
+            from usvsim.evaluation.model_cards import default_helmsmen
+
+            return default_helmsmen(), False
+        return names, names != ["all"]
 
     def names(self) -> list[str]:
         """The ``--helmsmen`` list, blanks dropped (duplicates kept: the registry drops them)."""
@@ -259,9 +273,8 @@ def run_bench(args: BenchArgs, progress: bool = True) -> BenchResult:
 
     check_bounds(args)
     args.check()
-    factories, skipped = loadable_helmsmen(
-        select_helmsmen(args.names()), bool(args.names()), _stderr
-    )
+    names, explicit = args.selection()
+    factories, skipped = loadable_helmsmen(select_helmsmen(names), explicit, _stderr)
     if not factories:
         raise UserError("no helmsman to compare: " + "; ".join(skipped))
     sets = _episode_sets(args.scenario, args.heldout)

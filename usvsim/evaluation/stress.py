@@ -448,7 +448,7 @@ def write_stress(result: StressResult, out: Any, plots: bool = True) -> list[Any
 
 def run_stress_args(args: Any, progress: bool = True) -> StressResult:
     """The stress suite for ``usvsim bench`` options (:class:`usvsim.evaluation.bench.BenchArgs`):
-    ``--helmsmen`` (empty: every available one; unreadable shipped models skipped), ``--sets``,
+    ``--helmsmen`` (:meth:`usvsim.evaluation.bench.BenchArgs.selection`), ``--sets``,
     ``--stress-episodes``, ``--split`` (validation | test, default test)."""
     import sys
 
@@ -464,7 +464,8 @@ def run_stress_args(args: Any, progress: bool = True) -> StressResult:
     def warn(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
-    factories, skipped = loadable_helmsmen(select_helmsmen(args.names()), bool(args.names()), warn)
+    names, explicit = args.selection()
+    factories, skipped = loadable_helmsmen(select_helmsmen(names), explicit, warn)
     if not factories:
         raise UserError("no helmsman to compare: " + "; ".join(skipped))
     return run_stress(factories, sets, args.stress_episodes, progress, skipped, args.split)

@@ -17,8 +17,9 @@ from usvsim.common import fileio
 from usvsim.common.errors import UserError
 from usvsim.evaluation import bench
 from usvsim.evaluation.bench import BenchArgs, run_bench, write_results
+from usvsim.evaluation.model_cards import default_helmsmen
 from usvsim.helm.protocol import RandomHelmsman, StraightAheadHelmsman
-from usvsim.helm.registry import available_helmsmen, make_helmsman
+from usvsim.helm.registry import available_helmsmen, make_helmsman, select_helmsmen
 
 
 def test_registry_lists_the_baselines(tmp_path: Path) -> None:
@@ -100,15 +101,16 @@ def test_literal_fields_accept_only_their_values(capsys: pytest.CaptureFixture[s
     assert bench.SCENARIOS == ("pole", "waypoints")
 
 
-def test_bench_json_parses_and_has_every_helmsman(
+def test_bench_json_parses_and_has_every_default_helmsman(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert run(BenchArgs(json=True, heldout=20, out=str(tmp_path), plots=False)) == 0
     payload = json.loads(capsys.readouterr().out)  # stdout holds the JSON and nothing else
     rows = payload["rows"]
-    assert {r["helmsman"] for r in rows} == set(available_helmsmen())
+    default = set(select_helmsmen(default_helmsmen()))  # baselines + recommended models
+    assert {r["helmsman"] for r in rows} == default
     assert {(r["helmsman"], r["episode_set"]) for r in rows} == {
-        (h, s) for h in available_helmsmen() for s in ("validation", "held-out")
+        (h, s) for h in default for s in ("validation", "held-out")
     }
     assert payload["episode_sets"] == {"validation": 15, "held-out": 20}
     avoid = next(
