@@ -239,7 +239,10 @@ def command_of(args: TrainArgs) -> str:
         if f.name == "setup" or value == f.default:
             continue
         flag = "--" + f.name.replace("_", "-")
-        out += [flag] if isinstance(value, bool) else [flag, str(value)]
+        if isinstance(value, bool):  # a switch: --x, or --no-x for a default of True
+            out.append(flag if value else "--no-" + flag[2:])
+        else:
+            out += [flag, str(value)]
     return "usvsim train " + " ".join(out)
 
 

@@ -113,3 +113,15 @@ def test_a_plain_store_true_flag_would_be_a_failing_case() -> None:
     flags = [a for a in parser._actions if _is_flag(a)]
     assert [a.dest for a in flags] == ["quiet", "loud"]
     assert not isinstance(flags[0], argparse.BooleanOptionalAction)
+
+
+@pytest.mark.parametrize("flipped", [(), ("resume",), ("quiet",), ("resume", "quiet")])
+def test_train_command_line_reproduces_its_switches(flipped: tuple[str, ...]) -> None:
+    """``summary.json``'s command (:func:`learning.cli.train.command_of`) parses back to the
+    same options, switches included."""
+    from learning.cli.train import TrainArgs, command_of
+
+    args = TrainArgs(POSITIONALS["setup"], **{name: True for name in flipped})
+    argv = command_of(args).split()[1:]  # without "usvsim"
+    parsed = vars(_subparser("train").parse_args(argv[1:]))
+    assert TrainArgs(**parsed) == args
