@@ -11,11 +11,15 @@ from pathlib import Path
 
 
 def _usvsim(args: list[str]) -> None:
+    """Run ``usvsim ARGS``; a failure stops the build with the command's last stderr lines."""
     env = {**os.environ, "MPLBACKEND": "Agg"}
-    subprocess.run(
-        [sys.executable, "-m", "usvsim.cli", *args], check=True, env=env,
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+    done = subprocess.run(
+        [sys.executable, "-m", "usvsim.cli", *args], env=env, text=True,
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, check=False,
     )  # fmt: skip
+    if done.returncode != 0:
+        tail = "\n".join(done.stderr.strip().splitlines()[-5:])
+        raise RuntimeError(f"usvsim {' '.join(args)} failed ({done.returncode}):\n{tail}")
 
 
 def plant_outputs() -> tuple[str, dict[str, bytes]]:

@@ -164,3 +164,29 @@ def model_zoo() -> str:
             f"| `{name}` | {algo} | {parts[2]} | {parts[1]} | {ok} | {run} | `{command}` |"
         )
     return "\n".join(lines)
+
+
+def training_times() -> str:
+    """Expected wall-clock per setup: the shipped run's first 15/15 and its whole run
+    (``models.json``; one torch thread on the 2-core CI machine)."""
+    root = Path(__file__).resolve().parents[2]
+    models = json.loads((root / "usvsim" / "models" / "models.json").read_text())["models"]
+    lines = [
+        "| setup | first 15/15: iteration, wall-clock | whole run: iterations, wall-clock |",
+        "|---|---|---|",
+    ]
+    for name in sorted(models):
+        summary = models[name].get("summary", {})
+        first = summary.get("first_15_of_15") or {}
+        first_text = (
+            f"{first['iteration']}, {first['wall_time_s']:.0f} s"
+            if "iteration" in first and "wall_time_s" in first
+            else "–"
+        )
+        whole = (
+            f"{summary['iterations']}, {summary['wall_time_s']:.0f} s"
+            if "iterations" in summary and "wall_time_s" in summary
+            else "–"
+        )
+        lines.append(f"| `{name}` | {first_text} | {whole} |")
+    return "\n".join(lines)

@@ -154,6 +154,7 @@ def on_files(files: Files, config: Any) -> Files:
         "plant-plots": gen_plant.plots_markdown(list(images), f"../{PLANT_DIR}"),
         "stress-summary": gen_results.stress_summary(stress),
         "model-zoo": gen_results.model_zoo(),
+        "training-times": gen_results.training_times(),
     }
     _notebooks(files, config)
     return files
