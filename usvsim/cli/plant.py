@@ -8,7 +8,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from usvsim.common.errors import UserError
 from usvsim.common.options import bounds
@@ -65,6 +65,14 @@ class PerfArgs:
     seconds: float = field(default=1.0, metadata=bounds(gt=0, le=3600))  # per figure, s
     env: bool = True  # also measure the environments (--no-env: the plant only)
     profile: bool = False  # only profile decision steps: where a step's time goes
+    # plant backend measured beside the C kernel: cpu (the C kernel only), torch-cpu, cuda
+    device: Literal["cpu", "torch-cpu", "cuda"] = "cpu"
+
+    def check(self) -> None:
+        if self.device != "cpu":  # cuda without a GPU: one line, before any measuring
+            from usvsim.vessel.torch_plant import torch_device
+
+            torch_device(self.device)
 
 
 def _autopilot_config(name: str) -> Any:
@@ -154,7 +162,7 @@ def run_perf(args: PerfArgs) -> int:
         from usvsim.evaluation.perf import profile_steps
 
         return _print_profile(profile_steps(max(args.seconds, 1.0)), args.json)
-    result = measure(args.seconds, env=args.env)
+    result = measure(args.seconds, env=args.env, device=args.device)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -173,6 +181,17 @@ def run_perf(args: PerfArgs) -> int:
         + ", ".join(f"{k}: {v:,}/s" for k, v in kernels.items())
         + f"; soa is {plant['soa_over_scalar']}x scalar, {plant['soa_over_casadi_map']}x casadi_map"
     )
+    torch_plant = result.get("torch_plant")
+    if torch_plant:
+        ratios = torch_plant["over_C_kernel_N=1024"]
+        print(
+            f"torch plant ({torch_plant['device']}, same run, load "
+            f"{torch_plant['load_average_1min']}): boat-substeps/s "
+            + ", ".join(
+                f"{k}: {v:,}" + (f" ({ratios[k]}x C)" if k in ratios else "")
+                for k, v in torch_plant["boat_substeps_per_s"].items()
+            )
+        )
     env = result.get("env", {})
     targets = env.get("targets", {})
     for key, value in env.get("decision_steps_per_s", {}).items():

@@ -31,6 +31,7 @@ __all__ = [
     "run_perf",
     "scene_radar_rates",
     "stress_set_throughput",
+    "torch_plant_rates",
 ]
 
 
@@ -80,6 +81,72 @@ def kernel_rates(n_boats: int = 1024, seconds: float = 1.0, rounds: int = 3) -> 
     return {name: float(np.median(rates)) for name, rates in turns.items()}
 
 
+DTYPES = ("float64", "float32")  # the torch plant's number types, measured side by side
+
+
+def torch_plant_rates(
+    device: str, sizes: tuple[int, ...] | None = None, seconds: float = 1.0, rounds: int = 3
+) -> dict[str, Any]:
+    """Boat-substeps per second of the torch plant (:class:`usvsim.vessel.torch_plant.TorchPlant`
+    on ``device``, float64 and float32, at each of ``sizes`` boats; default N = 1024 on the CPU,
+    also 2^20 on a GPU) beside the C kernel's at N = 1024, in the same run: ``rounds``
+    interleaved turns of ``seconds / rounds`` each, the median reported (issue 40)."""
+    import torch
+
+    from usvsim.vessel.torch_plant import TorchPlant, torch_device
+
+    on_gpu = torch_device(device).type == "cuda"  # a one-line UserError where no GPU is seen
+    sizes = sizes or ((1024, 2**20) if on_gpu else (1024,))
+    c_plant = Plant("default")
+    plants = {dtype: TorchPlant("default", device=device, dtype=dtype) for dtype in DTYPES}
+    turns: dict[str, list[float]] = {}
+    for _ in range(rounds):
+        turns.setdefault("C kernel N=1024", []).append(
+            measure_plant(c_plant, 1024, seconds / rounds)
+        )
+        for dtype, plant in plants.items():
+            for n in sizes:
+                rate = measure_torch_plant(plant, n, seconds / rounds, torch.cuda.synchronize)
+                turns.setdefault(f"{dtype} N={n}", []).append(rate)
+    rates = {name: float(np.median(r)) for name, r in turns.items()}
+    c_rate = rates["C kernel N=1024"]
+    return {
+        "device": device,
+        "boat_substeps_per_s": {name: round(rate) for name, rate in rates.items()},
+        "over_C_kernel_N=1024": {
+            name: float(f"{rate / c_rate:.3g}")
+            for name, rate in rates.items()
+            if "C kernel" not in name
+        },
+        "load_average_1min": _load_average(),
+    }
+
+
+def measure_torch_plant(
+    plant: Any, n_boats: int, seconds: float, synchronize: Callable[[], None]
+) -> float:
+    """Boat-substeps per second of a :class:`usvsim.vessel.torch_plant.TorchPlant` at
+    ``n_boats`` (20 substeps per call, no trajectory kept; ``synchronize`` waits for a GPU)."""
+    import torch
+
+    rng = np.random.default_rng(0)
+    eta = np.column_stack([np.zeros((n_boats, 2)), rng.uniform(-np.pi, np.pi, n_boats)])
+    state = plant.initial_state(eta)
+    psi_ref = torch.as_tensor(
+        rng.uniform(-np.pi, np.pi, n_boats), dtype=plant.dtype, device=plant.device
+    )
+    on_gpu = plant.device.type == "cuda"
+
+    def work() -> int:
+        nonlocal state
+        state, _ = plant.step(state, psi_ref, n_steps=20, trajectory=False)
+        if on_gpu:
+            synchronize()
+        return n_boats * 20
+
+    return _timed_rate(work, seconds)
+
+
 def per_boat_loop_rate(plant: Plant, n_boats: int = 32, seconds: float = 1.0) -> float:
     """Boat-substeps per second of a plain Python loop calling the CasADi Function per boat."""
     rng = np.random.default_rng(0)
@@ -111,8 +178,9 @@ def _load_average() -> float | None:
         return None
 
 
-def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
-    """All throughput figures as a JSON-ready dict."""
+def run_perf(seconds: float = 1.0, env: bool = True, device: str = "cpu") -> dict[str, Any]:
+    """All throughput figures as a JSON-ready dict; with a torch ``device`` (``torch-cpu``,
+    ``cuda``) also the torch plant's beside the C kernel's (:func:`torch_plant_rates`)."""
     plant = Plant("default")
     loop = per_boat_loop_rate(plant, seconds=seconds)
     n1 = measure_plant(plant, 1, seconds)
@@ -140,6 +208,8 @@ def run_perf(seconds: float = 1.0, env: bool = True) -> dict[str, Any]:
             "targets": {"N=1024": 20_000_000, "ratio": 100, "soa_over_casadi_map": 3},
         },
     }
+    if device != "cpu":
+        result["torch_plant"] = torch_plant_rates(device, seconds=3.0 * seconds)
     if env:
         result["env"] = _env_figures(seconds)
         result["open_water"] = open_water_figures(seconds)

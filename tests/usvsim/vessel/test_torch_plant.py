@@ -105,11 +105,12 @@ def test_float64_reproduces_the_c_kernel_over_an_episode(c_trajectory: np.ndarra
 
 
 def test_float32_stays_within_its_stated_tolerance(c_trajectory: np.ndarray) -> None:
-    """float32 over the same 100 s: positions within 0.05 m, headings within 0.002 rad (measured
-    0.0058 m and 1.4e-4 rad; rounding in the autopilot's switching grows over an episode)."""
+    """float32 over the same 100 s: positions within 0.25 m, headings within 0.01 rad, the
+    stated tolerance (measured 0.0058 m and 1.4e-4 rad here; 0.098 m and 0.0054 rad for the 64
+    boats of benchmarks/gpu_check.py: rounding in the autopilot's switching grows)."""
     got = _torch_trajectory("float32")
-    assert np.abs(got[..., 0:2] - c_trajectory[..., 0:2]).max() < 0.05
-    assert _heading_gap(got, c_trajectory) < 0.002
+    assert np.abs(got[..., 0:2] - c_trajectory[..., 0:2]).max() < 0.25
+    assert _heading_gap(got, c_trajectory) < 0.01
 
 
 def test_rover_autopilot_generated_in_memory_follows_the_c_kernel() -> None:

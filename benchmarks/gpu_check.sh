@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# The torch plant on one GPU (issue 40): equality against torch-cpu float64, then plant
+# boat-substeps/s in float32 and float64, eager and torch.compile, N = 1e3 .. 1e7.
+#
+#   bash benchmarks/gpu_check.sh                      # on the GPU machine, from the repo root
+#   GPU_CHECK_DEVICE=torch-cpu GPU_CHECK_SIZES=1000,4000 GPU_CHECK_COMPILE_BACKEND=eager \
+#     bash benchmarks/gpu_check.sh                    # the same stages on a CPU (a dry run)
+#
+# Needs python with torch and numpy; nothing of this project is installed (the repository goes on
+# PYTHONPATH; no CasADi). Where torch is missing it tries `pip install torch numpy` once and says
+# so. Every stage runs under its own time limit inside one overall budget (GPU_CHECK_BUDGET_S,
+# default 470 s), writes its results to $OUT/results.jsonl as it goes, and a stage that fails or
+# runs out of time does not stop the next. At the end: $OUT/results.json and $OUT/table.txt.
+#
+# Environment: OUT (default ./gpu-out), GPU_CHECK_DEVICE (cuda), GPU_CHECK_SIZES
+# (1000,10000,100000,1000000,10000000), GPU_CHECK_SECONDS (timed seconds per point, 1.0),
+# GPU_CHECK_COMPILE_BACKEND (inductor; eager only traces, for a dry run), GPU_CHECK_BUDGET_S.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+export OUT="${OUT:-./gpu-out}"
+mkdir -p "$OUT"
+DEVICE="${GPU_CHECK_DEVICE:-cuda}"
+SIZES="${GPU_CHECK_SIZES:-1000,10000,100000,1000000,10000000}"
+SECONDS_PER_POINT="${GPU_CHECK_SECONDS:-1.0}"
+BACKEND="${GPU_CHECK_COMPILE_BACKEND:-inductor}"
+BUDGET="${GPU_CHECK_BUDGET_S:-470}"
+PY="${PYTHON:-python3}"
+export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
+export PYTHONUNBUFFERED=1
+LOG="$OUT/log.txt"
+START=$(date +%s)
+: > "$OUT/results.jsonl"
+echo "gpu_check: device $DEVICE, sizes $SIZES, budget ${BUDGET}s, out $OUT" | tee "$LOG"
+
+left() { echo $(( BUDGET - ($(date +%s) - START) )); }
+
+# run NAME LIMIT_S CMD...: the command under min(LIMIT_S, what is left of the budget - 10 s)
+run() {
+  local name="$1" limit="$2"
+  shift 2
+  local remaining=$(( $(left) - 10 ))
+  (( remaining < limit )) && limit=$remaining
+  if (( limit < 5 )); then
+    echo "== $name: skipped (budget spent)" | tee -a "$LOG"
+    echo "{\"stage\": \"stage_end\", \"name\": \"$name\", \"status\": \"skipped, budget spent\"}" >> "$OUT/results.jsonl"
+    return 0
+  fi
+  echo "== $name (limit ${limit}s)" | tee -a "$LOG"
+  local t0=$(date +%s)
+  timeout --kill-after=5 "$limit" "$@" >> "$LOG" 2>&1
+  local rc=$? status=ok
+  (( rc == 124 || rc == 137 )) && status="timed out"
+  (( rc != 0 && rc != 124 && rc != 137 )) && status="failed (exit $rc)"
+  local dt=$(( $(date +%s) - t0 ))
+  echo "   $name: $status in ${dt}s" | tee -a "$LOG"
+  echo "{\"stage\": \"stage_end\", \"name\": \"$name\", \"status\": \"$status\", \"seconds\": $dt}" >> "$OUT/results.jsonl"
+  [[ $status == ok ]]
+}
+
+# 1. what is there: python, torch (pip-install it where missing), CUDA
+if ! "$PY" -c "import torch, numpy" >> "$LOG" 2>&1; then
+  echo "torch or numpy missing: trying pip install torch numpy" | tee -a "$LOG"
+  run pip-install 240 "$PY" -m pip install --quiet torch numpy
+  if ! "$PY" -c "import torch, numpy" >> "$LOG" 2>&1; then
+    echo "gpu_check: torch could not be imported or installed; see $LOG" | tee -a "$LOG"
+    exit 1
+  fi
+fi
+run env 60 "$PY" benchmarks/gpu_check.py env
+if [[ $DEVICE == cuda* ]] && ! "$PY" -c "import torch, sys; sys.exit(not torch.cuda.is_available())"; then
+  echo "gpu_check: torch sees no CUDA GPU (torch.cuda.is_available() is False); see $LOG" | tee -a "$LOG"
+  "$PY" benchmarks/gpu_check.py report | tee -a "$LOG"
+  exit 1
+fi
+
+# 2. equality on the device, float64 and float32, against torch-cpu float64
+run equality 90 "$PY" benchmarks/gpu_check.py equality --device "$DEVICE"
+
+# 3. speed: the float32 target first, with torch.compile; then eager; float64 compiled last
+bench() {
+  run "bench-$1-$2" "$3" "$PY" benchmarks/gpu_check.py bench --device "$DEVICE" --dtype "$1" \
+    --mode "$2" --sizes "$SIZES" --seconds "$SECONDS_PER_POINT" --backend "$BACKEND"
+}
+bench float32 compile 170
+bench float32 eager 50
+bench float64 eager 50
+bench float64 compile 130
+
+"$PY" benchmarks/gpu_check.py report 2>&1 | tee -a "$LOG"
+echo "gpu_check: done in $(( $(date +%s) - START ))s; $OUT/table.txt, $OUT/results.json, $OUT/log.txt"
