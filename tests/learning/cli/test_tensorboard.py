@@ -3,14 +3,12 @@ row as TensorBoard scalars, read back with TensorBoard's own reader."""
 
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
 import pytest
-
-pytest.importorskip("tensorboard")
-from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+from tensorboard.backend.event_processing.event_accumulator import EventAccumulator  # dev extra
+from test_train_cli import _csv
 
 # the tiny GAIL setup of the IL command's tests (a fixture), validated on 5 episodes
 from test_train_il_cli import reference, tiny  # noqa: F401
@@ -40,11 +38,6 @@ def _args(out: Path, board: Path, **kw: object) -> TrainArgs:
     )
     base.update(kw)
     return TrainArgs(**base)  # type: ignore[arg-type]
-
-
-def _csv(path: Path) -> list[dict[str, str]]:
-    with path.open(newline="") as handle:
-        return list(csv.DictReader(handle))
 
 
 def _scalars(folder: Path) -> EventAccumulator:
