@@ -14,7 +14,8 @@
 #
 # Environment: OUT (default ./gpu-out), GPU_CHECK_DEVICE (cuda), GPU_CHECK_SIZES
 # (1000,10000,100000,1000000,10000000), GPU_CHECK_SECONDS (timed seconds per point, 1.0),
-# GPU_CHECK_COMPILE_BACKEND (inductor; eager only traces, for a dry run), GPU_CHECK_BUDGET_S.
+# GPU_CHECK_COMPILE_BACKEND (inductor; eager only traces, for a dry run), GPU_CHECK_BUDGET_S,
+# GPU_CHECK_LIMIT_SCALE (integer factor on every stage's limit, 1).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 export OUT="${OUT:-./gpu-out}"
@@ -24,19 +25,28 @@ SIZES="${GPU_CHECK_SIZES:-1000,10000,100000,1000000,10000000}"
 SECONDS_PER_POINT="${GPU_CHECK_SECONDS:-1.0}"
 BACKEND="${GPU_CHECK_COMPILE_BACKEND:-inductor}"
 BUDGET="${GPU_CHECK_BUDGET_S:-470}"
-PY="${PYTHON:-python3}"
+LIMIT_SCALE="${GPU_CHECK_LIMIT_SCALE:-1}"  # every stage's limit times this (slow dry runs)
+# the first python that has torch (else the first there is: torch gets installed below)
+PY=""
+for candidate in ${PYTHON:-} python3 python; do
+  command -v "$candidate" > /dev/null || continue
+  [[ -z $PY ]] && PY="$candidate"
+  if "$candidate" -c "import torch" > /dev/null 2>&1; then PY="$candidate"; break; fi
+done
+[[ -z $PY ]] && { echo "gpu_check: no python found"; exit 1; }
 export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
 export PYTHONUNBUFFERED=1
 LOG="$OUT/log.txt"
 START=$(date +%s)
 : > "$OUT/results.jsonl"
-echo "gpu_check: device $DEVICE, sizes $SIZES, budget ${BUDGET}s, out $OUT" | tee "$LOG"
+rm -f "$OUT/reference.npy"
+echo "gpu_check: device $DEVICE, sizes $SIZES, budget ${BUDGET}s, out $OUT, $PY" | tee "$LOG"
 
 left() { echo $(( BUDGET - ($(date +%s) - START) )); }
 
 # run NAME LIMIT_S CMD...: the command under min(LIMIT_S, what is left of the budget - 10 s)
 run() {
-  local name="$1" limit="$2"
+  local name="$1" limit=$(( $2 * LIMIT_SCALE ))
   shift 2
   local remaining=$(( $(left) - 10 ))
   (( remaining < limit )) && limit=$remaining
