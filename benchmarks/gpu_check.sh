@@ -97,4 +97,5 @@ bench float64 eager 50
 bench float64 compile 130
 
 "$PY" benchmarks/gpu_check.py report 2>&1 | tee -a "$LOG"
+rm -f "$OUT/reference.npy"  # 7 MB of intermediate numbers
 echo "gpu_check: done in $(( $(date +%s) - START ))s; $OUT/table.txt, $OUT/results.json, $OUT/log.txt"

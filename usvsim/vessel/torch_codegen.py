@@ -271,6 +271,8 @@ Plant: vessel {vessel!r} (fingerprint {fingerprint}), autopilot {kind!r} ({confi
 :func:`surge_drag` is :func:`usvsim.vessel.model.surge_trim`, one torch statement per CasADi
 instruction (:mod:`usvsim.vessel.torch_codegen`); ``GAINS`` is the design's
 :meth:`usvsim.vessel.autopilot.AutopilotDesign.gains_vector`. Needs torch only.
+
+Why this module is long: it is generated, one statement per instruction of the CasADi plant.
 """
 
 from __future__ import annotations

@@ -6,6 +6,8 @@ Plant: vessel 'usv105' (fingerprint 85a89271dcab6870), autopilot 'pid' (the defa
 :func:`surge_drag` is :func:`usvsim.vessel.model.surge_trim`, one torch statement per CasADi
 instruction (:mod:`usvsim.vessel.torch_codegen`); ``GAINS`` is the design's
 :meth:`usvsim.vessel.autopilot.AutopilotDesign.gains_vector`. Needs torch only.
+
+Why this module is long: it is generated, one statement per instruction of the CasADi plant.
 """
 
 from __future__ import annotations
