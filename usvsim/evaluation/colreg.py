@@ -40,7 +40,10 @@ linearly from 1 at a detectable to 0 at a readily apparent change (rule 8); cros
 target (our track crosses its course line within ``ahead_range_m`` ahead of its bow: rule 15 for
 crossing, 13 for overtaking); stand-on roles — a course change ≥ 10° or a speed change ≥ 20 %
 while the range is above ``stand_on_free_range_m`` (rule 17(a)(i): keep course and speed until
-the give-way vessel is evidently not acting).
+the give-way vessel is evidently not acting), unless the own ship is at that time in a give-way
+encounter with another target (from its start until the range opens past the entry range): a
+change needed for one vessel is not charged to the stand-on duty towards another. Each
+own-ship/target pair is otherwise scored on its own (Woerner 2019's pairwise evaluation).
 
 ``passed`` (per encounter): CPA ≥ the minimum acceptable CPA (no near miss, no collision), none
 of the rule's discrete penalties (passing side, side of the manoeuvre, crossing ahead, stand-on
@@ -245,6 +248,36 @@ def evaluate_colreg(tracks: EncounterTracks, params: ColregParams | None = None)
         penalty components.
     """
     p = params or ColregParams()
+    e, k, t = np.shape(tracks.target_course_rad)
+    per = max(1, CHUNK_ELEMENTS // max(k * t, 1))
+    if e <= per:
+        return _evaluate_block(tracks, p)
+    # bounded memory: blocks of whole episodes, each one vectorised call (not a loop per episode)
+    parts = [_evaluate_block(_episodes(tracks, slice(i, i + per)), p) for i in range(0, e, per)]
+    arrays = {f: np.concatenate([getattr(r, f) for r in parts]) for f in _ARRAY_FIELDS}
+    return ColregResult(
+        **arrays,
+        penalties={n: np.concatenate([r.penalties[n] for r in parts]) for n in parts[0].penalties},
+    )
+
+
+_ARRAY_FIELDS = ("encounter", "start_index", "cpa_m", "score", "passed")
+CHUNK_ELEMENTS = 4_000_000  # (episode, target, sample) triples per block: ~30 MB per array
+
+
+def _episodes(tr: EncounterTracks, sl: slice) -> EncounterTracks:
+    """The tracks of the episodes ``sl``."""
+    tv = None if tr.target_valid is None else np.asarray(tr.target_valid)[sl]
+    a = {f: np.asarray(getattr(tr, f))[sl] for f in _TRACK_FIELDS}
+    return EncounterTracks(tr.dt_s, **a, target_valid=tv)
+
+
+_TRACK_FIELDS = ("own_north_east_m", "own_course_rad", "own_speed_mps", "target_north_east_m",
+                 "target_course_rad", "target_speed_mps", "valid")  # fmt: skip
+
+
+def _evaluate_block(tracks: EncounterTracks, p: ColregParams) -> ColregResult:
+    """:func:`evaluate_colreg` on one block of episodes."""
     kin = _kinematics(tracks)
     rng = kin["range"]
     e, k, t = rng.shape
@@ -282,14 +315,16 @@ def evaluate_colreg(tracks: EncounterTracks, params: ColregParams | None = None)
         encounter[..., 1:] & encounter[..., :-1] & (np.sign(y[..., 1:]) != np.sign(y[..., :-1]))
     )
     ahead = np.any(flip & (kin["x_t"] > 0.0) & (kin["x_t"] < p.ahead_range_m), axis=-1)
-    # stand-on: course or speed changed while the give-way vessel still had room to act
-    early = to_cpa & (rng > p.stand_on_free_range_m)
-    so_course = np.max(np.where(early, np.abs(dev), 0.0), axis=-1) >= p.stand_on_course_rad
-    so_speed = np.max(np.where(early, np.abs(ratio - 1.0), 0.0), axis=-1) >= p.stand_on_speed_ratio
-
+    # stand-on: course or speed changed while the give-way vessel still had room to act and the
+    # own ship gave way to no other target (multi-target scenes: module docstring)
     head_on = kind == EncounterType.HEAD_ON
     give_way = np.isin(kind, [int(x) for x in GIVE_WAY])
     stand_on = np.isin(kind, [int(x) for x in STAND_ON])
+    busy = np.any(encounter & give_way[..., None], axis=1, keepdims=True)  # (E, 1, T)
+    early = to_cpa & (rng > p.stand_on_free_range_m) & ~busy
+    so_course = np.max(np.where(early, np.abs(dev), 0.0), axis=-1) >= p.stand_on_course_rad
+    so_speed = np.max(np.where(early, np.abs(ratio - 1.0), 0.0), axis=-1) >= p.stand_on_speed_ratio
+
     deficiency = np.minimum(
         _ramp(max_dev, p.detectable_course_rad, p.apparent_course_rad),
         _ramp(slow, p.detectable_speed_ratio, p.apparent_speed_ratio),

@@ -474,3 +474,49 @@ def test_holding_course_when_giving_way_violates() -> None:
     assert applies >= 0.95 * N_SYNTH and share >= 0.95, (share, applies)
     share, applies = _violating_share(_synthetic_set("crossing", "give-way", N_SYNTH, 2), rule)
     assert applies >= 0.95 * N_SYNTH and share <= 0.05, (share, applies)
+
+
+def _stack_targets(*parts: EncounterTracks) -> EncounterTracks:
+    """One episode, the targets of several single-target scenes with the same own track."""
+    a = parts[0]
+    cat = lambda name: np.concatenate([getattr(p, name) for p in parts], axis=1)  # noqa: E731
+    return _tracks(
+        a.own_north_east_m,
+        a.own_course_rad,
+        a.own_speed_mps,
+        cat("target_north_east_m"),
+        cat("target_course_rad"),
+        cat("target_speed_mps"),
+    )
+
+
+def test_stand_on_change_needed_for_another_target_is_not_penalised() -> None:
+    """A crossing target from port (15 s late, stand-on) alone: a 60° alteration at once costs
+    the stand-on course penalty (0.5); with a second target crossing from starboard that the own
+    ship gives way to at that time, the same alteration is needed and costs nothing."""
+    t = np.arange(T)
+    course = np.where(t < 1, 0.0, np.where(t < 90, 60.0 * DEG, -30.0 * DEG))
+    port = _one(course, (300.0, -300.0 - U * 15.0), 90.0 * DEG)
+    alone = evaluate_colreg(port)
+    assert _kind(alone) is EncounterType.CROSSING_STAND_ON
+    assert alone.penalties["stand_on_course_change"][0, 0] == pytest.approx(0.5)
+    both = evaluate_colreg(_stack_targets(port, _one(course, (300.0, 300.0), -90.0 * DEG)))
+    assert both.encounter[0].tolist() == [
+        EncounterType.CROSSING_STAND_ON,
+        EncounterType.CROSSING_GIVE_WAY,
+    ]
+    assert both.penalties["stand_on_course_change"][0, 0] == 0.0
+
+
+def test_blocks_of_episodes_equal_one_call(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Memory-bounded blocks (here 7 episodes each) give the same result as one call."""
+    import usvsim.evaluation.colreg as colreg
+
+    tr = _synthetic_set("crossing", "give-way", 30, 5)
+    whole = evaluate_colreg(tr)
+    monkeypatch.setattr(colreg, "CHUNK_ELEMENTS", 7 * T)
+    parts = colreg.evaluate_colreg(tr)
+    np.testing.assert_array_equal(parts.encounter, whole.encounter)
+    np.testing.assert_array_equal(parts.passed, whole.passed)
+    np.testing.assert_allclose(parts.score, whole.score)
+    np.testing.assert_allclose(parts.penalties["crossing_ahead"], whole.penalties["crossing_ahead"])
