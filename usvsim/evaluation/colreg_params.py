@@ -28,15 +28,24 @@ weights and ratios are scale-free and kept as published. The values that the sou
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
 
 from usvsim.vessel.vessels import DEFAULT_VESSEL
 
-__all__ = ["RANGE_SCALE", "SHIP_SPEED_MPS", "ColregParams", "parameter_table"]
+__all__ = ["RANGE_SCALE", "SHIP_SPEED_MPS", "ColregParams", "parameter_markdown", "parameter_table"]
 
 SHIP_SPEED_MPS = 10.0  # m/s, own ship of colav-simulator's Imazu files (imazu.SHIP_SPEED_MPS)
 RANGE_SCALE = DEFAULT_VESSEL.cruise_speed_mps / SHIP_SPEED_MPS  # 0.3: ranges as equal times
 _DEG = math.pi / 180.0
+_W = "Woerner et al. 2019 (colav-simulator evaluator defaults)"
+_U = "usvsim's choice"
+
+
+def _f(value: float, unit: str, meaning: str, source: str) -> Any:
+    """A parameter field: its default with unit, meaning and source as metadata (the docs'
+    table, :func:`parameter_markdown`)."""
+    return field(default=value, metadata={"unit": unit, "meaning": meaning, "source": source})
 
 
 @dataclass(frozen=True)
@@ -48,50 +57,100 @@ class ColregParams:
     """
 
     # --- entry criteria (when an encounter begins) ---
-    entry_range_m: float = 2500.0 * RANGE_SCALE  # m, 750; Woerner stage-1 range 2500 m
-    risk_cpa_m: float = 190.0 * RANGE_SCALE  # m, 57; a risk of collision: predicted CPA below the
-    # preferred passing distance (Woerner 2019 entry criterion, r_pref)
-    risk_tcpa_s: float = 300.0  # s, predicted CPA at most this far ahead (usvsim's choice: the
-    # 750 m entry range closed at 2.5 m/s, slow overtaking included)
+    entry_range_m: float = _f(
+        2500.0 * RANGE_SCALE, "m", "entry (risk-assessment) range; stage-1 range 2500 m", _W
+    )
+    risk_cpa_m: float = _f(
+        190.0 * RANGE_SCALE,
+        "m",
+        "risk of collision: predicted CPA below the preferred passing distance",
+        _W,
+    )
+    risk_tcpa_s: float = _f(
+        300.0,
+        "s",
+        "risk of collision: predicted CPA at most this far ahead (750 m closed at 2.5 m/s)",
+        _U,
+    )
     # --- classification sectors (COLREG rules 13-15) ---
-    head_on_rad: float = 13.0 * _DEG  # rad, |bearing| and |aspect| within: head-on (Woerner 2019)
-    crossing_port_rad: float = 10.0 * _DEG  # rad, a crossing target up to this far on the port
-    # bow still makes the own ship give way (Woerner 2019, crossing threshold −10°)
-    overtaking_rad: float = 112.5 * _DEG  # rad, 22.5° abaft the beam (COLREG rule 13)
+    head_on_rad: float = _f(
+        13.0 * _DEG, "rad", "head-on: relative bearing and aspect both within ±", _W
+    )
+    crossing_port_rad: float = _f(
+        10.0 * _DEG,
+        "rad",
+        "a crossing target this far on the port bow still makes us give way (−10°)",
+        _W,
+    )
+    overtaking_rad: float = _f(
+        112.5 * _DEG, "rad", "overtaking sector: more than 22.5° abaft the beam", "COLREG rule 13"
+    )
     # --- manoeuvre thresholds (rules 8, 14, 16, 17) ---
-    starboard_min_rad: float = 10.0 * _DEG  # rad, first alteration this large decides its side
-    # (Woerner 2019, starboard manoeuvre ≥ 10°)
-    apparent_course_rad: float = 30.0 * _DEG  # rad, readily apparent course change (Woerner 2019)
-    detectable_course_rad: float = 2.0 * _DEG  # rad, detectable course change (Woerner 2019)
-    apparent_speed_ratio: float = 0.5  # -, readily apparent speed reduction: to half (usvsim's
-    # choice; rule 8(b) "large enough to be readily apparent")
-    detectable_speed_ratio: float = 0.1  # -, a 10 % reduction is detectable (usvsim's choice)
-    stand_on_course_rad: float = 10.0 * _DEG  # rad, a stand-on course change (usvsim's choice:
-    # the starboard-manoeuvre threshold; smaller is track keeping)
-    stand_on_speed_ratio: float = 0.2  # -, a stand-on speed change |ΔU|/U (usvsim's choice)
-    stand_on_free_range_m: float = 1100.0 * RANGE_SCALE  # m, 330; inside it the stand-on may act
-    # (rule 17(a)(ii)); Woerner stage-2 range 1100 m
-    ahead_range_m: float = 1100.0 * RANGE_SCALE  # m, 330; crossing the target's track this close
-    # ahead of its bow is "crossing ahead" (usvsim's choice: the stage-2 range)
+    starboard_min_rad: float = _f(
+        10.0 * _DEG, "rad", "the first alteration this large decides the manoeuvre's side", _W
+    )
+    apparent_course_rad: float = _f(
+        30.0 * _DEG, "rad", "readily apparent course change (rule 8)", _W
+    )
+    detectable_course_rad: float = _f(2.0 * _DEG, "rad", "detectable course change", _W)
+    apparent_speed_ratio: float = _f(
+        0.5, "-", "readily apparent speed reduction (to half; rule 8(b))", _U
+    )
+    detectable_speed_ratio: float = _f(0.1, "-", "detectable speed reduction", _U)
+    stand_on_course_rad: float = _f(
+        10.0 * _DEG,
+        "rad",
+        "a stand-on course change (the starboard-manoeuvre threshold; smaller is track keeping)",
+        _U,
+    )
+    stand_on_speed_ratio: float = _f(0.2, "-", "a stand-on speed change, relative", _U)
+    stand_on_free_range_m: float = _f(
+        1100.0 * RANGE_SCALE,
+        "m",
+        "inside it the stand-on vessel may act (rule 17(a)(ii)); stage-2 range 1100 m",
+        _W,
+    )
+    ahead_range_m: float = _f(
+        1100.0 * RANGE_SCALE,
+        "m",
+        "crossing its course line this close ahead of its bow is crossing ahead (stage 2)",
+        _U,
+    )
     # --- safety (CPA) ---
-    preferred_cpa_m: float = 190.0 * RANGE_SCALE  # m, 57; preferred passing distance (Woerner)
-    min_cpa_m: float = 100.0 * RANGE_SCALE  # m, 30; minimum acceptable CPA (Woerner)
-    near_miss_m: float = 50.0 * RANGE_SCALE  # m, 15; near miss (Woerner)
-    collision_m: float = 30.0 * RANGE_SCALE  # m, 9; collision (Woerner)
-    weight_min_cpa: float = 0.2  # -, safety weight of CPA below preferred (Woerner 2019)
-    weight_near_miss: float = 0.3  # -, safety weight of a near miss (Woerner 2019)
-    weight_collision: float = 0.5  # -, safety weight of a collision (Woerner 2019)
-    # --- rule penalties (Woerner 2019, colav-simulator evaluator defaults) ---
-    penalty_head_on_starboard_pass: float = 0.6  # -, head-on passed starboard to starboard
-    penalty_head_on_not_starboard: float = 0.4  # -, head-on manoeuvre not to starboard
-    penalty_crossing_ahead: float = 0.5  # -, give-way vessel crosses ahead (rule 15)
-    penalty_overtaking_ahead: float = 0.3  # -, overtaking vessel crosses ahead (rule 13)
-    penalty_not_apparent: float = 0.5  # -, give-way manoeuvre not readily apparent (rules 8, 16)
-    penalty_stand_on_course: float = 0.5  # -, stand-on vessel changes course (rule 17)
-    penalty_stand_on_speed: float = 0.25  # -, stand-on vessel changes speed (rule 17)
+    preferred_cpa_m: float = _f(190.0 * RANGE_SCALE, "m", "preferred passing distance", _W)
+    min_cpa_m: float = _f(100.0 * RANGE_SCALE, "m", "minimum acceptable CPA (below it: fail)", _W)
+    near_miss_m: float = _f(50.0 * RANGE_SCALE, "m", "near miss", _W)
+    collision_m: float = _f(30.0 * RANGE_SCALE, "m", "collision", _W)
+    weight_min_cpa: float = _f(
+        0.2, "-", "safety weight: CPA below the preferred distance (ramp to the minimum)", _W
+    )
+    weight_near_miss: float = _f(0.3, "-", "safety weight: near miss", _W)
+    weight_collision: float = _f(0.5, "-", "safety weight: collision", _W)
+    # --- rule penalties ---
+    penalty_head_on_starboard_pass: float = _f(
+        0.6, "-", "head-on passed starboard to starboard (rule 14)", _W
+    )
+    penalty_head_on_not_starboard: float = _f(
+        0.4, "-", "head-on manoeuvre not to starboard (rule 14)", _W
+    )
+    penalty_crossing_ahead: float = _f(0.5, "-", "give-way vessel crosses ahead (rule 15)", _W)
+    penalty_overtaking_ahead: float = _f(0.3, "-", "overtaking vessel crosses ahead (rule 13)", _W)
+    penalty_not_apparent: float = _f(
+        0.5, "-", "give-way manoeuvre not readily apparent (rules 8, 16), × its deficiency", _W
+    )
+    penalty_stand_on_course: float = _f(
+        0.5, "-", "stand-on vessel changes course without need (rule 17)", _W
+    )
+    penalty_stand_on_speed: float = _f(
+        0.25, "-", "stand-on vessel changes speed without need (rule 17)", _W
+    )
     # --- pass/fail ---
-    pass_apparent_fraction: float = 0.5  # -, a give-way manoeuvre passes when its "not apparent"
-    # deficiency is at most this (a 16° course change or a 30 % slow-down; usvsim's choice)
+    pass_apparent_fraction: float = _f(
+        0.5,
+        "-",
+        "a give-way manoeuvre passes up to this deficiency (16° course, 30 % speed)",
+        _U,
+    )
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -122,16 +181,37 @@ class ColregParams:
         )
 
 
-def parameter_table(params: ColregParams | None = None) -> list[tuple[str, float, float | None]]:
-    """(name, value in SI / degrees for angles, ship value or None) per field: the docs' table."""
+def parameter_table(params: ColregParams | None = None) -> list[dict[str, Any]]:
+    """One row per field: name, unit (degrees for angles), value at boat scale, ship value
+    (ranges: value / RANGE_SCALE; None where not scaled), meaning, source."""
     p = params or ColregParams()
-    rows: list[tuple[str, float, float | None]] = []
+    rows = []
     for f in fields(p):
         v = float(getattr(p, f.name))
-        if f.name.endswith("_rad"):
-            rows.append((f.name, math.degrees(v), None))
-        elif f.name.endswith("_m"):
-            rows.append((f.name, v, v / RANGE_SCALE))
-        else:
-            rows.append((f.name, v, None))
+        unit, ship = f.metadata["unit"], None
+        if unit == "rad":
+            unit, v = "deg", math.degrees(v)
+        elif unit == "m":
+            ship = v / RANGE_SCALE
+        rows.append({"name": f.name, "unit": unit, "value": v, "ship_value": ship,
+                     "meaning": f.metadata["meaning"], "source": f.metadata["source"]})  # fmt: skip
     return rows
+
+
+def parameter_markdown(params: ColregParams | None = None) -> str:
+    """The parameter table in Markdown (``python -m usvsim.evaluation.colreg_params``)."""
+    lines = [
+        "| parameter | unit | boat value | ship value | meaning | source |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in parameter_table(params):
+        ship = "" if r["ship_value"] is None else f"{r['ship_value']:g}"
+        lines.append(
+            f"| `{r['name']}` | {r['unit']} | {r['value']:g} | {ship} | {r['meaning']} "
+            f"| {r['source']} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    print(parameter_markdown(), end="")

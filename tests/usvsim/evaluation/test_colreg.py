@@ -17,7 +17,7 @@ from usvsim.evaluation.colreg import (
     evaluate_colreg,
     summarize_colreg,
 )
-from usvsim.evaluation.colreg_params import RANGE_SCALE, parameter_table
+from usvsim.evaluation.colreg_params import RANGE_SCALE, parameter_markdown, parameter_table
 from usvsim.evaluation.stats import proportion
 
 DEG = math.pi / 180.0
@@ -88,10 +88,13 @@ def test_parameters_scaled_by_speed_ratio() -> None:
     assert (P.near_miss_m, P.collision_m) == pytest.approx((15.0, 9.0))
     ship = P.scaled(1.0 / RANGE_SCALE)
     assert ship.preferred_cpa_m == pytest.approx(190.0) and ship.head_on_rad == P.head_on_rad
-    rows = {name: (v, s) for name, v, s in parameter_table()}
-    assert rows["head_on_rad"][0] == pytest.approx(13.0) and rows["collision_m"][
-        1
-    ] == pytest.approx(30.0)
+    rows = {r["name"]: r for r in parameter_table()}
+    assert rows["head_on_rad"]["unit"] == "deg" and rows["head_on_rad"]["value"] == pytest.approx(
+        13.0
+    )
+    assert rows["collision_m"]["ship_value"] == pytest.approx(30.0)
+    assert all(r["source"] and r["meaning"] for r in rows.values())  # every field cites a source
+    assert parameter_markdown().count("\n") == len(rows) + 2
     with pytest.raises(ValueError, match="near_miss_m"):
         ColregParams(near_miss_m=5.0)
 
