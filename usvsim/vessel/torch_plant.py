@@ -304,9 +304,11 @@ class TorchPlant:
         self, s: Columns, w: Columns, n_steps: int, trajectory: torch.Tensor | None = None
     ) -> Columns:
         """``n_steps`` plant steps of state columns ``s`` (13 tensors (N,)) under the per-boat
-        inputs ``w`` (ψ_ref, U_ref: (N,) each); ``trajectory[:, k]`` (N, n_steps, 13), if given,
-        receives the state after step k. No checks: the fast path for benchmarks."""
-        inputs = (*w, *self._current)
+        inputs ``w``: (ψ_ref rad, U_ref m/s), the plant's current for all boats, or (ψ_ref, U_ref,
+        V_c m/s, β_c rad), a current per boat (each an (N,) tensor or a 0-d one shared by all);
+        ``trajectory[:, k]`` (N, n_steps, 13), if given, receives the state after step k. No
+        checks: the fast path for batches (environments, benchmarks)."""
+        inputs = (*w, *self._current) if len(w) == 2 else tuple(w)
         for k in range(n_steps):
             s = self.step_function(s, inputs, self._gains)
             if trajectory is not None:

@@ -204,3 +204,26 @@ def test_default_plant_runs_without_casadi_or_gymnasium() -> None:
     heading = float(out[0].split()[1])
     assert out[0].startswith("committed") and 0.3 < heading < 1.0  # turning towards 1 rad
     assert "casadi is not installed" in out[1]
+
+
+def test_advance_takes_a_current_per_boat() -> None:
+    """Boats in different currents in one batch: each as in a plant with its own current."""
+    currents = [(0.0, 0.0), (0.8, 2.0)]
+    eta = np.array([[0.0, 0.0, 0.5]])
+    ends = []
+    for current in currents:
+        plant = TorchPlant("default", current=current)
+        end, _ = plant.step(plant.initial_state(eta), 1.0, n_steps=40, trajectory=False)
+        ends.append(end.x[0])
+    plant = TorchPlant("default")
+    start = plant.initial_state(np.repeat(eta, 2, axis=0))
+    columns = tuple(c.contiguous() for c in torch.cat([start.x, start.c], 1).unbind(1))
+    w = (
+        torch.full((2,), 1.0, dtype=torch.float64),
+        torch.full((2,), plant.cruise_speed_mps, dtype=torch.float64),
+        torch.tensor([c[0] for c in currents], dtype=torch.float64),
+        torch.tensor([c[1] for c in currents], dtype=torch.float64),
+    )
+    batch = torch.stack(plant.advance(columns, w, 40), dim=1)
+    assert torch.equal(batch[0, :8], ends[0]) and torch.equal(batch[1, :8], ends[1])
+    assert (ends[0][:2] - ends[1][:2]).abs().max() > 1.0  # m: the current moved the boat
