@@ -1,0 +1,264 @@
+"""Waves: sea state per episode, JONSWAP spectrum, first-order wave motion and mean drift force.
+
+* Sea state codes (WMO / Douglas) with the mean significant wave height H_s and the most
+  probable modal (peak) period T_p of the open North Atlantic, Bales (1983), "Designing ships to
+  the natural environment", Naval Engineers Journal 95(2), table of annual sea state
+  occurrences (also in Lee & Bales 1984 and Fossen 2021 §10.2).
+* JONSWAP spectrum in the DNV-RP-C205 (§3.5.5) form, the one Fossen 2021 §10.2.1 describes
+  (Hasselmann et al. 1973): S(ω) = A_γ (5/16) H_s² ω_p⁴ ω⁻⁵ exp(-5/4 (ω_p/ω)⁴) γ^r,
+  r = exp(-(ω - ω_p)² / (2 σ² ω_p²)), σ = 0.07 (ω ≤ ω_p) or 0.09, A_γ = 1 - 0.287 ln γ.
+* First-order wave-frequency motion: Fossen's linear wave response model (2021, §10.2.3)
+  h(s) = K_w s / (s² + 2 λ ω₀ s + ω₀²), K_w = 2 λ ω₀ σ_w, σ_w² = max S(ω). Fossen fits λ by least
+  squares; here λ = m₀ / (π ω₀ σ_w²) makes the filter's variance equal m₀ = H_s²/16 exactly
+  (∫₀^∞ |h(jω)|² dω = π λ ω₀ σ_w²), with the peak height and frequency of S. Discretised
+  exactly from its stationary covariance (no Python loop over boats).
+* Mean (second-order) drift force: the short-wave asymptote for a wall-sided hull (Faltinsen
+  1990, *Sea Loads on Ships and Offshore Structures*, ch. 5): a straight waterline segment of
+  length ℓ and outward normal n, met by waves travelling along k̂, takes ½ ρ g ζ_a² R² (n·k̂)² ℓ
+  along -n, with R the reflection coefficient of a fixed thin barrier of the hull's draft in deep
+  water (Ursell 1947, Proc. Camb. Phil. Soc. 43: 374-382): R² = π² I₁(kT)² / (π² I₁(kT)² +
+  K₁(kT)²), k = ω²/g. In irregular seas ½ ζ_a² → S(ω) dω. APPROXIMATE: the hull's own motions and
+  diffraction by its shape are ignored; good to an order of magnitude.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.special import i1e, k1e
+
+from usvsim.common.errors import UserError
+
+__all__ = [
+    "HS_MAX_M",
+    "RHO_WATER",
+    "SEA_STATES",
+    "TP_RANGE_S",
+    "USV105_WATERLINE",
+    "G",
+    "SeaState",
+    "WaterlinePolygon",
+    "WaveResponse",
+    "jonswap",
+    "mean_drift_force",
+    "reflection_squared",
+    "sea_state_from_code",
+    "wave_displacement",
+    "wave_motion_init",
+    "wave_motion_step",
+    "wave_response",
+]
+
+G = 9.81  # m/s², gravity
+RHO_WATER = 1025.0  # kg/m³, sea water (as vessels.clarke83_derivatives)
+HS_MAX_M = 14.0  # m, top of sea state 8 (Bales 1983)
+TP_RANGE_S = (1.0, 25.0)  # s, accepted peak periods (Bales' 5-95 % ranges lie in 3.3-23.7 s)
+
+# code: (H_s m, T_p s, description); Bales (1983) North Atlantic means and most probable T_p.
+SEA_STATES: dict[int, tuple[float, float, str]] = {
+    0: (0.0, 0.0, "calm (glassy)"),
+    1: (0.05, 2.0, "calm (rippled); T_p ASSUMED (Bales gives none)"),
+    2: (0.3, 7.5, "smooth (wavelets)"),
+    3: (0.88, 7.5, "slight"),
+    4: (1.88, 8.8, "moderate"),
+    5: (3.25, 9.7, "rough"),
+    6: (5.0, 12.4, "very rough"),
+    7: (7.5, 15.0, "high"),
+    8: (11.5, 16.4, "very high"),
+}
+
+
+@dataclass(frozen=True)
+class SeaState:
+    """One sea state: H_s (m), T_p (s), direction waves travel towards (rad, NED), JONSWAP γ."""
+
+    hs_m: float
+    tp_s: float
+    direction_rad: float = 0.0
+    gamma: float = 3.3  # -, JONSWAP mean peak enhancement (Hasselmann et al. 1973)
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.hs_m <= HS_MAX_M:
+            raise UserError(
+                f"significant wave height must lie in [0, {HS_MAX_M:g}] m, got {self.hs_m}"
+            )
+        lo, hi = TP_RANGE_S
+        if self.hs_m > 0 and not lo <= self.tp_s <= hi:
+            raise UserError(f"peak period must lie in [{lo:g}, {hi:g}] s, got {self.tp_s}")
+        if not 1.0 <= self.gamma <= 7.0:
+            raise UserError(f"JONSWAP gamma must lie in [1, 7] (DNV-RP-C205), got {self.gamma}")
+        if not math.isfinite(self.direction_rad):
+            raise UserError(
+                f"wave direction must be a finite angle in rad, got {self.direction_rad}"
+            )
+
+
+def sea_state_from_code(code: int, direction_rad: float = 0.0) -> SeaState:
+    """The :class:`SeaState` of a WMO sea state code 0-8 (table :data:`SEA_STATES`)."""
+    if isinstance(code, bool) or not isinstance(code, (int, np.integer)) or code not in SEA_STATES:
+        raise UserError(f"sea state must be an integer code 0-{max(SEA_STATES)}, got {code!r}")
+    hs, tp, _ = SEA_STATES[int(code)]
+    return SeaState(hs, tp, direction_rad)
+
+
+def jonswap(
+    omega: ArrayLike, hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3
+) -> NDArray[np.float64]:
+    """JONSWAP S(ω) (m² s/rad, one-sided) at ``omega`` (rad/s, > 0); broadcasts (N, 1) × (M,)."""
+    w = np.asarray(omega, dtype=float)
+    hs = np.asarray(hs_m, dtype=float)
+    wp = 2.0 * math.pi / np.asarray(tp_s, dtype=float)
+    sigma = np.where(w <= wp, 0.07, 0.09)
+    r = np.exp(-((w - wp) ** 2) / (2.0 * sigma**2 * wp**2))
+    a_gamma = 1.0 - 0.287 * math.log(gamma)
+    pm = 5.0 / 16.0 * hs**2 * wp**4 * w**-5.0 * np.exp(-1.25 * (wp / w) ** 4)
+    return a_gamma * pm * gamma**r
+
+
+@dataclass(frozen=True)
+class WaveResponse:
+    """Parameters of the linear wave response model per boat, each (N,)."""
+
+    omega0: NDArray[np.float64]  # rad/s, ω₀ (peak or encounter frequency)
+    damping: NDArray[np.float64]  # -, λ
+    gain: NDArray[np.float64]  # m s^0.5 (scaled so the output is elevation in m), K_w
+
+
+def wave_response(hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3) -> WaveResponse:
+    """λ, ω₀ = 2π/T_p and K_w of the wave response model for JONSWAP seas (module docstring)."""
+    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))
+    w0 = 2.0 * math.pi / np.atleast_1d(np.asarray(tp_s, dtype=float))
+    sigma2 = jonswap(w0, hs, 2.0 * math.pi / w0, gamma)  # the spectrum's peak value
+    m0 = hs**2 / 16.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lam = np.where(hs > 0, m0 / (math.pi * w0 * sigma2), 0.1)
+    return WaveResponse(w0, lam, 2.0 * lam * w0 * np.sqrt(sigma2))
+
+
+def _transition(resp: WaveResponse, dt_s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Exact Φ = exp(A Δt) and stationary covariance P∞, each (N, 2, 2).
+
+    The filter is x'' + 2λω₀x' + ω₀²x = K w; w is white noise of intensity π (one-sided
+    PSD 1 in ω), so y = x' has PSD |h(jω)|².
+    """
+    w, z, k = resp.omega0, resp.damping, resp.gain
+    if np.any(z >= 1.0):
+        raise UserError("wave response damping λ must be < 1 (a peaked spectrum)")
+    wd = w * np.sqrt(1.0 - z**2)
+    e = np.exp(-z * w * dt_s)
+    c, s = np.cos(wd * dt_s), np.sin(wd * dt_s)
+    phi = np.empty((w.size, 2, 2))
+    phi[:, 0, 0] = e * (c + z * w / wd * s)
+    phi[:, 0, 1] = e * s / wd
+    phi[:, 1, 0] = -e * w**2 / wd * s
+    phi[:, 1, 1] = e * (c - z * w / wd * s)
+    p = np.zeros_like(phi)
+    p[:, 0, 0] = math.pi * k**2 / (4.0 * z * w**3)
+    p[:, 1, 1] = math.pi * k**2 / (4.0 * z * w)
+    return phi, p
+
+
+def _chol2(p: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Lower Cholesky factors of (N, 2, 2) covariances (0 where singular)."""
+    l = np.zeros_like(p)
+    l[:, 0, 0] = np.sqrt(np.maximum(p[:, 0, 0], 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        l[:, 1, 0] = np.where(l[:, 0, 0] > 0, p[:, 1, 0] / l[:, 0, 0], 0.0)
+    l[:, 1, 1] = np.sqrt(np.maximum(p[:, 1, 1] - l[:, 1, 0] ** 2, 0.0))
+    return l
+
+
+def wave_motion_init(rng: np.random.Generator, resp: WaveResponse) -> NDArray[np.float64]:
+    """Filter states (N, 2) drawn from the stationary distribution (no start-up transient)."""
+    _, p = _transition(resp, 1.0)
+    return np.einsum("nij,nj->ni", _chol2(p), rng.standard_normal((resp.omega0.size, 2)))
+
+
+def wave_motion_step(
+    x: NDArray[np.float64], rng: np.random.Generator, resp: WaveResponse, dt_s: float
+) -> NDArray[np.float64]:
+    """Advance the filter states (N, 2) by ``dt_s``: x' = Φ x + L ξ, L Lᵀ = P∞ - Φ P∞ Φᵀ (exact).
+
+    x[:, 1] is the wave elevation ζ (m); ω₀ x[:, 0] the horizontal displacement (m).
+    """
+    phi, p = _transition(resp, dt_s)
+    qd = p - np.einsum("nij,njk,nlk->nil", phi, p, phi)
+    noise = np.einsum("nij,nj->ni", _chol2(qd), rng.standard_normal(x.shape))
+    return np.einsum("nij,nj->ni", phi, x) + noise
+
+
+def wave_displacement(
+    x: NDArray[np.float64],
+    resp: WaveResponse,
+    direction_rad: ArrayLike,
+    psi_rad: ArrayLike,
+    yaw_gain: float = 1.0,
+) -> NDArray[np.float64]:
+    """First-order motion [Δn (m), Δe (m), Δψ (rad)] (N, 3) to add to the boat's η.
+
+    Translation: the surface particle's horizontal orbit, amplitude ζ_a along the wave direction
+    in deep water (linear theory; a boat much shorter than the wave follows it), approximated by
+    d = ω₀ x₁ (in quadrature with ζ). Yaw: the wave slope k₀ d turned into heading as
+    Δψ = c_ψ k₀ d sin 2(β - ψ) (zero in head, following and beam seas); c_ψ = ``yaw_gain`` = 1
+    ASSUMED, no published yaw RAO of a 10.5 m waterjet USV was found.
+    """
+    d = resp.omega0 * x[:, 0]
+    beta = np.asarray(direction_rad, dtype=float)
+    k0 = resp.omega0**2 / G
+    dpsi = yaw_gain * k0 * d * np.sin(2.0 * (beta - np.asarray(psi_rad, dtype=float)))
+    return np.stack([d * np.cos(beta), d * np.sin(beta), dpsi], -1)
+
+
+@dataclass(frozen=True)
+class WaterlinePolygon:
+    """Waterline of a wall-sided hull: vertices (m, body x forward, y starboard) and draft (m)."""
+
+    vertices: tuple[tuple[float, float], ...]  # counter-clockwise seen from below (x fwd, y stbd)
+    draft_m: float
+
+
+# usv105: L = 10.5 m, B = 3.5 m (Vedeler 2019), draft 0.55 m (vessels.USV105, ASSUMED); the bow
+# is a triangle over the forward 3.0 m (ASSUMED planing-hull shape), the rest a rectangle.
+USV105_WATERLINE = WaterlinePolygon(
+    vertices=((-5.25, -1.75), (-5.25, 1.75), (2.25, 1.75), (5.25, 0.0), (2.25, -1.75)),
+    draft_m=0.55,
+)
+
+
+def reflection_squared(omega: ArrayLike, draft_m: float) -> NDArray[np.float64]:
+    """R² of a fixed thin barrier of draft T in deep water (Ursell 1947), k = ω²/g."""
+    x = np.asarray(omega, dtype=float) ** 2 / G * draft_m
+    ratio = k1e(x) / i1e(x) * np.exp(-2.0 * x) / math.pi  # K₁ / (π I₁), overflow-safe
+    return 1.0 / (1.0 + ratio**2)
+
+
+def mean_drift_force(
+    hs_m: ArrayLike,
+    tp_s: ArrayLike,
+    direction_rad: ArrayLike,
+    psi_rad: ArrayLike,
+    waterline: WaterlinePolygon = USV105_WATERLINE,
+    gamma: float = 3.3,
+) -> NDArray[np.float64]:
+    """Mean drift [X (N), Y (N), N (N m)] in body axes, shape (N, 3) (module docstring's model)."""
+    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))[:, None]
+    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))[:, None]
+    omega = np.linspace(0.05, 15.0, 3000)  # rad/s; S ∝ ω⁻⁵ leaves < 1e-4 m0 above
+    s = jonswap(omega, hs, np.where(hs > 0, tp, 1.0), gamma)
+    m_r = np.trapezoid(s * reflection_squared(omega, waterline.draft_m), omega, axis=1)  # m²
+    v = np.asarray(waterline.vertices, dtype=float)
+    a, b = v, np.roll(v, -1, axis=0)
+    edge = b - a
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    normal = np.stack([-edge[:, 1], edge[:, 0]], -1) / length[:, None]  # outward for this order
+    mid = 0.5 * (a + b)
+    rel = np.asarray(direction_rad, dtype=float) - np.asarray(psi_rad, dtype=float)
+    k_hat = np.stack([np.cos(rel), np.sin(rel)], -1).reshape(-1, 2)
+    nk = k_hat @ normal.T  # (N, S)
+    lit = np.where(nk < 0.0, nk**2, 0.0) * length  # m, illuminated segments only
+    force = -(RHO_WATER * G * m_r)[:, None, None] * lit[:, :, None] * normal[None]  # (N, S, 2)
+    moment = mid[None, :, 0] * force[..., 1] - mid[None, :, 1] * force[..., 0]
+    return np.concatenate([force.sum(1), moment.sum(1, keepdims=True)], -1)
