@@ -259,6 +259,7 @@ def mean_drift_force(
     k_hat = np.stack([np.cos(rel), np.sin(rel)], -1).reshape(-1, 2)
     nk = k_hat @ normal.T  # (N, S)
     lit = np.where(nk < 0.0, nk**2, 0.0) * length  # m, illuminated segments only
-    force = -(RHO_WATER * G * m_r)[:, None, None] * lit[:, :, None] * normal[None]  # (N, S, 2)
+    pressure = np.asarray(RHO_WATER * G * m_r, dtype=float)  # N/m, per metre of lit wall
+    force = -pressure[:, None, None] * lit[:, :, None] * normal[None]  # (N, S, 2)
     moment = mid[None, :, 0] * force[..., 1] - mid[None, :, 1] * force[..., 0]
     return np.concatenate([force.sum(1), moment.sum(1, keepdims=True)], -1)
