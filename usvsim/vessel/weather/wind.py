@@ -12,7 +12,8 @@ Control*, 2nd ed., §10.1, the "ships at high speed" form)::
 north" has β_w = π. Fossen gives c_x ∈ [0.50, 0.90], c_y ∈ [0.70, 0.95], c_n ∈ [0.05, 0.20].
 
 Gusts: the wind speed is V_w(t) = V̄ + g(t) with g a first-order Gauss–Markov process
-ġ = -g / T_g + w (Fossen 2021 §10.1 offers it beside the Harris and NORSOK spectra), discretised
+ġ = -g / T_g + w (the process Fossen 2021 §10.3 uses for a slowly varying current; a simpler
+stand-in for the Harris and NORSOK gust spectra of §10.1, which it does not reproduce), discretised
 exactly: g_{k+1} = a g_k + σ_g √(1 - a²) ξ_k, a = exp(-Δt / T_g), stationary std σ_g = I_u V̄.
 """
 
@@ -68,7 +69,7 @@ USV105_WINDAGE = Windage(frontal_area_m2=7.25, lateral_area_m2=16.5, length_m=10
 
 @dataclass(frozen=True)
 class GustParams:
-    """First-order Gauss–Markov gust model (Fossen 2021 §10.1)."""
+    """First-order Gauss–Markov gust model (module docstring)."""
 
     intensity: float = 0.10  # -, σ_g / V̄; ASSUMED, offshore turbulence intensity is ~0.06-0.12
     time_constant_s: float = 10.0  # s, T_g; ASSUMED (order of L_u / V̄ for a ~100 m scale)
