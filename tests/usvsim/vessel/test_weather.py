@@ -25,6 +25,7 @@ from usvsim.vessel.weather.waves import (
     jonswap,
     mean_drift_force,
     sea_state_from_code,
+    wave_displacement,
     wave_motion_init,
     wave_motion_step,
     wave_response,
@@ -145,6 +146,38 @@ def test_simulated_elevation_spectrum_matches_jonswap() -> None:
     hs_sim = 4.0 * math.sqrt(np.trapezoid(psd_w, omega))
     assert hs_sim == pytest.approx(hs_jonswap, rel=0.10)
     assert 4.0 * eta.std() == pytest.approx(1.88, rel=0.10)
+
+
+def test_wave_displacement_follows_the_surface_orbit() -> None:
+    """Along-wave displacement std = H_s / 4 (stationary: var(ω₀ x₁) = var(x₂) = m₀), none across;
+    yaw zero in beam seas and largest at 45°."""
+    n = 64
+    resp = wave_response(np.full(n, 0.88), np.full(n, 7.5))
+    rng = np.random.default_rng(2)
+    x = wave_motion_init(rng, resp)
+    direction = np.full(n, 0.4)
+    beam, quartering, along, across = [], [], [], []
+    for _ in range(2000):
+        x = wave_motion_step(x, rng, resp, 0.5)
+        d = wave_displacement(x, resp, direction, direction - math.pi / 2)
+        along.append(d[:, 0] * math.cos(0.4) + d[:, 1] * math.sin(0.4))
+        across.append(-d[:, 0] * math.sin(0.4) + d[:, 1] * math.cos(0.4))
+        beam.append(d[:, 2])
+        quartering.append(wave_displacement(x, resp, direction, direction - math.pi / 4)[:, 2])
+    assert np.std(along) == pytest.approx(0.88 / 4, rel=0.05)
+    np.testing.assert_allclose(across, 0.0, atol=1e-12)
+    np.testing.assert_allclose(beam, 0.0, atol=1e-12)
+    k0 = (2 * math.pi / 7.5) ** 2 / G  # 1/m, peak wave number
+    assert np.std(quartering) == pytest.approx(k0 * 0.88 / 4, rel=0.05)  # 0.0157 rad = 0.9°
+
+
+def test_calm_sea_has_no_motion_and_no_drift() -> None:
+    calm = sea_state_from_code(0)
+    resp = wave_response([calm.hs_m], [calm.tp_s])
+    rng = np.random.default_rng(0)
+    x = wave_motion_step(wave_motion_init(rng, resp), rng, resp, 0.1)
+    np.testing.assert_array_equal(x, 0.0)
+    np.testing.assert_array_equal(mean_drift_force([0.0], [0.0], [0.0], [0.0]), 0.0)
 
 
 def test_mean_drift_pushes_down_wave() -> None:

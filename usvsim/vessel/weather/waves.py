@@ -42,6 +42,7 @@ __all__ = [
     "SeaState",
     "WaterlinePolygon",
     "WaveResponse",
+    "drift_table",
     "jonswap",
     "mean_drift_force",
     "reflection_squared",
@@ -128,9 +129,13 @@ class WaveResponse:
 
 
 def wave_response(hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3) -> WaveResponse:
-    """λ, ω₀ = 2π/T_p and K_w of the wave response model for JONSWAP seas (module docstring)."""
+    """λ, ω₀ = 2π/T_p and K_w of the wave response model for JONSWAP seas (module docstring).
+
+    Calm boats (H_s = 0) get K_w = 0: their wave motion is exactly zero.
+    """
     hs = np.atleast_1d(np.asarray(hs_m, dtype=float))
-    w0 = 2.0 * math.pi / np.atleast_1d(np.asarray(tp_s, dtype=float))
+    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))
+    w0 = 2.0 * math.pi / np.where(hs > 0, tp, 10.0)  # calm: any ω₀, the gain is 0
     sigma2 = jonswap(w0, hs, 2.0 * math.pi / w0, gamma)  # the spectrum's peak value
     m0 = hs**2 / 16.0
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -263,3 +268,23 @@ def mean_drift_force(
     force = -pressure[:, None, None] * lit[:, :, None] * normal[None]  # (N, S, 2)
     moment = mid[None, :, 0] * force[..., 1] - mid[None, :, 1] * force[..., 0]
     return np.concatenate([force.sum(1), moment.sum(1, keepdims=True)], -1)
+
+
+def drift_table(
+    headings_deg: tuple[float, ...] = (90.0,), codes: tuple[int, ...] = (2, 3, 4, 5)
+) -> str:
+    """Markdown table of usv105's mean drift [X, Y, N] per sea state, waves from port (docs)."""
+    rows = [
+        "| sea state | waves towards (deg, boat heading north) | X (N) | Y (N) | N (N m) |",
+        "|---|---|---|---|---|",
+    ]
+    for code in codes:
+        sea = sea_state_from_code(code)
+        for deg in headings_deg:
+            f = mean_drift_force([sea.hs_m], [sea.tp_s], [math.radians(deg)], [0.0])[0]
+            rows.append(f"| {code} | {deg:g} | {f[0]:.1f} | {f[1]:.1f} | {f[2]:.1f} |")
+    return "\n".join(rows)
+
+
+if __name__ == "__main__":
+    print(drift_table((90.0, 135.0, 180.0)))
