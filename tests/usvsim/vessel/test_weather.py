@@ -22,6 +22,7 @@ from usvsim.vessel.weather.waves import (
     G,
     SeaState,
     WaterlinePolygon,
+    encounter_frequency,
     jonswap,
     mean_drift_force,
     sea_state_from_code,
@@ -169,6 +170,13 @@ def test_wave_displacement_follows_the_surface_orbit() -> None:
     np.testing.assert_allclose(beam, 0.0, atol=1e-12)
     k0 = (2 * math.pi / 7.5) ** 2 / G  # 1/m, peak wave number
     assert np.std(quartering) == pytest.approx(k0 * 0.88 / 4, rel=0.05)  # 0.0157 rad = 0.9°
+
+
+def test_encounter_frequency_rises_in_head_seas_and_falls_in_following_seas() -> None:
+    w = 2 * math.pi / 7.5  # rad/s, sea state 3's peak
+    we = encounter_frequency(w, 3.0, [math.pi, math.pi / 2, 0.0])
+    np.testing.assert_allclose(we, [w + w**2 * 3.0 / G, w, w - w**2 * 3.0 / G], rtol=1e-12)
+    assert we[0] == pytest.approx(1.0524, abs=1e-4)  # 26 % above ω = 0.8378 rad/s
 
 
 def test_calm_sea_has_no_motion_and_no_drift() -> None:

@@ -43,6 +43,7 @@ __all__ = [
     "WaterlinePolygon",
     "WaveResponse",
     "drift_table",
+    "encounter_frequency",
     "jonswap",
     "mean_drift_force",
     "reflection_squared",
@@ -141,6 +142,19 @@ def wave_response(hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3) -> WaveR
     with np.errstate(invalid="ignore", divide="ignore"):
         lam = np.where(hs > 0, m0 / (math.pi * w0 * sigma2), 0.1)
     return WaveResponse(w0, lam, 2.0 * lam * w0 * np.sqrt(sigma2))
+
+
+def encounter_frequency(
+    omega: ArrayLike, speed_mps: ArrayLike, beta_rad: ArrayLike
+) -> NDArray[np.float64]:
+    """ω_e = |ω - ω² U cos β / g| (rad/s): the frequency a boat at speed U meets deep-water waves of
+    frequency ω at, β the wave direction relative to the heading (π: head seas), Fossen 2021 §10.2.
+
+    >>> round(float(encounter_frequency(0.8, 3.0, np.pi)), 4)
+    0.9957
+    """
+    w = np.asarray(omega, dtype=float)
+    return np.abs(w - w**2 * np.asarray(speed_mps, dtype=float) * np.cos(beta_rad) / G)
 
 
 def _transition(resp: WaveResponse, dt_s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
