@@ -268,3 +268,17 @@ def test_heading_notch_attenuates_the_wave_band_and_passes_low_frequencies() -> 
     tail = slice(len(t) // 2, None)
     residual = out[tail] - slow[tail]
     assert np.ptp(residual - residual.mean()) / 2 < math.radians(0.2)
+
+
+def test_cascaded_low_pass_adds_its_corner_and_keeps_the_notch() -> None:
+    w0, wf, dt = 2 * math.pi / 7.5, 2.0, 0.1
+    f = design_notch(w0, 20.0, dt, lowpass_rad_s=wf)
+    _, h = freqz(f.b, f.a, worN=[w0 * dt, wf * dt, 0.0, 3.0])
+    notch_at_wf = abs(complex(-(wf**2) + w0**2, 2 * f.zeta * w0 * wf) / complex(w0, wf) ** 2)
+    gain_db = 20 * np.log10(np.abs(h))
+    lp_at_w0 = -10 * math.log10(1 + (w0 / wf) ** 2)  # dB, continuous low-pass at ω₀
+    assert gain_db[0] == pytest.approx(-20.0 + lp_at_w0, abs=0.05)
+    # low-pass exact at ω_f (prewarped there); the notch, prewarped at ω₀, is off by 0.017 dB
+    assert gain_db[1] == pytest.approx(20 * math.log10(notch_at_wf) - 3.0103, abs=0.03)
+    assert gain_db[2] == pytest.approx(0.0, abs=1e-9)
+    assert gain_db[3] < -30.0  # 30 rad/s (sensor noise) is cut

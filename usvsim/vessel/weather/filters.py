@@ -27,7 +27,7 @@ ATTENUATION_RANGE_DB = (1.0, 60.0)  # dB, accepted notch depths
 
 @dataclass(frozen=True)
 class NotchFilter:
-    """Discrete notch y_k = Σ b_i u_{k-i} - Σ a_i y_{k-i} (a₀ = 1); coefficients (3,) each."""
+    """Discrete filter y_k = Σ b_i u_{k-i} - Σ a_i y_{k-i} (a₀ = 1); (3,) or (4,) entries."""
 
     b: NDArray[np.float64]
     a: NDArray[np.float64]
@@ -36,10 +36,17 @@ class NotchFilter:
     dt_s: float  # s, sample time
 
 
-def design_notch(omega0: float, attenuation_db: float = 20.0, dt_s: float = 0.1) -> NotchFilter:
+def design_notch(
+    omega0: float,
+    attenuation_db: float = 20.0,
+    dt_s: float = 0.1,
+    lowpass_rad_s: float | None = None,
+) -> NotchFilter:
     """Design the heading notch for wave frequency ``omega0`` (rad/s) and depth ``attenuation_db``.
 
-    ``omega0`` must lie below the Nyquist frequency π/dt_s.
+    ``omega0`` must lie below the Nyquist frequency π/dt_s. With ``lowpass_rad_s`` = ω_f the notch
+    is cascaded with the low-pass ω_f / (s + ω_f) (Fossen 2021 §13), Tustin prewarped at ω_f; the
+    coefficients then have 4 entries.
 
     >>> f = design_notch(0.8, 20.0, 0.1)
     >>> round(f.zeta, 3)
@@ -66,4 +73,13 @@ def design_notch(omega0: float, attenuation_db: float = 20.0, dt_s: float = 0.1)
         )
 
     num, den = quadratic(zeta), quadratic(1.0)
+    if lowpass_rad_s is not None:
+        if not 0 < lowpass_rad_s < math.pi / dt_s:
+            raise UserError(
+                f"low-pass corner must lie in (0, π/dt) = (0, {math.pi / dt_s:.3g}) rad/s, "
+                f"got {lowpass_rad_s}"
+            )
+        cf = lowpass_rad_s / math.tan(0.5 * lowpass_rad_s * dt_s)
+        num = np.polymul(num, [lowpass_rad_s, lowpass_rad_s])  # ω_f (z + 1)
+        den = np.polymul(den, [cf + lowpass_rad_s, lowpass_rad_s - cf])  # c(z - 1) + ω_f(z + 1)
     return NotchFilter(num / den[0], den / den[0], omega0, zeta, dt_s)
