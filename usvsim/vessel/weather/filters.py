@@ -80,6 +80,7 @@ def design_notch(
                 f"got {lowpass_rad_s}"
             )
         cf = lowpass_rad_s / math.tan(0.5 * lowpass_rad_s * dt_s)
-        num = np.polymul(num, [lowpass_rad_s, lowpass_rad_s])  # ω_f (z + 1)
-        den = np.polymul(den, [cf + lowpass_rad_s, lowpass_rad_s - cf])  # c(z - 1) + ω_f(z + 1)
+        num = np.asarray(np.polymul(num, [lowpass_rad_s, lowpass_rad_s]), float)  # ω_f (z + 1)
+        # c (z - 1) + ω_f (z + 1)
+        den = np.asarray(np.polymul(den, [cf + lowpass_rad_s, lowpass_rad_s - cf]), float)
     return NotchFilter(num / den[0], den / den[0], omega0, zeta, dt_s)
