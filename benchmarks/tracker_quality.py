@@ -56,6 +56,7 @@ from baselines.vo_radar import VORadarHelmsman
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_write_text, json_safe
 from usvsim.evaluation.stress import select_sets, stress_episodes
+from usvsim.nav.tracker import greedy_pairs
 from usvsim.nav.tracker_detections import detect
 from usvsim.task.observations import relative_polar
 from usvsim.task.openwater_batch import OpenWaterBatch
@@ -95,26 +96,6 @@ def in_view(rho: FloatArray, phi: FloatArray, radius: FloatArray, radar: RadarCo
     )
 
 
-def greedy_match(dist: FloatArray, ok: NDArray[np.bool_]) -> NDArray[np.intp]:
-    """Disc → track pairs (N, J) (-1: none) by increasing distance, where ``ok`` (N, J, M)."""
-    n, j, m = dist.shape
-    cost = np.where(ok, dist, np.inf).reshape(n, j * m)
-    pair = np.full((n, j), -1, dtype=np.intp)
-    rows = np.arange(n)
-    for _ in range(min(j, m)):
-        best = np.argmin(cost, axis=1)
-        found = np.isfinite(cost[rows, best])
-        if not found.any():
-            break
-        b, flat = rows[found], best[found]
-        d, t = flat // m, flat % m
-        pair[b, d] = t
-        c3 = cost.reshape(n, j, m)
-        c3[b, d, :] = np.inf
-        c3[b, :, t] = np.inf
-    return pair
-
-
 def run_set(stress_set: Any, n: int, radar: RadarConfig) -> SetQuality:
     """The figures of ``n`` episodes of one set (module docstring)."""
     t0 = time.perf_counter()
@@ -150,7 +131,7 @@ def run_set(stress_set: Any, n: int, radar: RadarConfig) -> SetQuality:
         streak = np.where(view, streak + 1, 0)
         dist = np.linalg.norm(centres[:, :, None] - tg.position_ne[:, None], axis=-1)  # (N,J,M)
         near = ok[..., None] & tg.valid[:, None] & (dist <= radii[..., None] + MATCH_MARGIN_M)
-        pair = greedy_match(dist, near & active[:, None, None])
+        pair = greedy_pairs(np.where(near & active[:, None, None], dist, np.inf))
         matched = pair >= 0
         b, d = np.nonzero(matched & view)  # errors of wholly visible discs
         t = pair[b, d]

@@ -57,6 +57,7 @@ __all__ = [
     "TrackTargets",
     "TrackerConfig",
     "cv_model",
+    "greedy_pairs",
     "inv2",
     "kf_predict",
     "kf_update",
@@ -127,6 +128,29 @@ def kf_update(
     i_kh = np.eye(4) - k @ _H
     p_new = i_kh @ p @ np.swapaxes(i_kh, -1, -2) + k @ r @ np.swapaxes(k, -1, -2)
     return x_new, p_new
+
+
+def greedy_pairs(cost: FloatArray) -> NDArray[np.intp]:
+    """Greedy assignment of each boat's rows to columns by increasing ``cost`` (N, A, B), inf
+    where a pair may not be made: (N, A) the column of each row, -1 for none. The cheapest
+    remaining pair of every boat at once, its row and column struck out, until none is left
+    (at most min(A, B) rounds over all boats)."""
+    n, a, b = cost.shape
+    work = cost.reshape(n, a * b).copy()
+    pair = np.full((n, a), -1, dtype=np.intp)
+    rows = np.arange(n)
+    for _ in range(min(a, b)):
+        best = np.argmin(work, axis=1)
+        found = np.isfinite(work[rows, best])
+        if not found.any():
+            break
+        boat, flat = rows[found], best[found]
+        i, j = flat // b, flat % b
+        pair[boat, i] = j
+        grid = work.reshape(n, a, b)
+        grid[boat, i, :] = np.inf
+        grid[boat, :, j] = np.inf
+    return pair
 
 
 def inv2(s: FloatArray) -> FloatArray:
@@ -206,8 +230,6 @@ class RadarTracker:
     def _associate(self, det: Detections) -> NDArray[np.intp]:
         """Greedy global-nearest-neighbour pairs (module docstring): (N, M) detection or -1."""
         cfg = self.config
-        n, m = self.status.shape
-        d = det.valid.shape[1]
         s = self.p[:, :, None, :2, :2] + det.covariance[:, None]  # (N, M, D, 2, 2)
         y = det.position_ne[:, None] - self.x[:, :, None, :2]
         det_s = s[..., 0, 0] * s[..., 1, 1] - s[..., 0, 1] * s[..., 1, 0]
@@ -220,21 +242,7 @@ class RadarTracker:
         cost = d2 + np.log(det_s)
         cost = cost + np.where(self.status == _TENTATIVE, cfg.tentative_cost, 0.0)[..., None]
         ok = (self.status != _EMPTY)[..., None] & det.valid[:, None, :] & (d2 <= cfg.gate)
-        cost = np.where(ok, cost, np.inf).reshape(n, m * d)
-        pair = np.full((n, m), -1, dtype=np.intp)
-        rows = np.arange(n)
-        for _ in range(min(m, d)):
-            best = np.argmin(cost, axis=1)
-            found = np.isfinite(cost[rows, best])
-            if not found.any():
-                break
-            b, flat = rows[found], best[found]
-            t, j = flat // d, flat % d
-            pair[b, t] = j
-            c3 = cost.reshape(n, m, d)
-            c3[b, t, :] = np.inf
-            c3[b, :, j] = np.inf
-        return pair
+        return greedy_pairs(np.where(ok, cost, np.inf))
 
     def _static_second_hit(
         self, det: Detections, pair: NDArray[np.intp], hit: NDArray[np.bool_]

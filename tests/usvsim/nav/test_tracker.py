@@ -10,7 +10,14 @@ from filterpy.kalman import KalmanFilter
 
 from usvsim.common.errors import UserError
 from usvsim.evaluation.stress import STRESS_SETS, stress_episodes
-from usvsim.nav.tracker import RadarTracker, TrackerConfig, cv_model, kf_predict, kf_update
+from usvsim.nav.tracker import (
+    RadarTracker,
+    TrackerConfig,
+    cv_model,
+    greedy_pairs,
+    kf_predict,
+    kf_update,
+)
 from usvsim.nav.tracker_detections import detect
 from usvsim.task.observations import relative_polar
 from usvsim.task.openwater_batch import OpenWaterBatch
@@ -147,3 +154,14 @@ def test_confirmation_rules_first_frame_static_repeat_and_probation() -> None:
     assert tracker.update(pole, own, psi).valid.sum() == 0  # 1 of 3 frames: dropped; pole new
     assert tracker.update(pole, own, psi).valid.sum() == 1  # the pole's 2nd frame, same spot
     assert tracker.update(blip, own, psi).valid.sum() == 1  # a later blip is only tentative
+
+
+def test_greedy_pairs_take_the_cheapest_pair_first_per_boat() -> None:
+    inf = np.inf
+    cost = np.array(
+        [
+            [[1.0, 2.0, inf], [0.5, 3.0, inf]],  # row 1 takes column 0 (0.5), row 0 then 1
+            [[inf, inf, inf], [4.0, inf, 1.0]],  # row 0 has no allowed pair
+        ]
+    )
+    assert greedy_pairs(cost).tolist() == [[1, 0], [-1, 2]]
