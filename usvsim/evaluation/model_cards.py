@@ -290,7 +290,12 @@ def with_stress_figures(
     for name, card in cards.items():
         summary = stress_summary(stress, name)
         if summary:
-            out[name] = replace(card, **{where: {**getattr(card, where), "stress": summary}})
+            figures = {**getattr(card, where), "stress": summary}
+            out[name] = (
+                replace(card, validation=figures)
+                if where == "validation"
+                else replace(card, test=figures)
+            )
     return out
 
 
