@@ -29,6 +29,9 @@ shipped-model rule see validation only. Re-running the same sweep continues it
 (:func:`ray.tune.Tuner.restore`, crashed trials retried from their ``latest.pt``). Ctrl-C and
 SIGTERM stop it through Tune's own graceful stop. A local sweep (no ``address``) always starts a
 Ray of its own (``ray.init(address="local")``), whatever other Ray runs on the machine.
+
+Why this module is long: the run folder's layout, the trial function Ray calls, resuming and
+the shipped-seed rule are one contract with ``usvsim sweep``; split, each part needs the others.
 """
 
 from __future__ import annotations
@@ -103,7 +106,7 @@ def validation_curve(log_csv: Path) -> list[dict[str, float]]:
     ]
 
 
-def _train(config: Mapping[str, Any], out: Path) -> None:
+def train_trial(config: Mapping[str, Any], out: Path) -> None:
     """Train (or resume) one trial's run into ``out``: the library behind ``usvsim train``."""
     import torch
 
@@ -177,7 +180,7 @@ def run_trial(config: dict[str, Any]) -> dict[str, Any]:
     out = Path(config["root"]) / "runs" / config["dir"]
     out.mkdir(parents=True, exist_ok=True)
     if not (out / "summary.json").is_file():
-        _train(config, out)
+        train_trial(config, out)
     _evaluate_heldout(out, int(config["heldout"]))
     return trial_metrics(out)
 

@@ -22,6 +22,9 @@ Per arm (a setup with one set of hyperparameter overrides; its trials differ onl
 
 Held-out results come from each run's ``heldout.json``; every other number from its
 ``log.csv`` and ``summary.json``. A crashed trial is listed, not left out silently.
+
+Why this module is long: each statistic above is a short function, and the report that puts
+them in one table and its figures reads them together; the report is one idea.
 """
 
 from __future__ import annotations

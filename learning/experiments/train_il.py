@@ -11,6 +11,9 @@ write ``log.csv`` (:data:`IL_CSV_FIELDS`), ``curve.png`` and ``summary.json`` as
 it with the options of an RL run: ``--stop-after`` (default 3 consecutive 15/15 validations,
 as RL; 0 runs the whole budget), ``--time-budget-s``, ``--validate-every``, ``--n-envs``,
 ``--resume``, ``--quiet``.
+
+Why this module is long: loading, validating and checkpointing a GAIL run mirror
+:mod:`learning.experiments.train_rl` step by step, and are kept in one place as that module is.
 """
 
 from __future__ import annotations
@@ -61,10 +64,7 @@ from learning.imitation.preprocess import (
     expert_data,
     harsh_radar_runs,
 )
-from usvsim.common.fileio import (
-    atomic_open,
-    remove_stale_temporaries,
-)
+from usvsim.common.fileio import atomic_open, remove_stale_temporaries
 from usvsim.common.splits import selection_mode
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness

@@ -124,7 +124,7 @@ def _resolve(target: str) -> Any:
     return getattr(importlib.import_module(module), name)
 
 
-def _command(name: str) -> tuple[type, Callable[[Any], int]]:
+def command_spec(name: str) -> tuple[type, Callable[[Any], int]]:
     """The options dataclass and the run function of command ``name``."""
     command = COMMANDS[name]
     return _resolve(command.options), _resolve(command.runner)
@@ -137,9 +137,9 @@ def package_version() -> str:
     try:
         return version("usvsim")
     except PackageNotFoundError:
-        from usvsim import __version__
+        import usvsim
 
-        return __version__
+        return str(usvsim.__version__)
 
 
 def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
@@ -152,7 +152,7 @@ def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (_, _, summary) in COMMANDS.items():
         if name == chosen:
-            cls, _ = _command(name)
+            cls, _ = command_spec(name)
             doc = (cls.__doc__ or summary).strip().splitlines()[0]
             epilog = getattr(cls, "cli_epilog", None)
             command = sub.add_parser(
@@ -189,7 +189,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     prog = f"usvsim {ns.command}"
     values = {k: v for k, v in vars(ns).items() if k != "command"}
     try:
-        cls, run = _command(ns.command)
+        cls, run = command_spec(ns.command)
         options = cls(**values)
         check_options(options)
         with interrupt_signals():  # SIGTERM as Ctrl-C; neither lost in a C extension

@@ -94,12 +94,12 @@ class BenchArgs:
     plots: bool = True  # write the path plots (--no-plots: skip them)
     likeness: bool = True  # the expert-likeness columns (validation, pole scenario)
     # stress: usvsim.evaluation.stress (named sets); colreg: usvsim.evaluation.colreg_suite
-    suite: Literal["study", "stress", "colreg"] = "study"
+    suite: Literal["study", "stress", "colreg"] = "study"  # study | stress sets | colreg sets
     sets: str = ""  # --suite stress | colreg: comma-separated sets; empty: all
     stress_episodes: int = field(default=100, metadata=bounds(ge=1, le=10_000))  # per stress set
     split: Literal["validation", "test"] = "test"  # --suite stress: test reports; validation picks
     # --suite colreg: perturbed episodes per set (22 Imazu problems + trafficgen-1ts)
-    colreg_episodes: int = field(default=5, metadata=bounds(ge=1, le=1000))
+    colreg_episodes: int = field(default=5, metadata=bounds(ge=1, le=1000))  # per colreg set
     reactive_targets: bool = False  # --suite colreg: targets steered by vo (default: hold course)
     trafficgen: str = ""  # --suite colreg: trafficgen situation file or folder (trafficgen-user)
     sweep: str = ""  # a usvsim sweep folder: its across-seed held-out IQM beside shipped models

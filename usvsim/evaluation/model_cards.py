@@ -41,6 +41,9 @@ problem is one :class:`usvsim.common.errors.UserError` line naming the model and
 
 The recommended marks follow :data:`RECOMMENDATION_RULE` (:func:`recommend`), written down before
 the validation figures it reads were computed, and read validation figures only.
+
+Why this module is long: the card format (the table above), its checks and its Markdown
+rendering are one contract with ``models.json``; the checks name each field the format defines.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ from test_train_il_cli import reference, tiny  # noqa: F401
 from learning.cli.train import TrainArgs, run
 from learning.experiments.run_log import scalar_tag
 from learning.experiments.setups import get_setup
-from learning.experiments.sweep import _train
+from learning.experiments.sweep import train_trial
 from learning.experiments.train_il import IL_CSV_FIELDS
 from learning.experiments.train_rl import csv_fields
 from usvsim.cli import main
@@ -106,7 +106,7 @@ def test_sweep_trial_writes_its_scalars_into_its_own_folder(tmp_path: Path) -> N
         "options": {**options, "time_budget_s": 0.0},
         "tensorboard": str(tmp_path / "tb" / "trial-a"),
     }
-    _train(config, tmp_path / "runs" / "trial-a")
+    train_trial(config, tmp_path / "runs" / "trial-a")
     acc = _scalars(tmp_path / "tb" / "trial-a")
     assert [s.step for s in acc.Scalars("train/mean_return")] == [STEPS_PER_ITERATION]
     assert [s.step for s in acc.Scalars("validation/val_successes")] == [STEPS_PER_ITERATION]

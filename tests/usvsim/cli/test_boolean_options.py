@@ -16,7 +16,7 @@ import typing
 
 import pytest
 
-from usvsim.cli.main import COMMANDS, _command, build_parser
+from usvsim.cli.main import COMMANDS, build_parser, command_spec
 
 # a value for each positional argument, so a command line of the command parses
 POSITIONALS = {"setup": "rl-gaussian-positional", "checkpoint": "rl-gaussian-positional"}
@@ -60,8 +60,8 @@ def test_the_cases_cover_every_bool_field_of_every_command() -> None:
     fields = {
         (command, f.name)
         for command in COMMANDS
-        for f in dataclasses.fields(_command(command)[0])
-        if typing.get_type_hints(_command(command)[0])[f.name] is bool
+        for f in dataclasses.fields(command_spec(command)[0])
+        if typing.get_type_hints(command_spec(command)[0])[f.name] is bool
     }
     assert set(CASES) == fields
     # the 16 of issue 36 (bench 3, perf 3, train 2, sweep 2, evaluate 2, sitl 2, bridge 2)
@@ -77,7 +77,7 @@ def test_switch_has_its_no_form_and_its_stated_default(command: str, dest: str) 
     )
     name = "--" + dest.replace("_", "-")
     assert action.option_strings == [name, "--no-" + name[2:]]
-    cls = _command(command)[0]
+    cls = command_spec(command)[0]
     default = next(f.default for f in dataclasses.fields(cls) if f.name == dest)
     stated = re.search(r"\(default: (on|off)\)$", action.help or "")
     assert stated is not None, f"{name}: help states no default: {action.help!r}"

@@ -15,7 +15,7 @@ import pytest
 from learning.experiments.il_setups import IL_SETUPS
 from learning.experiments.setups import SETUPS
 from usvsim.cli import main
-from usvsim.cli.main import COMMANDS, _command
+from usvsim.cli.main import COMMANDS, command_spec
 from usvsim.helm.registry import MODELS_DIR
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -34,7 +34,7 @@ def test_version_prints_the_package_version(capsys: pytest.CaptureFixture[str]) 
 @pytest.mark.parametrize("command", sorted(COMMANDS))
 def test_json_is_a_stdout_switch_in_every_command(command: str) -> None:
     """Where a command has ``--json`` it is a switch (JSON on stdout), never a path."""
-    cls = _command(command)[0]
+    cls = command_spec(command)[0]
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         if f.name == "json":

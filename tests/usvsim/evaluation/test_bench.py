@@ -79,6 +79,10 @@ def test_bench_args_follow_the_cli_conventions() -> None:
         "suite",
         "sets",
         "stress_episodes",
+        "split",
+        "colreg_episodes",
+        "reactive_targets",
+        "trafficgen",
         "sweep",
     }
     assert all(comments.values())
