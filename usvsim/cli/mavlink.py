@@ -26,7 +26,43 @@ from usvsim.task.batch import parse_action_kind
 from usvsim.task.observations import parse_observation_kind
 from usvsim.vessel.vessels import get_vessel
 
-__all__ = ["run_bridge", "run_sitl", "run_sitl_physics"]
+__all__ = ["peer_url", "run_bridge", "run_sitl", "run_sitl_physics"]
+
+
+# pymavlink's schemes: a listener (tcpin, udpin, and udp, which listens) is reached by
+# connecting to it; an endpoint that connects (tcp) or sends (udpout) by listening where it aims
+_PEER_SCHEME = {
+    "tcpin": "tcp",
+    "udpin": "udpout",
+    "udp": "udpout",
+    "tcp": "tcpin",
+    "udpout": "udpin",
+}
+_ANY_HOST = ("0.0.0.0", "")  # listening on every interface: the peer on this machine uses loopback
+
+
+def peer_url(url: str, bound_port: int = 0) -> str | None:
+    """The MAVLink URL of the other end of an endpoint opened with ``url``; None for serial.
+
+    ``tcpin:H:P`` → ``tcp:H:P``, ``udpin:H:P`` (or ``udp:``) → ``udpout:H:P``: a listener is
+    reached at its address (127.0.0.1 for ``0.0.0.0``; ``bound_port``, the port it was given,
+    where it asked for port 0). ``tcp:H:P`` → ``tcpin:H:P`` and ``udpout:H:P`` → ``udpin:H:P``:
+    an endpoint that connects or sends is reached by listening at the address it aims at.
+
+    >>> peer_url("udpout:127.0.0.1:14550")
+    'udpin:127.0.0.1:14550'
+    >>> peer_url("tcpin:0.0.0.0:0", bound_port=40123)
+    'tcp:127.0.0.1:40123'
+    """
+    scheme, _, rest = check_url(url).partition(":")
+    if scheme not in _PEER_SCHEME:
+        return None  # a serial device: the peer is whatever sits on the line's other end
+    host, _, port = rest.rpartition(":")
+    listens = _PEER_SCHEME[scheme] in ("tcp", "udpout")
+    if listens:
+        host = "127.0.0.1" if host in _ANY_HOST else host
+        port = str(bound_port) if port == "0" and bound_port else port
+    return f"{_PEER_SCHEME[scheme]}:{host}:{port}"
 
 
 def run_sitl(args: SitlArgs) -> int:
@@ -36,11 +72,12 @@ def run_sitl(args: SitlArgs) -> int:
         sitl = RoverSitl(args)
     except ValueError as err:  # unknown vessel or autopilot
         raise UserError(str(err)) from None
-    where = args.listen
+    bound = sitl.link.local_port if args.listen.endswith(":0") else 0  # the OS chose it
+    peer = peer_url(args.listen, bound)
+    how = f"usvsim bridge --connect {peer}" if peer else "the bridge on the line's other end"
     print(
-        f"usvsim sitl: Rover boat (sysid {args.system_id}) on {where}, speedup "
-        f"{args.speedup:g}; connect with: usvsim bridge --connect "
-        f"{where.replace('tcpin:', 'tcp:').replace('udpin:', 'udpout:')}",
+        f"usvsim sitl: Rover boat (sysid {args.system_id}) on {args.listen}, speedup "
+        f"{args.speedup:g}; connect with: {how}",
         flush=True,
     )
     try:
@@ -119,7 +156,7 @@ def run_bridge(args: BridgeArgs) -> int:
     """``usvsim bridge``: exit 0 when the goal is reached, 1 on a failsafe, 3 when the final
     mode command (the ``--failsafe`` mode) was never acknowledged, 130 on Ctrl-C (the failsafe
     mode commanded first); 2 on a user error, a vehicle that cannot be reached, refuses GUIDED
-    or does not arm in time (module docstring)."""
+    (or does not acknowledge it) or does not arm in time (module docstring)."""
     if not args.mission:
         raise UserError("--mission FILE is required (JSON or YAML: poles and goal as lat/lon)")
     check_url(args.connect)

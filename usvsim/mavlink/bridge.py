@@ -85,6 +85,17 @@ from usvsim.task.radar import RadarConfig
 
 __all__ = ["Bridge", "BridgeArgs", "BridgeResult"]
 
+# MAV_RESULT of MAVLink common.xml, for messages (the module's constants name the ones it sends)
+_MAV_RESULTS = ("ACCEPTED", "TEMPORARILY_REJECTED", "DENIED", "UNSUPPORTED", "FAILED",
+                "IN_PROGRESS", "CANCELLED")  # fmt: skip
+
+
+def _result_name(result: int) -> str:
+    """``DENIED (2)`` for a COMMAND_ACK result; the bare number for one MAVLink does not list."""
+    name = _MAV_RESULTS[result] if 0 <= result < len(_MAV_RESULTS) else "unknown"
+    return f"{name} ({result})"
+
+
 _CSV_FIELDS = (
     "wall_s",
     "vehicle_s",
@@ -274,8 +285,9 @@ class Bridge:
         ------
         VehicleError
             (a :class:`RuntimeError` and a one-line user error) If the vehicle is not a
-            boat/rover, refuses GUIDED, or does not arm within ``arm_timeout_s`` (its mode is
-            then set back to what it was).
+            boat/rover, refuses GUIDED or does not acknowledge it within
+            ``command_timeout_s``, or does not arm within ``arm_timeout_s`` (its mode is then
+            set back to what it was).
         HeartbeatTimeoutError
             If no heartbeat arrives within ``heartbeat_timeout_s``.
         """
@@ -330,8 +342,16 @@ class Bridge:
         self.result.wp_speed_mps = self.wp_speed_mps
         self.link.set_mode(self.target, RoverMode.GUIDED)
         ack = wait_ack(self.link, self.watch, MavCommand.DO_SET_MODE, timeout)
-        if ack is None or ack.result != MAV_RESULT_ACCEPTED:
-            raise VehicleError(f"vehicle {self.target} refused GUIDED mode")
+        if ack is None:  # silence is not a refusal: a lost ACK, a busy or slow vehicle
+            raise VehicleError(
+                f"vehicle {self.target} did not acknowledge GUIDED mode within {timeout:g} s "
+                "(no COMMAND_ACK; --command-timeout-s sets the wait)"
+            )
+        if ack.result != MAV_RESULT_ACCEPTED:
+            raise VehicleError(
+                f"vehicle {self.target} refused GUIDED mode (COMMAND_ACK result "
+                f"{_result_name(ack.result)})"
+            )
         if self.args.arm:
             try:
                 self.result.arm_attempts = arm_when_ready(

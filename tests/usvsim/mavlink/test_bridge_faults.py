@@ -20,7 +20,7 @@ from test_bridge import AvoidingHelmsman, bridge_args, episode_mission, sitl_run
 
 from usvsim.mavlink.bridge import Bridge
 from usvsim.mavlink.connection import VehicleError
-from usvsim.mavlink.messages import RoverMode
+from usvsim.mavlink.messages import MAV_RESULT_DENIED, MavCommand, RoverMode
 from usvsim.mavlink.sitl import NOT_READY_TEXT
 
 # an endpoint thread that dies of an exception is a failure, not a warning
@@ -152,6 +152,38 @@ def test_arming_timeout_is_one_line_and_restores_the_mode(tmp_path: Path) -> Non
     message = str(err.value)
     assert "\n" not in message and "did not arm within 0.6 s" in message
     assert NOT_READY_TEXT in message and "--arm-timeout-s" in message
+
+
+@pytest.mark.parametrize(
+    ("answer", "words"),
+    [
+        (None, ["vehicle 1 did not acknowledge GUIDED mode within 0.5 s", "--command-timeout-s"]),
+        (MAV_RESULT_DENIED, ["vehicle 1 refused GUIDED mode", "DENIED (2)"]),
+    ],
+)
+def test_guided_refused_and_guided_unacknowledged_are_told_apart(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, answer: int | None, words: list[str]
+) -> None:
+    """A DO_SET_MODE the vehicle answers with a refusal, and one it never answers (a lost
+    COMMAND_ACK): each is one line saying which happened."""
+    with sitl_running() as sitl:
+        send_ack = sitl.link.send_command_ack
+
+        def vehicle_ack(command: int, result: int, *to: int) -> None:
+            if command != MavCommand.DO_SET_MODE:
+                send_ack(command, result, *to)
+            elif answer is not None:
+                send_ack(command, answer, *to)  # else: the ACK is lost
+
+        monkeypatch.setattr(sitl.link, "send_command_ack", vehicle_ack)
+        mission, _ = episode_mission()
+        args = bridge_args(sitl, tmp_path, command_timeout_s=0.5)
+        with pytest.raises(VehicleError) as err:
+            Bridge(args, mission, AvoidingHelmsman()).run(max_wall_s=10.0)
+        assert not sitl.armed
+    message = str(err.value)
+    assert "\n" not in message and all(w in message for w in words), message
+    assert ("refused" in message) == (answer is not None)
 
 
 @pytest.mark.parametrize(("failsafe", "held"), [("loiter", True), ("hold", False)])
