@@ -64,7 +64,7 @@ COMMANDS: dict[str, Command] = {
     "bench": Command(
         "usvsim.evaluation.bench:BenchArgs",
         "usvsim.cli.bench:run_bench_command",
-        "compare every helmsman on validation and held-out",
+        "compare helmsmen (baselines + recommended models) on validation and held-out",
     ),
     "demo": Command(
         "usvsim.cli.plant:DemoArgs",
@@ -153,7 +153,7 @@ def build_parser(chosen: str | None = None) -> argparse.ArgumentParser:
     for name, (_, _, summary) in COMMANDS.items():
         if name == chosen:
             cls, _ = command_spec(name)
-            doc = (cls.__doc__ or summary).strip().splitlines()[0]
+            doc = " ".join((cls.__doc__ or summary).strip().split("\n\n")[0].split())
             epilog = getattr(cls, "cli_epilog", None)
             command = sub.add_parser(
                 name,

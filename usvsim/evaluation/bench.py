@@ -1,6 +1,7 @@
-"""``usvsim bench``: every available helmsman on the validation and held-out sets, one table.
+"""``usvsim bench``: helmsmen on the validation and held-out sets, one table.
 
-With no arguments: each helmsman of :func:`usvsim.helm.registry.available_helmsmen` runs the 15
+With no arguments: the classical baselines and the recommended models (``--helmsmen`` below;
+``all``: each helmsman of :func:`usvsim.helm.registry.available_helmsmen`) run the 15
 validation episodes and the 200 held-out episodes of the pole task (each set is ONE batch,
 :func:`usvsim.evaluation.episodes.evaluate`), and the table gives per helmsman and set
 
@@ -84,7 +85,8 @@ SET_NAMES = ("validation", "held-out")
 
 @dataclass(frozen=True)
 class BenchArgs:
-    """Compare every available helmsman on the validation and held-out episodes (the table)."""
+    """Compare helmsmen on the validation and held-out episodes: the classical baselines and
+    the recommended models (--helmsmen all: every shipped one), or those named."""
 
     scenario: ScenarioKind = "pole"  # pole (the study's task) | waypoints (courses with poles)
     helmsmen: str = ""  # names or checkpoint paths; empty: baselines + recommended models; all
