@@ -77,3 +77,14 @@ def test_finite_mean_and_median_skip_nan_and_return_nan_when_empty() -> None:
     assert finite_mean([1.0, math.nan, 3.0]) == 2.0
     assert finite_median([5.0, math.nan, 1.0, 3.0, 10.0]) == 4.0
     assert math.isnan(finite_mean([math.nan])) and math.isnan(finite_median([]))
+
+
+def test_difference_interval_matches_newcombe_and_is_antisymmetric() -> None:
+    from usvsim.evaluation.stats import difference_interval
+
+    lo, hi = difference_interval(56, 70, 48, 80)  # Newcombe 1998 (Stat. Med. 17), example (a)
+    assert (round(lo, 4), round(hi, 4)) == (0.0524, 0.3339)
+    back = difference_interval(48, 80, 56, 70)
+    assert back == pytest.approx((-hi, -lo))
+    assert difference_interval(52, 100, 64, 100)[1] > 0.0  # 52 vs 64 of 100: not different
+    assert difference_interval(40, 100, 64, 100)[1] < 0.0  # 40 vs 64 of 100: different
