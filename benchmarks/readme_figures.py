@@ -1,11 +1,11 @@
 """The README's picture: the stress suite's heat map beside one open-water episode.
 
-The heat map is read from the JSON that ``usvsim bench --suite stress --json`` prints (committed
-as ``docs/data/stress.json``); the episode is run here, deterministically (a fixed stress set,
-episode index and helmsman). Run from the repository root::
+The heat map is read from the JSON that ``usvsim bench --suite stress --helmsmen all --json``
+prints (committed as ``docs/data/stress.json``); the episode is run here, deterministically (a
+fixed stress set, episode index and helmsman). Run from the repository root::
 
-    usvsim bench --suite stress --json > docs/data/stress.json   # the suite (minutes)
-    python benchmarks/readme_figures.py                         # docs/assets/readme-figure.png
+    usvsim bench --suite stress --helmsmen all --json > docs/data/stress.json   # the suite
+    python benchmarks/readme_figures.py                  # docs/assets/readme-figure.png
 
 The documentation build uses :func:`open_water_episode_figure` for the environment pages too.
 """

@@ -1,6 +1,7 @@
-"""Result tables generated from the JSON that ``usvsim bench --json`` and
-``usvsim bench --suite stress --json`` write (committed under ``docs/data/``), so the pages
-cannot drift from the data."""
+"""Result tables generated from the JSON that ``usvsim bench --helmsmen all --json`` and
+``usvsim bench --suite stress --helmsmen all --json`` write (committed under ``docs/data/``), so
+the pages cannot drift from the data; what each file holds (helmsmen, sets, split, run time, the
+shipped helmsmen it lacks) is read from the file too (:func:`provenance`)."""
 
 from __future__ import annotations
 
@@ -9,13 +10,45 @@ from pathlib import Path
 from typing import Any
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-STRESS_COMMAND = "usvsim bench --suite stress --json > docs/data/stress.json"
-BENCH_COMMAND = "usvsim bench --json --no-plots > docs/data/bench.json"
+STRESS_COMMAND = "usvsim bench --suite stress --helmsmen all --json > docs/data/stress.json"
+BENCH_COMMAND = "usvsim bench --helmsmen all --json --no-plots > docs/data/bench.json"
 
 
 def load(name: str) -> dict[str, Any]:
     """``docs/data/NAME.json``."""
     return json.loads((DATA / f"{name}.json").read_text())
+
+
+def _names(names: list[str]) -> str:
+    return ", ".join(f"`{n}`" for n in names)
+
+
+def provenance(name: str, data: dict[str, Any]) -> str:
+    """One line on what ``docs/data/NAME.json`` holds, read from the file: its helmsmen, sets
+    and split, the run's wall-clock, and the helmsmen ``--helmsmen all`` runs today that the file
+    lacks (added after it was written)."""
+    from usvsim.helm.registry import available_helmsmen
+
+    helmsmen = list(dict.fromkeys(r["helmsman"] for r in data["rows"]))
+    missing = [h for h in available_helmsmen() if h not in helmsmen]
+    if name == "stress":
+        split = data.get("split")
+        split = f"{split} split" if split else "test split (written before the split field)"
+        what = (
+            f"{len(helmsmen)} helmsmen × {len(data['sets'])} sets, "
+            f"{data['episodes_per_set']} episodes per set, {split}"
+        )
+    else:
+        sets = ", ".join(f"{k} {v}" for k, v in data["episode_sets"].items())
+        what = f"{len(helmsmen)} helmsmen on the {data['scenario']} task ({sets} episodes)"
+    line = f"`docs/data/{name}.json`: {what}; the run took {data['wall_s'] / 60:.0f} min."
+    if data.get("interrupted"):
+        line += " The run was interrupted: the file holds what it finished."
+    if data.get("skipped"):
+        line += f" Skipped (unreadable): {_names(list(data['skipped']))}."
+    if missing:
+        line += f" Not in it: {_names(missing)} (the command above adds them)."
+    return line
 
 
 def _pct(row: dict[str, Any]) -> str:
@@ -112,17 +145,23 @@ nothing here is typed by hand. To reproduce them (from the repository root):
 python benchmarks/readme_figures.py   # the README's figure from docs/data/stress.json
 ```
 
+`--helmsmen all` runs every shipped helmsman; without it `usvsim bench` runs the baselines and the
+recommended models only ([Helmsmen](guide/helmsmen.md)). What the committed files hold:
+
+- {provenance("bench", bench)}
+- {provenance("stress", stress)}
+
 ## The study's task
 
-`usvsim bench`: every helmsman on the study's validation episodes and on held-out episodes
-(success with a 95 % Wilson interval; distances and times on the last set, times and paths over
-successful episodes). Columns: [Benchmarks](guide/benchmarks.md).
+`{BENCH_COMMAND.split(" >")[0]}`: the helmsmen on the study's validation episodes and on held-out
+episodes (success with a 95 % Wilson interval; distances and times on the last set, times and
+paths over successful episodes). Columns: [Benchmarks](guide/benchmarks.md).
 
 {bench_table(bench)}
 
 ## The stress suite
 
-`usvsim bench --suite stress`: {stress["episodes_per_set"]} episodes per set; what each set
+`{STRESS_COMMAND.split(" >")[0]}`: {stress["episodes_per_set"]} episodes per set; what each set
 perturbs is on the [Benchmarks](guide/benchmarks.md) page.
 
 ### Summary per helmsman

@@ -76,7 +76,7 @@ def test_turning_circle_matches_yaw_moment_balance(vessel):
     Expected range (documented): the Loe (2008) hull has no sway-yaw coupling (Y_r = N_v = 0,
     x_g = 0), so the steady yaw rate solves the moment balance -N_r r - N_rrr r³ = τ_N alone and
     the radius is U / r. This hull is known to turn much tighter than a real one (no hull lift):
-    about 0.6-0.8 m radius at full steering from 3 m/s; see README, Known limitations.
+    about 0.6-0.8 m radius at full steering from 3 m/s; see docs/guide/limitations.md.
     """
     act = vessel.actuation
     cruise_thrust = surge_drag(vessel, 3.0)
