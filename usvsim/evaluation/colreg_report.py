@@ -26,7 +26,7 @@ def colreg_markdown(result: ColregSuiteResult) -> str:
     Imazu problems pooled per helmsman."""
     by = {(r.episode_set, r.helmsman): r for r in result.rows}
     descriptions = {s.name: s.description for s in COLREG_SETS}
-    head = "| set | " + " | ".join(result.helmsmen) + " |"
+    head = "| set | " + " | ".join(_labels(result)) + " |"
     rule = "|---|" + "---|" * len(result.helmsmen)
     lines = [
         "# usvsim bench — COLREG suite" + (" (interrupted)" if result.interrupted else ""),
@@ -54,26 +54,38 @@ def colreg_markdown(result: ColregSuiteResult) -> str:
         "| helmsman | success | compliance |",
         "|---|---|---|",
     ]
-    for h in result.helmsmen:
+    for h, label in zip(result.helmsmen, _labels(result), strict=True):
         s_p, c_p = result.pooled(h)
-        lines.append(f"| {h} | {_pct(s_p)} | {_pct(c_p)} |")
+        lines.append(f"| {label} | {_pct(s_p)} | {_pct(c_p)} |")
+    unfit = [(h, f) for h, f in result.fitness.items() if not f.meets_traffic]
+    if unfit:
+        lines += ["", "† not made to meet traffic (run and scored all the same):", ""]
+        lines += [f"- `{h}` ({f.trained_for}, {f.perceives}): {f.why}" for h, f in unfit]
     lines += ["", "Sets:", ""]
     lines += [f"- `{s}`: {descriptions.get(s, '')}" for s in result.sets]
     lines += ["", f"Run time {result.wall_s:.0f} s.", ""]
     return "\n".join(lines)
 
 
+def _labels(result: ColregSuiteResult) -> list[str]:
+    """Column labels: a helmsman not made to meet traffic gets a dagger (†)."""
+    fit = result.fitness
+    return [h + ("†" if h in fit and not fit[h].meets_traffic else "") for h in result.helmsmen]
+
+
 def colreg_table(result: ColregSuiteResult) -> str:
     """Fixed-width terminal summary: per helmsman the Imazu sets pooled, then the other sets."""
     others = [s for s in result.sets if not s.startswith("imazu-")]
-    head = ["helmsman", "Imazu success", "Imazu compliance", "coll."]
+    head = ["helmsman", "traffic", "Imazu success", "Imazu compliance", "coll."]
     head += [f"{s} success / compliance" for s in others]
     by = {(r.episode_set, r.helmsman): r for r in result.rows}
     lines = [head]
     for h in result.helmsmen:
         s_p, c_p = result.pooled(h)
         coll = sum(r.collisions for r in result.rows if r.helmsman == h)
-        cells = [h, _pct(s_p), _pct(c_p), str(coll)]
+        fit = result.fitness.get(h)
+        made = "–" if fit is None else ("yes" if fit.meets_traffic else "no")
+        cells = [h, made, _pct(s_p), _pct(c_p), str(coll)]
         for s in others:
             r = by.get((s, h))
             cells.append("–" if r is None else f"{_pct(r.success)} / {_pct(r.compliance)}")
@@ -105,6 +117,7 @@ def colreg_json(result: ColregSuiteResult, files: Sequence[str] = ()) -> str:
         "reactive_targets": result.reactive_targets,
         "rows": [r.flat() for r in result.rows],
         "imazu_pooled": pooled,
+        "helmsmen_traffic": {h: asdict(f) for h, f in result.fitness.items()},
         "wall_s": result.wall_s,
         "files": list(files),
         "interrupted": result.interrupted,

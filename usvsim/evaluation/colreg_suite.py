@@ -18,8 +18,12 @@ interval, the mean score and the violations per rule. Files
 (:mod:`usvsim.evaluation.colreg_report`): ``colreg.md``, ``colreg.csv``, ``colreg-heatmap.png``
 (success, compliance and collisions, sets × helmsmen); ``--json`` prints the same on stdout.
 
-Which helmsmen: every available one (:func:`usvsim.helm.registry.available_helmsmen`) except
-``los``, which never looks at traffic; ``--helmsmen`` names others.
+Which helmsmen: by default every available one (:func:`usvsim.helm.registry.available_helmsmen`)
+that is made to meet traffic (:func:`traffic_fitness`): not ``los``, which never looks at
+obstacles, nor the models trained on the study's pole task (model card task ``study``: one static
+pole, never a moving vessel; the ``positional`` ones see only the nearest obstacle's position,
+no velocity and no second vessel). ``--helmsmen all`` runs them too, labelled (``helmsmen_traffic``
+in the JSON, a dagger in the Markdown); ``--helmsmen`` names others.
 """
 
 from __future__ import annotations
@@ -44,19 +48,23 @@ __all__ = [
     "ColregRow",
     "ColregSet",
     "ColregSuiteResult",
+    "TrafficFitness",
     "colreg_columns",
     "colreg_compliance",
     "colreg_episodes",
     "colreg_row",
     "colreg_set_names",
+    "made_for_traffic",
     "run_colreg",
     "run_colreg_args",
     "select_colreg_sets",
+    "traffic_fitness",
     "user_trafficgen_set",
 ]
 
 Split = Literal["validation", "test"]
 TRAFFIC_BLIND = ("los",)  # helmsmen that never look at traffic: left out by default
+BASELINES = ("los", "los-avoid", "vo", "sb-mpc", "vo-radar")  # usvsim.helm.registry's classical
 TRAFFICGEN_DIR = Path(__file__).resolve().parent / "data" / "trafficgen"
 
 
@@ -243,6 +251,54 @@ def colreg_row(helmsman: str, set_name: str, run: Any, wall_s: float) -> ColregR
     )
 
 
+def made_for_traffic(name: str, cards: Any) -> bool:
+    """Whether the default selection runs helmsman ``name`` (module docstring): not
+    :data:`TRAFFIC_BLIND`, not a model whose card (in ``cards``) says task ``study``."""
+    return name not in TRAFFIC_BLIND and (name not in cards or cards[name].task != "study")
+
+
+@dataclass(frozen=True)
+class TrafficFitness:
+    """Whether a helmsman is made to meet traffic, and why (a label of the suite's columns)."""
+
+    perceives: str  # what it sees of obstacles (usvsim.task.observations.PERCEPTION)
+    trained_for: str  # "baseline", its model card's use, or "checkpoint" (no card)
+    meets_traffic: bool
+    why: str
+
+
+def traffic_fitness(name: str, observation: str, cards: Any) -> TrafficFitness:
+    """The :class:`TrafficFitness` of helmsman ``name`` seeing ``observation`` (kind), from its
+    model card in ``cards`` (name → :class:`usvsim.evaluation.model_cards.ModelCard`) if any."""
+    from usvsim.task.observations import PERCEPTION
+
+    perceives = PERCEPTION.get(observation, observation)
+    card = cards.get(name)
+    if name in TRAFFIC_BLIND:
+        return TrafficFitness(perceives, "baseline", False, "steers for the goal only (LOS)")
+    if card is None:
+        if name in BASELINES:
+            return TrafficFitness(perceives, "baseline", True, "a classical COLAV")
+        ok = observation != "positional"
+        why = "a checkpoint without a model card, judged by its observation" + (
+            "" if ok else ": the nearest obstacle's position only"
+        )
+        return TrafficFitness(perceives, "checkpoint", ok, why)
+    if card.task == "study":
+        sees = (
+            "sees only the nearest obstacle's position (no velocity, no second vessel)"
+            if observation == "positional"
+            else "sees one radar image (no target velocity)"
+        )
+        return TrafficFitness(
+            perceives,
+            card.use,
+            False,
+            f"trained on the study's static pole, never a vessel; {sees}",
+        )
+    return TrafficFitness(perceives, card.use, True, "trained on the open-water family (vessels)")
+
+
 @dataclass(frozen=True)
 class ColregSuiteResult:
     """Rows (set × helmsman) and timing of one suite run."""
@@ -256,6 +312,7 @@ class ColregSuiteResult:
     wall_s: float
     interrupted: bool = False
     skipped: tuple[str, ...] = ()
+    fitness: dict[str, TrafficFitness] = field(default_factory=dict)  # per helmsman
 
     def pooled(self, helmsman: str, prefix: str = "imazu-") -> tuple[Proportion, Proportion]:
         """Success and compliance of ``helmsman`` pooled over the sets named ``prefix*``."""
@@ -282,7 +339,11 @@ def run_colreg(
     from tqdm import tqdm
 
     from usvsim.evaluation.colreg_rollout import run_encounters
+    from usvsim.evaluation.model_cards import load_cards
+    from usvsim.helm.registry import helmsman_kinds
 
+    cards = load_cards()
+    fitness: dict[str, TrafficFitness] = {}
     start = time.perf_counter()
     bar = tqdm(
         total=len(sets) * len(factories),
@@ -305,7 +366,9 @@ def run_colreg(
                 bar.set_postfix_str(f"{name} ({len(group)} sets)")
                 t0 = time.perf_counter()
                 batch = [e for s in group for e in episodes[s.name]]
-                run = run_encounters(factory(), batch, reactive_targets=flag)
+                helmsman = factory()
+                fitness[name] = traffic_fitness(name, helmsman_kinds(helmsman)[0], cards)
+                run = run_encounters(helmsman, batch, reactive_targets=flag)
                 wall = (time.perf_counter() - t0) / len(group)
                 for i, cset in enumerate(group):
                     part = run.part(slice(i * n, (i + 1) * n))
@@ -326,6 +389,7 @@ def run_colreg(
         time.perf_counter() - start,
         interrupted,
         tuple(skipped),
+        fitness,
     )
 
 
@@ -348,8 +412,11 @@ def run_colreg_args(args: Any, progress: bool = True) -> ColregSuiteResult:
     if args.trafficgen:  # the user's files: every one read (and checked) before anything runs
         sets = (*sets, user_trafficgen_set(args.trafficgen))
     chosen = select_helmsmen(args.names())
-    if not args.names():
-        chosen = {k: v for k, v in chosen.items() if k not in TRAFFIC_BLIND}
+    if not args.names():  # made for traffic only (module docstring)
+        from usvsim.evaluation.model_cards import load_cards
+
+        cards = load_cards()
+        chosen = {k: v for k, v in chosen.items() if made_for_traffic(k, cards)}
     factories, skipped = loadable_helmsmen(chosen, bool(args.names()), warn)
     if not factories:
         raise UserError("no helmsman to compare: " + "; ".join(skipped))

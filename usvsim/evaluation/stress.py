@@ -19,8 +19,11 @@ Two splits of every set (issue 37: validation splits choose, test splits report)
 
 The table (set × helmsman): success with its Wilson 95 % interval, collisions, the closest
 approach to any obstacle (pole-equivalent distance, :mod:`usvsim.task.openwater`: < 10 m fails),
-worst and median episode. ``stress.md``, ``stress.csv``, ``stress-heatmap.png`` (success, sets ×
-helmsmen) and, with ``--json``, the same on stdout; the run time is in the Markdown and JSON.
+worst and median episode; on the sets with traffic (``moving-vessels``, ``everything``) also
+COLREG compliance with its Wilson interval, the mean score and the encounters scored
+(:mod:`usvsim.evaluation.stress_colreg`, the COLREG suite's scorer). ``stress.md``,
+``stress.csv``, ``stress-heatmap.png`` (success, sets × helmsmen) and, with ``--json``, the same
+on stdout; the run time is in the Markdown and JSON.
 """
 
 from __future__ import annotations
@@ -277,9 +280,11 @@ def run_stress(
     progress: bool = True,
     skipped: Sequence[str] = (),
     split: Split = "test",
+    colreg: bool = True,
 ) -> StressResult:
     """Every helmsman of ``factories`` (label → factory) on ``n`` episodes of every set's
-    ``split`` (module docstring).
+    ``split`` (module docstring); ``colreg``: score the traffic sets' encounters
+    (:func:`usvsim.evaluation.stress_colreg.stress_row`).
 
     Each set's episodes are drawn once and shared by all helmsmen; Ctrl-C ends the run early
     with the rows so far (``interrupted``).
@@ -290,6 +295,7 @@ def run_stress(
     from tqdm import tqdm
 
     from usvsim.evaluation.bench import summarize_set
+    from usvsim.evaluation.stress_colreg import stress_row
     from usvsim.helm.registry import helmsman_kinds
 
     start = time.perf_counter()
@@ -307,7 +313,8 @@ def run_stress(
                 records = evaluate_set(helmsman, stress_set, episodes)
                 row = summarize_set(name, stress_set.name, records, time.perf_counter() - t0)
                 perceives = PERCEPTION[helmsman_kinds(helmsman)[0]]
-                rows.append(replace(row, perceives=perceives))
+                row = replace(row, perceives=perceives)
+                rows.append(stress_row(row, stress_set, records, colreg=colreg))
                 bar.update()
     except KeyboardInterrupt:
         interrupted = True
@@ -357,6 +364,10 @@ def stress_markdown(result: StressResult) -> str:
     for s in result.sets:
         cells = [_cell(by[(s, h)]) if (s, h) in by else "–" for h in result.helmsmen]
         lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    from usvsim.evaluation.stress_colreg import colreg_markdown_table
+
+    table = colreg_markdown_table(result.rows, result.sets, result.helmsmen)
+    lines += ["", table] if table else []
     lines += ["", "Sets:", ""]
     lines += [f"- `{s}`: {descriptions[s]}" for s in result.sets]
     lines += ["", f"Run time {result.wall_s:.0f} s.", ""]
@@ -376,6 +387,8 @@ def stress_json(result: StressResult, files: Sequence[str] = ()) -> str:
     def safe(v: Any) -> Any:
         return None if isinstance(v, float) and not math.isfinite(v) else v
 
+    from usvsim.evaluation.stress_colreg import colreg_overhead
+
     payload = {
         "suite": "stress",
         "split": result.split,
@@ -384,6 +397,7 @@ def stress_json(result: StressResult, files: Sequence[str] = ()) -> str:
         "episodes_per_set": result.episodes_per_set,
         "rows": [{k: safe(v) for k, v in r.flat().items()} for r in result.rows],
         "wall_s": result.wall_s,
+        "colreg_overhead": safe(colreg_overhead(result.rows)),  # scoring / run time, traffic sets
         "files": list(files),
         "interrupted": result.interrupted,
         "skipped": list(result.skipped),

@@ -123,3 +123,47 @@ def test_test_split_refused_in_selection_code() -> None:
             colreg_episodes(select_colreg_sets(["imazu-03"])[0], 2)
         with pytest.raises(TestSplitInSelectionError):
             colreg_episodes(tg, 2)
+
+
+def test_study_task_models_are_labelled_not_made_for_traffic() -> None:
+    from usvsim.evaluation.colreg_suite import traffic_fitness
+    from usvsim.evaluation.model_cards import load_cards
+
+    cards = load_cards()
+    study = [n for n, c in cards.items() if c.task == "study"]
+    open_water = [n for n, c in cards.items() if c.task == "open-water"]
+    assert study and open_water
+    for name in study:
+        fit = traffic_fitness(name, cards[name].observation, cards)
+        assert not fit.meets_traffic and "pole" in fit.why and fit.trained_for == cards[name].use
+    assert all(traffic_fitness(n, cards[n].observation, cards).meets_traffic for n in open_water)
+    assert not traffic_fitness("los", "positional", cards).meets_traffic
+    assert traffic_fitness("sb-mpc", "scene", cards).meets_traffic
+    assert not traffic_fitness("my-run", "positional", {}).meets_traffic  # a card-less checkpoint
+    assert traffic_fitness("my-run", "radar+goal", {}).meets_traffic
+
+
+def test_default_selection_leaves_study_models_out_and_named_ones_are_labelled() -> None:
+    from usvsim.evaluation.bench import BenchArgs
+    from usvsim.evaluation.colreg_report import colreg_json, colreg_markdown
+    from usvsim.evaluation.colreg_suite import made_for_traffic, run_colreg_args
+    from usvsim.evaluation.model_cards import load_cards
+    from usvsim.helm.registry import available_helmsmen
+
+    cards = load_cards()
+    study = {n for n, c in cards.items() if c.task == "study"}
+    default = {n for n in available_helmsmen() if made_for_traffic(n, cards)}
+    assert not study & default and "los" not in default
+    assert {"vo", "sb-mpc", "vo-radar", "los-avoid"} <= default
+    assert {n for n, c in cards.items() if c.task == "open-water"} <= default
+    named = sorted(study)[0]
+    run = run_colreg_args(
+        BenchArgs(suite="colreg", sets="imazu-01", colreg_episodes=1, helmsmen=f"vo,{named}"),
+        progress=False,
+    )
+    payload = json.loads(colreg_json(run))
+    assert payload["helmsmen_traffic"][named]["meets_traffic"] is False
+    assert payload["helmsmen_traffic"]["vo"]["meets_traffic"] is True
+    assert len(payload["rows"]) == 2  # run and scored all the same
+    md = colreg_markdown(run)
+    assert f"| set | vo | {named}† |" in md and f"- `{named}` (" in md
