@@ -2,9 +2,10 @@
 scored for success and COLREG compliance.
 
 Sets (:data:`COLREG_SETS`): ``imazu-01`` … ``imazu-22``, Imazu's problems scaled to the boat
-(:mod:`usvsim.evaluation.imazu`), and ``trafficgen-1ts``, DNV trafficgen's five one-target
-baseline situations (:mod:`usvsim.evaluation.trafficgen_io`, files in
-``usvsim/evaluation/data/trafficgen``; episode k runs situation k mod 5). Each set draws its
+(:mod:`usvsim.evaluation.imazu`), and ``trafficgen-1ts`` / ``-2ts`` / ``-3ts``, DNV
+trafficgen's 55 baseline situations with one (5), two (15) and three (35) targets, DNV's own
+files (:mod:`usvsim.evaluation.trafficgen_io`, in ``usvsim/evaluation/data/trafficgen`` with
+their MIT licence; episode k runs situation k mod S, so ``n`` ≥ S covers every situation). Each set draws its
 ``n`` perturbed episodes from its own seeds, the ``test`` split by default (``validation`` for
 choosing). ``reactive_targets`` (per set, or ``--reactive-targets`` for all) steers the target
 vessels with ``vo`` (:mod:`usvsim.evaluation.colreg_rollout`); by default they hold course and
@@ -94,10 +95,17 @@ COLREG_SETS: tuple[ColregSet, ...] = (
         )
         for p in range(1, 23)
     ),
-    ColregSet(
-        "trafficgen-1ts",
-        "DNV trafficgen's one-target baseline situations (HO, CR-GW, CR-SO, OT-GW, OT-SO)",
-        trafficgen_files=tuple(str(p) for p in sorted(TRAFFICGEN_DIR.glob("*.json"))),
+    *(
+        ColregSet(
+            f"trafficgen-{k}ts",
+            f"DNV trafficgen's {len(files)} baseline situations with {k} target"
+            + ("s" if k > 1 else "")
+            + (" (HO, CR-GW, CR-SO, OT-GW, OT-SO)" if k == 1 else " (every combination)"),
+            trafficgen_files=tuple(
+                str(TRAFFICGEN_DIR / f"baseline_situation_{i:02d}.json") for i in files
+            ),
+        )  # fmt: skip
+        for k, files in ((1, range(1, 6)), (2, range(6, 21)), (3, range(21, 56)))
     ),
 )
 

@@ -28,7 +28,8 @@ DEG = math.pi / 180
 def test_twenty_two_imazu_sets_and_trafficgen() -> None:
     names = colreg_set_names()
     assert names[:22] == tuple(f"imazu-{p:02d}" for p in range(1, 23))
-    assert names[22] == "trafficgen-1ts" and len(COLREG_SETS[22].trafficgen_files) == 5
+    assert names[22:] == ("trafficgen-1ts", "trafficgen-2ts", "trafficgen-3ts")
+    assert [len(s.trafficgen_files) for s in COLREG_SETS[22:]] == [5, 15, 35]  # DNV's 55
     assert not any(s.reactive_targets for s in COLREG_SETS)  # Imazu's problems are defined so
     with pytest.raises(UserError, match="unknown colreg set 'imazu-23'"):
         select_colreg_sets(["imazu-23"])
@@ -167,3 +168,16 @@ def test_default_selection_leaves_study_models_out_and_named_ones_are_labelled()
     assert len(payload["rows"]) == 2  # run and scored all the same
     md = colreg_markdown(run)
     assert f"| set | vo | {named}† |" in md and f"- `{named}` (" in md
+
+
+@pytest.mark.parametrize("targets", [1, 2, 3])
+def test_trafficgen_baseline_sets_hold_situations_with_their_number_of_targets(targets) -> None:
+    from usvsim.evaluation.trafficgen_io import read_situation
+
+    (tg,) = select_colreg_sets([f"trafficgen-{targets}ts"])
+    situations = [read_situation(f) for f in tg.trafficgen_files]
+    assert all(len(s.targets) == targets for s in situations)
+    assert all(len(s.title.split(", ")) == targets for s in situations)  # "HO, CR-GW", ...
+    assert len({s.title for s in situations}) == len(situations)  # every combination once
+    episodes = colreg_episodes(tg, len(situations), "validation")
+    assert [len(e.vessels) for e in episodes] == [targets] * len(situations)

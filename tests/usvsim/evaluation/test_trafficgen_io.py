@@ -19,7 +19,7 @@ from usvsim.evaluation.trafficgen_io import (
     write_situation,
 )
 
-FILES = sorted(TRAFFICGEN_DIR.glob("*.json"))
+FILES = [TRAFFICGEN_DIR / f"baseline_situation_{i:02d}.json" for i in range(1, 6)]  # 1 target
 EXACT = ImazuConfig(rotate=False, course_jitter_rad=0.0, speed_jitter=0.0, position_jitter_m=0.0)
 
 
