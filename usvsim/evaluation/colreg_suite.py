@@ -5,10 +5,10 @@ Sets (:data:`COLREG_SETS`): ``imazu-01`` … ``imazu-22``, Imazu's problems scal
 (:mod:`usvsim.evaluation.imazu`), and ``trafficgen-1ts`` / ``-2ts`` / ``-3ts``, DNV
 trafficgen's 55 baseline situations with one (5), two (15) and three (35) targets, DNV's own
 files (:mod:`usvsim.evaluation.trafficgen_io`, in ``usvsim/evaluation/data/trafficgen`` with
-their MIT licence; episode k runs situation k mod S, so ``n`` ≥ S covers every situation). Each set draws its
-``n`` perturbed episodes from its own seeds, the ``test`` split by default (``validation`` for
-choosing). ``reactive_targets`` (per set, or ``--reactive-targets`` for all) steers the target
-vessels with ``vo`` (:mod:`usvsim.evaluation.colreg_rollout`); by default they hold course and
+their MIT licence; episode k runs situation k mod S, so ``n`` ≥ S covers every situation).
+Each set draws its ``n`` perturbed episodes from its own seeds, the ``test`` split by default
+(``validation`` for choosing). ``reactive_targets`` (per set, or ``--reactive-targets`` for all)
+steers the target vessels with ``vo`` (:mod:`usvsim.evaluation.colreg_rollout`); by default they hold course and
 speed, as Imazu's problems are defined.
 
 Every episode is recorded as own-ship and target tracks and scored by
@@ -104,7 +104,7 @@ COLREG_SETS: tuple[ColregSet, ...] = (
             trafficgen_files=tuple(
                 str(TRAFFICGEN_DIR / f"baseline_situation_{i:02d}.json") for i in files
             ),
-        )  # fmt: skip
+        )
         for k, files in ((1, range(1, 6)), (2, range(6, 21)), (3, range(21, 56)))
     ),
 )
