@@ -8,8 +8,8 @@ files (:mod:`usvsim.evaluation.trafficgen_io`, in ``usvsim/evaluation/data/traff
 their MIT licence; episode k runs situation k mod S, so ``n`` ≥ S covers every situation).
 Each set draws its ``n`` perturbed episodes from its own seeds, the ``test`` split by default
 (``validation`` for choosing). ``reactive_targets`` (per set, or ``--reactive-targets`` for all)
-steers the target vessels with ``vo`` (:mod:`usvsim.evaluation.colreg_rollout`); by default they hold course and
-speed, as Imazu's problems are defined.
+steers the target vessels with ``vo`` (:mod:`usvsim.evaluation.colreg_rollout`); by default
+they hold course and speed, as Imazu's problems are defined.
 
 Every episode is recorded as own-ship and target tracks and scored by
 :func:`usvsim.evaluation.colreg.evaluate_colreg` (Woerner et al. 2019). A row (set × helmsman):
