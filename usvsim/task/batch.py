@@ -363,8 +363,11 @@ class PoleAvoidanceBatch:
         self._noise.for_boats(None)
         return obs
 
-    def step(self, actions: Any) -> BatchStep:
-        """One decision step of every boat (see the module docstring)."""
+    def advance(self, actions: Any) -> tuple[FloatArray, FloatArray]:
+        """Plant and navigation of one decision of every boat, nothing judged: the true
+        trajectory (N, T, 13) (``BatchStep.trajectory``) and the heading changes Δψ (N,) rad.
+        The boats' clocks advance; :meth:`step` is this plus the pole task's flags, reward and
+        observation (the open-water batch judges its own scene)."""
         if not self._ready.all():
             raise RuntimeError("reset every boat before step()")
         check_interrupt()  # a Ctrl-C that a C extension swallowed ends the work here
@@ -393,8 +396,14 @@ class PoleAvoidanceBatch:
         self._plant_step += T
         self._est_pos = self._s[:, PACKED.nav_pos].copy()
         self._est_psi = self._s[:, PACKED.nav_psi].copy()
+        self._n_decisions += 1
+        return packed[:, :, PACKED.closed_loop], dpsi
 
-        traj = packed[:, :, PACKED.closed_loop]
+    def step(self, actions: Any) -> BatchStep:
+        """One decision step of every boat (see the module docstring)."""
+        traj, dpsi = self.advance(actions)
+        sc = self.scenario
+        T = sc.steps_per_decision
         x_n, y_e = traj[:, :, 0], traj[:, :, 1]  # true position at every plant step (N, T)
         d_pole = np.hypot(x_n - self.pole_ne[:, 0:1], y_e - self.pole_ne[:, 1:2])
         hit = d_pole < self._collision_m
@@ -408,10 +417,9 @@ class PoleAvoidanceBatch:
         if terminated.any():
             upto_end = np.where(np.arange(T) > end[:, None], np.inf, d_pole)
         self._min_pole = np.minimum(self._min_pole, upto_end.min(axis=1))
-        if reached.any():
-            t_first = (self._n_decisions * T + np.argmax(in_goal, axis=1) + 1) * sc.dt_s
+        if reached.any():  # the decision that just ended: the clock's value before advance
+            t_first = ((self._n_decisions - 1) * T + np.argmax(in_goal, axis=1) + 1) * sc.dt_s
             self._t_goal = np.where(reached & np.isinf(self._t_goal), t_first, self._t_goal)
-        self._n_decisions += 1
         rows = np.arange(self.n_boats)
         d_pole_end = d_pole[rows, end]
         d_goal_end = np.hypot(dx_goal[rows, end], dy_goal[rows, end])

@@ -184,107 +184,145 @@ class OpenWaterScenario:
             raise ValueError("speed_range_mps and start_distance_range_m must be > 0")
 
 
-def _u(rng: np.random.Generator, r: Range) -> float:
-    return float(rng.uniform(r[0], r[1]))
+def _at(r: Range, u: float) -> float:
+    """The point ``u`` ∈ [0, 1) of range ``r``: ``lo + (hi − lo) u``, the arithmetic of
+    ``Generator.uniform(lo, hi)`` on the same draw ``Generator.random()`` (bit for bit)."""
+    return r[0] + (r[1] - r[0]) * u
+
+
+def _draws(rng: np.random.Generator, k: int) -> list[float]:
+    """The next ``k`` uniform draws of ``rng`` in one call (the values of ``k`` calls)."""
+    draws: list[float] = rng.random(k).tolist()
+    return draws
+
+
+def _hypot(x: float, y: float) -> float:
+    """``np.hypot`` (C's ``hypot``) of two numbers; ``math.hypot`` rounds differently."""
+    return float(np.hypot(x, y))
 
 
 def _place_extras(
-    rng: np.random.Generator, sc: OpenWaterScenario, s: FloatArray, g: FloatArray,
-    obstacles: list[tuple[float, float, float]], n: int,
+    rng: np.random.Generator, sc: OpenWaterScenario, s: tuple[float, float],
+    g: tuple[float, float], obstacles: list[tuple[float, float, float]], n: int,
 ) -> None:  # fmt: skip
-    """Append ``n`` extra obstacles (module docstring), rejection-sampled from ``rng``."""
-    u = (g - s) / max(float(np.hypot(*(g - s))), 1e-9)
-    normal = np.array([-u[1], u[0]])
-    length = float(np.hypot(*(g - s)))
+    """Append ``n`` extra obstacles (module docstring), rejection-sampled from ``rng``: per
+    attempt four draws (islet, radius, then angle and distance from the primary, or position
+    along and across the route)."""
+    (sx, sy), (gx, gy) = s, g
+    length = _hypot(gx - sx, gy - sy)
+    scale = max(length, 1e-9)
+    ux, uy = (gx - sx) / scale, (gy - sy) / scale  # unit vector S → G, normal (-uy, ux)
+    half_width = sc.corridor_half_width_m
     for _ in range(n):
         for _attempt in range(200):
-            islet = rng.random() < sc.islet_probability
-            radius = _u(rng, sc.islet_radius_range_m if islet else sc.extra_radius_range_m)
+            u_islet, u_radius, u_a, u_b = _draws(rng, 4)
+            islet = u_islet < sc.islet_probability
+            radius = _at(sc.islet_radius_range_m if islet else sc.extra_radius_range_m, u_radius)
             if sc.near_primary_range_m is not None and obstacles:
-                ang = rng.uniform(0.0, 2.0 * math.pi)
-                c = np.asarray(obstacles[0][:2]) + _u(rng, sc.near_primary_range_m) * np.array(
-                    [math.cos(ang), math.sin(ang)]
-                )
+                ang = _at((0.0, 2.0 * math.pi), u_a)
+                reach = _at(sc.near_primary_range_m, u_b)
+                cx = obstacles[0][0] + reach * math.cos(ang)
+                cy = obstacles[0][1] + reach * math.sin(ang)
             else:
-                along = _u(rng, sc.corridor_along_range) * length
-                across = rng.uniform(-sc.corridor_half_width_m, sc.corridor_half_width_m)
-                c = s + along * u + across * normal
-            edge_s = np.hypot(*(c - s)) - radius
-            edge_g = np.hypot(*(c - g)) - radius
-            gaps = [np.hypot(c[0] - x, c[1] - y) - radius - r for x, y, r in obstacles]
-            if min(edge_s, edge_g) >= sc.clearance_m and min(gaps, default=np.inf) >= sc.min_gap_m:
-                obstacles.append((float(c[0]), float(c[1]), radius))
+                along = _at(sc.corridor_along_range, u_a) * length
+                across = _at((-half_width, half_width), u_b)
+                cx = sx + along * ux + across * -uy
+                cy = sy + along * uy + across * ux
+            edge_s = _hypot(cx - sx, cy - sy) - radius
+            edge_g = _hypot(cx - gx, cy - gy) - radius
+            gap = min((_hypot(cx - x, cy - y) - radius - r for x, y, r in obstacles),
+                      default=math.inf)  # fmt: skip
+            if min(edge_s, edge_g) >= sc.clearance_m and gap >= sc.min_gap_m:
+                obstacles.append((cx, cy, radius))
                 break
 
 
 def _vessel(
-    rng: np.random.Generator, sc: OpenWaterScenario, s: FloatArray, chi_g: float, own_mps: float,
-    length_m: float,
+    rng: np.random.Generator, sc: OpenWaterScenario, s: tuple[float, float], chi_g: float,
+    own_mps: float, length_m: float,
 ) -> Vessel:  # fmt: skip
     """One vessel meeting the own boat's nominal run (module docstring)."""
     kind = sc.encounters[int(rng.integers(len(sc.encounters)))]
-    side = 1.0 if rng.random() < 0.5 else -1.0
-    jitter = rng.uniform(-math.radians(10.0), math.radians(10.0))
+    u_side, u_jitter, u_speed, u_meet, u_miss, u_turn = _draws(rng, 6)
+    side = 1.0 if u_side < 0.5 else -1.0
+    jitter = _at((-math.radians(10.0), math.radians(10.0)), u_jitter)
     if kind == "head-on":
-        course, speed = chi_g + math.pi + jitter, _u(rng, sc.vessel_speed_range_mps)
+        course, speed = chi_g + math.pi + jitter, _at(sc.vessel_speed_range_mps, u_speed)
     elif kind == "crossing":
         course = chi_g + side * (math.pi / 2 + 3.0 * jitter)  # 60°-120° across
-        speed = _u(rng, sc.vessel_speed_range_mps)
+        speed = _at(sc.vessel_speed_range_mps, u_speed)
     else:
-        course, speed = chi_g + 0.5 * jitter, own_mps * _u(rng, sc.overtaken_speed_fraction_range)
-    t_c = _u(rng, sc.meet_fraction_range) * length_m / own_mps
-    miss = _u(rng, sc.miss_distance_range_m)
-    turn = _u(rng, sc.vessel_turn_rate_range_radps)
-    u = np.array([math.cos(chi_g), math.sin(chi_g)])
-    meet = s + own_mps * t_c * u + miss * np.array([-u[1], u[0]])
-    p0 = meet - speed * t_c * np.array([math.cos(course), math.sin(course)])
-    return Vessel(
-        float(p0[0]), float(p0[1]), float(ssa(course)), speed, turn, sc.vessel_radius_m, kind
-    )
+        course, speed = (
+            chi_g + 0.5 * jitter,
+            own_mps * _at(sc.overtaken_speed_fraction_range, u_speed),
+        )
+    t_c = _at(sc.meet_fraction_range, u_meet) * length_m / own_mps
+    miss = _at(sc.miss_distance_range_m, u_miss)
+    turn = _at(sc.vessel_turn_rate_range_radps, u_turn)
+    ux, uy = math.cos(chi_g), math.sin(chi_g)
+    run = own_mps * t_c
+    meet_x, meet_y = s[0] + run * ux + miss * -uy, s[1] + run * uy + miss * ux
+    back = speed * t_c
+    x0, y0 = meet_x - back * math.cos(course), meet_y - back * math.sin(course)
+    return Vessel(x0, y0, float(ssa(course)), speed, turn, sc.vessel_radius_m, kind)
 
 
 def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpisode:
-    d = _u(rng, sc.start_distance_range_m)
-    beta = float(rng.uniform(0.0, 2.0 * math.pi))
-    delta = _u(rng, sc.heading_offset_range_rad)
-    noise_seed, radar_seed, dist_seed = (int(x) for x in rng.integers(2**63, size=3))
-    goal_side, current_side = np.where(rng.random(2) < 0.5, -1.0, 1.0)  # mirror images
+    """One episode from ``rng`` (module docstring). Draws come in blocks of one
+    ``Generator.random`` call where their number does not depend on earlier values; the
+    order is that of one ``uniform`` call per quantity, so the episodes are those of a draw
+    per call."""
+    u_d, u_beta, u_delta = _draws(rng, 3)
+    d = _at(sc.start_distance_range_m, u_d)
+    beta = _at((0.0, 2.0 * math.pi), u_beta)
+    delta = _at(sc.heading_offset_range_rad, u_delta)
+    noise_seed, radar_seed, dist_seed = rng.integers(2**63, size=3).tolist()
+    u_goal_side, u_current_side, u_gamma, u_big_d, u_lateral, u_speed, u_primary = _draws(rng, 7)
+    goal_side = -1.0 if u_goal_side < 0.5 else 1.0  # mirror images
+    current_side = -1.0 if u_current_side < 0.5 else 1.0
     chi = beta + math.pi
-    gamma, big_d, lateral = (
-        _u(rng, sc.goal_bearing_range_rad), _u(rng, sc.goal_distance_range_m),
-        _u(rng, sc.goal_lateral_range_m),
-    )  # fmt: skip
-    speed = _u(rng, sc.speed_range_mps)
-    primary_r = _u(rng, sc.primary_radius_range_m)
+    gamma = _at(sc.goal_bearing_range_rad, u_gamma)
+    big_d = _at(sc.goal_distance_range_m, u_big_d)
+    lateral = _at(sc.goal_lateral_range_m, u_lateral)
+    speed = _at(sc.speed_range_mps, u_speed)
+    primary_r = _at(sc.primary_radius_range_m, u_primary)
     d += primary_r - _R_POLE  # d is the pole-equivalent distance: from the edge, + 1 m
-    s = d * np.array([math.cos(beta), math.sin(beta)])
+    s = (d * math.cos(beta), d * math.sin(beta))
+    offset = goal_side * lateral
+    normal = (-math.sin(chi), math.cos(chi))
     for _attempt in range(100):  # a goal must lie clear of the primary obstacle
-        g = s + big_d * np.array([math.cos(chi + gamma), math.sin(chi + gamma)])
-        g = g + goal_side * lateral * np.array([-math.sin(chi), math.cos(chi)])
-        if float(np.hypot(*g)) - primary_r >= sc.clearance_m or not sc.primary_obstacle:
+        gx = s[0] + big_d * math.cos(chi + gamma) + offset * normal[0]
+        gy = s[1] + big_d * math.sin(chi + gamma) + offset * normal[1]
+        if _hypot(gx, gy) - primary_r >= sc.clearance_m or not sc.primary_obstacle:
             break
-        gamma, big_d = _u(rng, sc.goal_bearing_range_rad), _u(rng, sc.goal_distance_range_m)
+        u_gamma, u_big_d = _draws(rng, 2)
+        gamma = _at(sc.goal_bearing_range_rad, u_gamma)
+        big_d = _at(sc.goal_distance_range_m, u_big_d)
+    g = (gx, gy)
     obstacles: list[tuple[float, float, float]] = [(0.0, 0.0, primary_r)]
     n_extra = int(rng.integers(sc.n_extra_range[0], sc.n_extra_range[1] + 1))
     _place_extras(rng, sc, s, g, obstacles, n_extra)
     if not sc.primary_obstacle:
         obstacles = obstacles[1:]
-    length = float(np.hypot(*(g - s)))
-    chi_g = math.atan2(g[1] - s[1], g[0] - s[0])
+    length = _hypot(gx - s[0], gy - s[1])
+    chi_g = math.atan2(gy - s[1], gx - s[0])
     n_v = int(rng.integers(sc.n_vessels_range[0], sc.n_vessels_range[1] + 1))
     vessels = tuple(_vessel(rng, sc, s, chi_g, speed, length) for _ in range(n_v))
-    current = _u(rng, sc.current_speed_range_mps)
-    current_dir = float(ssa(chi_g + current_side * _u(rng, sc.current_direction_range_rad)))
-    gnss_scale = _u(rng, sc.gnss_noise_scale_range)
-    outlier = _u(rng, sc.gnss_outlier_probability_range)
+    (u_current, u_direction, u_scale, u_outlier, u_dropout, u_drop_start, u_drop_len,
+     *u_radar) = _draws(rng, 11)  # fmt: skip
+    current = _at(sc.current_speed_range_mps, u_current)
+    turn = current_side * _at(sc.current_direction_range_rad, u_direction)
+    current_dir = float(ssa(chi_g + turn))
+    gnss_scale = _at(sc.gnss_noise_scale_range, u_scale)
+    outlier = _at(sc.gnss_outlier_probability_range, u_outlier)
     time_limit = max(150.0, sc.time_factor * length / speed)
     time_limit = 2.0 * math.ceil(time_limit / 2.0 - 1e-9)
-    dropout = rng.random() < sc.gnss_dropout_probability
-    drop_start = float(rng.uniform(0.0, 0.5 * time_limit))
-    drop_len = _u(rng, sc.gnss_dropout_duration_range_s)
+    dropout = u_dropout < sc.gnss_dropout_probability
+    drop_start = _at((0.0, 0.5 * time_limit), u_drop_start)
+    drop_len = _at(sc.gnss_dropout_duration_range_s, u_drop_len)
     radar = RadarQuality(
-        _u(rng, sc.radar_clutter_range), _u(rng, sc.radar_speckle_range),
-        _u(rng, sc.radar_missed_range), _u(rng, sc.radar_noise_range),
+        _at(sc.radar_clutter_range, u_radar[0]), _at(sc.radar_speckle_range, u_radar[1]),
+        _at(sc.radar_missed_range, u_radar[2]), _at(sc.radar_noise_range, u_radar[3]),
     )  # fmt: skip
     disturbance = EpisodeDisturbance(
         speed_mps=speed,
@@ -296,12 +334,11 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
         gnss_dropout_duration_s=drop_len if dropout else 0.0,
         seed=dist_seed,
     )
-    mid = 0.5 * (s + g)
-    area = float(np.hypot(*mid)) + 0.5 * length + sc.area_margin_m
+    area = _hypot(0.5 * (s[0] + gx), 0.5 * (s[1] + gy)) + 0.5 * length + sc.area_margin_m
     return OpenWaterEpisode(
         anchor_ne=(0.0, 0.0),
         start=EpisodeSpec(0, d, beta % (2.0 * math.pi), delta, noise_seed),
-        goal_ne=(float(g[0]), float(g[1])),
+        goal_ne=g,
         obstacles=tuple(obstacles),
         vessels=vessels,
         disturbance=disturbance,

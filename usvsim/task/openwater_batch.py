@@ -64,6 +64,7 @@ class OpenWaterStep:
     truncated: NDArray[np.bool_]  # (time_limit | out_of_area) and not terminated
     heading_change_rad: FloatArray
     min_distance_m: FloatArray  # pole-equivalent, over every obstacle and plant step so far
+    distance_to_obstacle_m: FloatArray  # pole-equivalent, nearest obstacle at the end step
     distance_to_goal_m: FloatArray  # at the end step
     reached_goal: NDArray[np.bool_]
     collision: NDArray[np.bool_]
@@ -138,6 +139,7 @@ class OpenWaterBatch:
             self.area_radius, self.time_limit = np.full(n, np.inf), np.full(n, np.inf)
             zeros = np.zeros(n)
             self.degradation = RadarDegradation(zeros, zeros, zeros, zeros)
+            self._pack_scene()
             return
         k = max(max((len(e.obstacles) for e in episodes), default=0), self.centres.shape[1])
         m = max(max((len(e.vessels) for e in episodes), default=0), self.v_p0.shape[1])
@@ -165,6 +167,14 @@ class OpenWaterBatch:
             cl[i], sp[i] = e.radar.clutter_probability, e.radar.speckle
             mi[i], no[i] = e.radar.missed_probability, e.radar.noise_amplitude
         self.degradation = RadarDegradation(cl, sp, mi, no)
+        self._pack_scene()
+
+    def _pack_scene(self) -> None:
+        """Every disc's radius and validity (N, J), statics then vessels: constant within an
+        episode, so joined once per reset, not per step (a caller that steers the vessels, as
+        :mod:`usvsim.evaluation.colreg_rollout` does, replaces their motion arrays only)."""
+        self._disc_radii = np.concatenate([self.radii, self.v_radius], axis=1)
+        self._disc_ok = np.concatenate([self.static_ok, self.vessel_ok], axis=1)
 
     def reset(self, boats: NDArray[np.intp] | None, episodes: Sequence[OpenWaterEpisode]) -> Any:
         """Start ``episodes`` on ``boats`` (None: all); returns their first observation."""
@@ -173,16 +183,13 @@ class OpenWaterBatch:
             raise ValueError(f"need one episode per reset boat ({idx.size}), got {len(episodes)}")
         inner = self.inner
         # the starts are EpisodeSpecs relative to per-episode anchors: the inner scenario's poles
-        poles = list(inner.scenario.poles_ne)
-        poles += [(0.0, 0.0)] * max(0, self.n_boats - len(poles))
-        for i, e in zip(idx.tolist(), episodes, strict=True):
-            poles[i] = e.anchor_ne
+        # are the reset episodes' anchors, spec j naming pole j
         limit = max(float(self.time_limit[np.isfinite(self.time_limit)].max(initial=0.0)),
                     max(e.time_limit_s for e in episodes))  # fmt: skip
-        inner.scenario = replace(inner.scenario, poles_ne=tuple(poles), time_limit_s=limit)
-        specs = [
-            replace(e.start, pole_index=i) for i, e in zip(idx.tolist(), episodes, strict=True)
-        ]
+        inner.scenario = replace(
+            inner.scenario, poles_ne=tuple(e.anchor_ne for e in episodes), time_limit_s=limit
+        )
+        specs = [replace(e.start, pole_index=j) for j, e in enumerate(episodes)]
         inner.reset(idx, specs, [e.disturbance for e in episodes])
         inner.pole_ne[idx] = 1e9  # the inner single-pole flags are not used
         self._set_scene(idx.tolist(), episodes)
@@ -195,39 +202,27 @@ class OpenWaterBatch:
         self._t_goal[idx] = np.inf
         return self._observe(idx)
 
-    def _vessels(self, t_s: FloatArray, idx: Any) -> tuple[FloatArray, FloatArray]:
-        """Positions and velocities (n, M, T, 2) of the vessels of boats ``idx`` at episode
-        times ``t_s`` (n, T)."""
-        return vessel_motion(
-            self.v_p0[idx][:, :, None, :], self.v_course[idx][:, :, None],
-            self.v_speed[idx][:, :, None], self.v_turn[idx][:, :, None], t_s[:, None, :],
-        )  # fmt: skip
-
-    def _radii_valid(self, idx: Any) -> tuple[FloatArray, NDArray[np.bool_]]:
-        """Radii and validity (n, J) of every disc of boats ``idx``: statics, then vessels."""
-        radii = np.concatenate([self.radii[idx], self.v_radius[idx]], axis=1)
-        return radii, np.concatenate([self.static_ok[idx], self.vessel_ok[idx]], axis=1)
-
-    def _discs(
+    def _discs_at(
         self, t_s: FloatArray, idx: Any = slice(None)
     ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
-        """Every disc of boats ``idx`` at episode times ``t_s`` (n, T): centres (n, J, T, 2),
-        radii (n, J), velocities (n, J, T, 2), valid (n, J); statics first, then vessels."""
+        """Every disc of boats ``idx`` at their episode times ``t_s`` (n,): centres (n, J, 2),
+        radii (n, J), velocities (n, J, 2), valid (n, J); statics first, then vessels (the
+        vessels by :func:`usvsim.task.openwater.vessel_motion`)."""
         c = self.centres[idx]
-        n, k, steps = c.shape[0], c.shape[1], t_s.shape[1]
-        pos, vel = self._vessels(t_s, idx)
-        centres = np.concatenate([np.broadcast_to(c[:, :, None, :], (n, k, steps, 2)), pos], axis=1)
-        velocity = np.concatenate([np.zeros((n, k, steps, 2)), vel], axis=1)
-        radii, ok = self._radii_valid(idx)
-        return centres, radii, velocity, ok
+        pos, vel = vessel_motion(
+            self.v_p0[idx], self.v_course[idx], self.v_speed[idx], self.v_turn[idx],
+            t_s[:, None],
+        )  # fmt: skip
+        centres = np.concatenate([c, pos], axis=1)
+        velocity = np.concatenate([np.zeros_like(c), vel], axis=1)
+        return centres, self._disc_radii[idx], velocity, self._disc_ok[idx]
 
     def scene_at(
         self, t_s: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
         """Every boat's discs at its own episode time ``t_s`` (N,) s: centres (N, J, 2) m, radii
         (N, J) m, velocities over ground (N, J, 2) m/s, valid (N, J); statics, then vessels."""
-        centres, radii, velocity, ok = self._discs(np.asarray(t_s, dtype=float)[:, None])
-        return centres[:, :, 0], radii, velocity[:, :, 0], ok
+        return self._discs_at(np.asarray(t_s, dtype=float))
 
     def _nearest_and_hits(
         self, pos: FloatArray, t_s: FloatArray, idx: Any = slice(None)
@@ -235,11 +230,12 @@ class OpenWaterBatch:
         """Smallest pole-equivalent distance (n, T) m and any-hit flags (n, T) of boats ``idx``
         at positions ``pos`` (n, T, ≥ 2) and episode times ``t_s`` (n, T)
         (:func:`usvsim.task.scene_distances.nearest_and_hits`)."""
-        discs = PackedDiscs(
-            self.centres[idx], self.radii[idx], self.static_ok[idx], self.v_p0[idx],
-            self.v_course[idx], self.v_speed[idx], self.v_turn[idx], self.v_radius[idx],
-            self.vessel_ok[idx],
-        )  # fmt: skip
+        s = self
+        arrays = (s.centres, s.radii, s.static_ok, s.v_p0, s.v_course, s.v_speed, s.v_turn,
+                  s.v_radius, s.vessel_ok)  # fmt: skip
+        if not (isinstance(idx, slice) and idx == slice(None)):  # all: views, no copies
+            arrays = tuple(a[idx] for a in arrays)
+        discs = PackedDiscs(*arrays)
         return nearest_and_hits(
             pos, t_s, discs, self._r_pole, self._half_beam, self._distance_backend
         )
@@ -256,8 +252,8 @@ class OpenWaterBatch:
     ) -> Any:
         sl: Any = slice(None) if idx is None else idx
         pos, psi = self.inner.estimate
-        t = (self._n_dec[sl] * self.base.decision_period_s).astype(float)[:, None]
-        centres, radii, velocity, ok = self._discs(t, sl)
+        t = (self._n_dec[sl] * self.base.decision_period_s).astype(float)
+        centres, radii, velocity, ok = self._discs_at(t, sl)
         q = self.degradation
         degr = RadarDegradation(
             q.clutter_probability[sl], q.speckle[sl], q.missed_probability[sl],
@@ -265,16 +261,15 @@ class OpenWaterBatch:
         )  # fmt: skip
         return observe_scene(
             kind or self.observation_kind, pos[sl], psi[sl], self.inner.estimated_velocity[sl],
-            self.goal_ne[sl], SceneDiscs(centres[:, :, 0], radii, velocity[:, :, 0], ok),
+            self.goal_ne[sl], SceneDiscs(centres, radii, velocity, ok),
             self.radar, degr, self._radar_streams.frame_keys(sl),
         )  # fmt: skip
 
     def step(self, actions: Any) -> OpenWaterStep:
         """One decision step of every boat (module docstring)."""
-        res = self.inner.step(actions)
+        traj, dpsi = self.inner.advance(actions)
         sc = self.base
         T = sc.steps_per_decision
-        traj = res.trajectory
         steps = self._n_dec[:, None] * T + np.arange(1, T + 1)
         t: FloatArray = steps.astype(np.float64) * sc.dt_s  # (N, T) episode time
         d_min_t, hit = self._nearest_and_hits(traj, t)
@@ -297,8 +292,9 @@ class OpenWaterBatch:
             observation=self._observe(),
             terminated=terminated,
             truncated=(time_limit | out_of_area) & ~terminated,
-            heading_change_rad=res.heading_change_rad,
+            heading_change_rad=dpsi,
             min_distance_m=self._min_d.copy(),
+            distance_to_obstacle_m=d_min_t[rows, end],
             distance_to_goal_m=np.hypot(dx[rows, end], dy[rows, end]),
             reached_goal=reached,
             collision=collision,

@@ -36,6 +36,8 @@ array; the reset itself is one batched call.
 
 from __future__ import annotations
 
+import bisect
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -50,13 +52,8 @@ from numpy.typing import NDArray
 from usvsim.task.batch import ActionKind, Observation, observation_rows, write_observation_rows
 from usvsim.task.horizon import RewardHorizon, apply_reward_horizon
 from usvsim.task.observations import OBSERVATION_KINDS, ObservationKind
-from usvsim.task.openwater import (
-    OpenWaterEpisode,
-    OpenWaterScenario,
-    draw_open_water,
-    vessel_motion,
-)
-from usvsim.task.openwater_batch import OpenWaterBatch, OpenWaterStep
+from usvsim.task.openwater import OpenWaterEpisode, OpenWaterScenario, draw_open_water
+from usvsim.task.openwater_batch import OpenWaterBatch
 from usvsim.task.options import EnvOptions, normalized_observation, normalized_positional_space
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction
@@ -102,6 +99,20 @@ class ScenarioMixture:
     def probabilities(self) -> FloatArray:
         w = np.asarray(self.weights, dtype=float)
         return w / w.sum()
+
+    @functools.cached_property
+    def _cdf(self) -> list[float]:
+        """The cumulative distribution as ``Generator.choice(p=probabilities)`` builds it."""
+        cdf = self.probabilities.cumsum()
+        cdf /= cdf[-1]
+        values: list[float] = cdf.tolist()
+        return values
+
+    def pick(self, rng: np.random.Generator) -> OpenWaterScenario:
+        """A member drawn from ``rng`` with probability ``probabilities``: the member and the
+        draw of ``rng.choice(len(members), p=probabilities)`` (one ``random()`` draw, the
+        first index whose cumulative probability exceeds it), without its checks per call."""
+        return self.members[bisect.bisect_right(self._cdf, rng.random())]
 
 
 # The family's ranges: every perturbation of the stress suite (usvsim.evaluation.stress) at up
@@ -216,10 +227,7 @@ def draw_family_episode(
 ) -> OpenWaterEpisode:
     """One episode of ``family`` from ``rng``: the member (a mixture only), then an episode
     seed, then :func:`usvsim.task.openwater.draw_open_water` of that member with that seed."""
-    if isinstance(family, OpenWaterScenario):
-        member = family
-    else:
-        member = family.members[int(rng.choice(len(family.members), p=family.probabilities))]
+    member = family if isinstance(family, OpenWaterScenario) else family.pick(rng)
     return draw_open_water(member, int(rng.integers(2**63)), 1)[0]
 
 
@@ -378,27 +386,12 @@ class OpenWaterVectorEnv(VectorEnv):
             )
         return info
 
-    def _end_distance(self, res: OpenWaterStep) -> FloatArray:
-        """Pole-equivalent distance (m) to the nearest obstacle at each boat's end step (N,)."""
-        sim, rows = self.sim, np.arange(self.num_envs)
-        end = res.end_step - 1
-        pos = res.trajectory[rows, end, 0:2]  # (N, 2) true position
-        steps = (self._decisions - 1) * sim.base.steps_per_decision + end + 1
-        t = steps.astype(np.float64) * sim.base.dt_s  # (N,) episode time of the end step
-        vessels, _ = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, t[:, None])
-        centres = np.concatenate([sim.centres, vessels], axis=1)  # (N, J, 2)
-        radii = np.concatenate([sim.radii, sim.v_radius], axis=1)
-        ok = np.concatenate([sim.static_ok, sim.vessel_ok], axis=1)
-        h = np.hypot(pos[:, None, 0] - centres[..., 0], pos[:, None, 1] - centres[..., 1])
-        d = np.where(ok, h + (sim.base.pole_radius_m - radii), np.inf)
-        return d.min(axis=1, initial=np.inf)
-
     def step(
         self, actions: Any
     ) -> tuple[Observation, FloatArray, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
         res = self.sim.step(actions)
         self._decisions += 1
-        d_obstacle = self._end_distance(res)
+        d_obstacle = res.distance_to_obstacle_m
         terms = self.reward(d_obstacle, res.distance_to_goal_m)
         dp = self.sim.base.decision_period_s
         time_s = (self._decisions * dp).astype(np.float64)
