@@ -14,7 +14,10 @@ name                         helmsman
                              COLREG costs (Johansen et al. 2016), ``scene`` observation
 ``vo-radar``                 :class:`baselines.vo_radar.VORadarHelmsman`: ``vo`` on the tracks of
                              its radar (:mod:`usvsim.nav.tracker`), ``radar+nav`` observation
-``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``
+``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``, also
+                             by the name its model card proposes (``usvsim models``:
+                             observation-action-algorithm-task, e.g.
+                             ``scene-categorical-gail-openwater``; :func:`model_aliases`)
 a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
 ===========================  ===================================================================
 
@@ -52,6 +55,7 @@ __all__ = [
     "helmsman_kinds",
     "load_checkpoint_helmsman",
     "make_helmsman",
+    "model_aliases",
     "select_helmsmen",
 ]
 
@@ -147,6 +151,33 @@ def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFact
     return helmsmen
 
 
+def model_aliases(models_dir: Path | None = None) -> dict[str, str]:
+    """Proposed name → file stem of each shipped model whose card (``models.json``, entry
+    ``card.proposed_name``) names it; a name that is already a helmsman's is not an alias.
+
+    Read here from the JSON (not through :mod:`usvsim.evaluation.model_cards`, which checks the
+    cards) so that the registry stays below the evaluation block.
+    """
+    import json
+
+    folder = MODELS_DIR if models_dir is None else models_dir
+    index = folder / "models.json"
+    if not index.is_file():
+        return {}
+    try:
+        entries = json.loads(index.read_text())["models"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise UserError(f"{index}: unreadable model index ({type(exc).__name__})") from exc
+    taken = {p.stem for p in folder.glob("*.pt")} | {"los", "los-avoid", "vo", "sb-mpc"}
+    taken |= {"vo-radar", *SANITY_HELMSMEN, ALL}
+    aliases: dict[str, str] = {}
+    for stem, entry in entries.items():
+        proposed = (entry.get("card") or {}).get("proposed_name")
+        if proposed and proposed not in taken and (folder / f"{stem}.pt").is_file():
+            aliases[proposed] = stem
+    return aliases
+
+
 def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
     """Any helmsman of the module's table, by name or checkpoint path.
 
@@ -165,6 +196,9 @@ def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
     registry = available_helmsmen()
     if name in registry:
         return registry[name]()
+    aliases = model_aliases()
+    if name in aliases:
+        return registry[aliases[name]]()
     if Path(name).is_file():
         return load_checkpoint_helmsman(name)
     raise UserError(_unknown(name, registry))
@@ -172,8 +206,8 @@ def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
 
 def _unknown(name: str, registry: dict[str, HelmsmanFactory]) -> str:
     return (
-        f"unknown helmsman {name!r}; choose {', '.join((*SANITY_HELMSMEN, *registry))} "
-        "or a checkpoint file (.pt)"
+        f"unknown helmsman {name!r}; choose {', '.join((*SANITY_HELMSMEN, *registry))}, "
+        "a model's proposed name (usvsim models) or a checkpoint file (.pt)"
     )
 
 
@@ -194,6 +228,7 @@ def select_helmsmen(
     registry = available_helmsmen()
     if not names or list(names) == [ALL]:
         return dict(registry)
+    aliases = model_aliases()
     chosen: dict[str, HelmsmanFactory] = {}
     sources: dict[str, str] = {}
     factory: HelmsmanFactory
@@ -202,6 +237,8 @@ def select_helmsmen(
             label, factory = name, partial(make_helmsman, name, action)
         elif name in registry:
             label, factory = name, registry[name]
+        elif name in aliases:
+            label, factory = name, registry[aliases[name]]
         elif Path(name).is_file():
             label, factory = Path(name).stem, partial(load_checkpoint_helmsman, name)
         else:

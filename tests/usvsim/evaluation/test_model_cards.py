@@ -216,3 +216,22 @@ def test_default_helmsmen_are_the_baselines_and_the_recommended_models(
     assert {"los", "los-avoid", "vo"} <= set(names)
     assert list(select_helmsmen(["all"])) == list(available_helmsmen())
     assert "il-gaussian-positional" in select_helmsmen(["all"])
+
+
+def test_every_model_is_also_named_by_its_card(tmp_path: Path) -> None:
+    """``usvsim bench --helmsmen scene-categorical-gail-openwater`` loads the file its card
+    describes; the proposed name labels the row; an index without cards gives no aliases."""
+    aliases = registry.model_aliases()
+    cards = load_cards()
+    assert aliases == {c.proposed_name: name for name, c in cards.items()}
+    proposed = cards[SMALL].proposed_name
+    chosen = registry.select_helmsmen([proposed])
+    assert list(chosen) == [proposed]
+    by_alias, by_file = chosen[proposed](), registry.make_helmsman(SMALL)
+    assert type(by_alias) is type(registry.make_helmsman(proposed)) is type(by_file)
+    assert registry.checkpoint_facts(MODELS_DIR / f"{SMALL}.pt")["setup"] == SMALL
+    shutil.copy(MODELS_DIR / f"{SMALL}.pt", tmp_path / f"{SMALL}.pt")
+    assert registry.model_aliases(tmp_path) == {}  # no models.json there
+    (tmp_path / "models.json").write_text("{")
+    with pytest.raises(UserError, match="unreadable model index"):
+        registry.model_aliases(tmp_path)
