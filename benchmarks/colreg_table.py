@@ -1,0 +1,149 @@
+"""The COLREG suite's tables for docs/guide/colreg-suite.md, from ``usvsim bench --suite colreg
+--json`` output: one row per helmsman (made for traffic or not, what it perceives, the Imazu
+problems pooled: success and compliance with Wilson 95 % intervals, collisions; the trafficgen
+sets), then the overtaking Imazu problems per helmsman. Run from the repository root::
+
+    usvsim bench --suite colreg --helmsmen all --colreg-episodes 20 --json > colreg.json
+    python benchmarks/colreg_table.py colreg.json                      # print the tables
+    python benchmarks/colreg_table.py colreg.json --write docs/guide/colreg-suite.md
+
+``--write`` replaces the text between the markers ``<!-- colreg-table:begin -->`` and
+``<!-- colreg-table:end -->`` (and ``colreg-overtaking:...``) of that file, atomically.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+# Imazu problems with an overtaking target (own ship faster, same course; usvsim.evaluation.imazu)
+OVERTAKING_PROBLEMS = (3, 7, 15, 17, 20, 22)
+BASELINES = ("los", "los-avoid", "vo", "vo-radar", "sb-mpc")
+
+
+def _pct(successes: int, n: int, low: float | None, high: float | None) -> str:
+    if n == 0 or low is None or high is None:
+        return "–"
+    return f"{100 * successes / n:.1f} [{100 * low:.1f}, {100 * high:.1f}]"
+
+
+def _pooled(rows: list[dict[str, Any]]) -> tuple[int, int, int, int, int]:
+    """Successes, episodes, compliant, encounters, collisions summed over ``rows``."""
+    keys = ("successes", "episodes", "compliant", "encounters", "collisions")
+    return tuple(sum(int(r[k]) for r in rows) for k in keys)  # type: ignore[return-value]
+
+
+def _wilson(successes: int, n: int) -> tuple[float | None, float | None]:
+    """Wilson 95 % interval (the suite's own, usvsim.evaluation.stats) of pooled counts."""
+    if n == 0:
+        return None, None
+    from usvsim.evaluation.stats import proportion
+
+    p = proportion(successes, n)
+    return p.lower, p.upper
+
+
+def helmsman_table(payload: dict[str, Any]) -> str:
+    """One row per helmsman (module docstring)."""
+    traffic = payload.get("helmsmen_traffic", {})
+    sets = payload["sets"]
+    others = [s for s in sets if not s.startswith("imazu-")]
+    lines = [
+        "| helmsman | made for traffic | trained for | perceives | Imazu success % | "
+        "Imazu compliance % | Imazu coll. | "
+        + " | ".join(f"{s} success / compliance %" for s in others)
+        + " |",
+        "|---" * (7 + len(others)) + "|",
+    ]
+    for h in payload["helmsmen"]:
+        rows = [r for r in payload["rows"] if r["helmsman"] == h]
+        imazu = [r for r in rows if r["episode_set"].startswith("imazu-")]
+        ok, n, comp, enc, coll = _pooled(imazu)
+        fit = traffic.get(h, {})
+        made = {True: "yes", False: "no"}.get(fit.get("meets_traffic"), "–")
+        cells = [
+            f"`{h}`",
+            made,
+            fit.get("trained_for", "–"),
+            fit.get("perceives", "–"),
+            _pct(ok, n, *_wilson(ok, n)),
+            _pct(comp, enc, *_wilson(comp, enc)),
+            str(coll),
+        ]
+        for s in others:
+            r = next((r for r in rows if r["episode_set"] == s), None)
+            if r is None:
+                cells.append("–")
+                continue
+            s_pct = f"{100 * r['successes'] / r['episodes']:.0f}"
+            c_pct = f"{100 * r['compliance_rate']:.0f}" if r["encounters"] else "–"
+            cells.append(f"{s_pct} / {c_pct}")
+        lines.append("| " + " | ".join(cells) + " |")
+    head = (
+        f"{payload['episodes_per_set']} episodes per set, {payload['split']} split, targets "
+        + ("reactive" if payload["reactive_targets"] else "holding course and speed")
+        + f"; {len(payload['helmsmen'])} helmsmen, run time {payload['wall_s']:.0f} s."
+    )
+    return head + "\n\n" + "\n".join(lines) + "\n"
+
+
+def overtaking_table(payload: dict[str, Any], helmsmen: tuple[str, ...] = BASELINES) -> str:
+    """Per overtaking Imazu problem and helmsman: compliance % of the problem's encounters, the
+    overtaking encounters failed, and of those the ones that crossed the target's course line
+    ahead of its bow (penalty ``overtaking_ahead``)."""
+    chosen = [h for h in helmsmen if h in payload["helmsmen"]]
+    by = {(r["episode_set"], r["helmsman"]): r for r in payload["rows"]}
+    lines = [
+        "| problem | " + " | ".join(f"`{h}`" for h in chosen) + " |",
+        "|---" * (1 + len(chosen)) + "|",
+    ]
+    for p in OVERTAKING_PROBLEMS:
+        name = f"imazu-{p:02d}"
+        cells = []
+        for h in chosen:
+            r = by.get((name, h))
+            if r is None:
+                cells.append("–")
+                continue
+            failed = int(r.get("violations_overtaking_give_way_failed", 0))
+            ahead = int(r.get("violations_overtaking_ahead", 0))
+            comp = f"{100 * r['compliance_rate']:.0f} %" if r["encounters"] else "–"
+            cells.append(f"{comp}; OT failed {failed}, ahead {ahead}")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _replace(text: str, marker: str, body: str) -> str:
+    pattern = re.compile(rf"(<!-- {marker}:begin -->\n).*?(<!-- {marker}:end -->)", flags=re.DOTALL)
+    if not pattern.search(text):
+        raise SystemExit(f"colreg_table: no <!-- {marker}:begin/end --> markers in the file")
+    return pattern.sub(lambda m: m.group(1) + body + m.group(2), text)
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) not in (1, 3) or (len(argv) == 3 and argv[1] != "--write"):
+        print("usage: python benchmarks/colreg_table.py COLREG_JSON [--write DOC]", file=sys.stderr)
+        return 2
+    payload = json.loads(Path(argv[0]).read_text())
+    tables = {
+        "colreg-table": helmsman_table(payload),
+        "colreg-overtaking": overtaking_table(payload),
+    }
+    if len(argv) == 1:
+        print("\n".join(tables.values()), end="")
+        return 0
+    doc = Path(argv[2])
+    text = doc.read_text()
+    for marker, body in tables.items():
+        text = _replace(text, marker, body)
+    from usvsim.common.fileio import atomic_write_text
+
+    atomic_write_text(doc, text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
