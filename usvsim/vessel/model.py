@@ -10,6 +10,7 @@ x[3:6]     ν = [u, v, r]: body velocities over ground              m/s, m/s, ra
 x[6:8]     a: actual actuator values (see ``vessels.Actuation``)  N, N | N, rad
 u[0:2]     a_cmd: commanded actuator values (saturated here)      as a
 p[0:2]     ocean current: speed V_c and direction β_c (going to)  m/s, rad
+p[2:5]     weather only: environmental load τ_env = [X, Y, N]    N, N, N m
 =========  =====================================================  =====================
 
 Equations (Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd ed.):
@@ -22,7 +23,10 @@ Equations (Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Contr
   6.44), D(ν_r) linear + modulus-quadratic + cubic damping;
 * first-order actuators ȧ = (sat(a_cmd) − a) / T_a; with T_a = 0 the actuator is instantaneous;
   the steering actuator's rate optionally limited, |ȧ2| ≤ a2_rate_max; a waterjet's delivered
-  thrust optionally falls with speed (:func:`thrust_factor`).
+  thrust optionally falls with speed (:func:`thrust_factor`);
+* with ``weather`` (:func:`build_dynamics`), an environmental load τ_env (wind and wave drift,
+  :mod:`usvsim.vessel.weather.loads`, held over the step by the caller) enters as
+  ν̇ += M⁻¹ τ_env, added last, so that τ_env = 0 leaves every other operation as it was.
 
 Hulls whose linear derivatives come from captive-model tests (e.g. Clarke et al. 1983) already
 contain the linearised added-mass Coriolis terms (Munk moment); this model adds C_A(ν_r) ν_r
@@ -43,6 +47,7 @@ from numpy.typing import NDArray
 from usvsim.vessel.vessels import Actuation, VesselParams
 
 __all__ = [
+    "NP_WEATHER",
     "NX",
     "NomotoModel",
     "build_dynamics",
@@ -61,6 +66,7 @@ __all__ = [
 NX = 8  # plant state size
 NU = 2  # actuator command size
 NP = 2  # parameter size: current speed (m/s) and direction (rad)
+NP_WEATHER = 5  # with weather: current, then the environmental load [X, Y, N] (N, N, N m)
 
 
 def mass_matrix(v: VesselParams) -> NDArray[np.float64]:
@@ -169,8 +175,11 @@ def _current_body(x: Any, p: Any) -> Any:
     return ca.vertcat(c * vc_n + s * vc_e, -s * vc_n + c * vc_e, 0.0)
 
 
-def _rigid_body_rates(v: VesselParams, x: Any, tau: Any, p: Any) -> tuple[Any, Any]:
-    """Return (η̇, ν̇) for state ``x`` (≥ 6 entries) under generalised force ``tau``."""
+def _rigid_body_rates(
+    v: VesselParams, x: Any, tau: Any, p: Any, weather: bool = False
+) -> tuple[Any, Any]:
+    """Return (η̇, ν̇) for state ``x`` (≥ 6 entries) under generalised force ``tau``; with
+    ``weather``, plus the environmental load ``p[2:5]``."""
     psi = x[2]
     nu = x[3:6]
     c, s = ca.cos(psi), ca.sin(psi)
@@ -182,17 +191,23 @@ def _rigid_body_rates(v: VesselParams, x: Any, tau: Any, p: Any) -> tuple[Any, A
     r = nu[2]
     nu_c_dot = ca.vertcat(r * nu_c[1], -r * nu_c[0], 0.0)  # -S(r) ν_c
     eta_dot = ca.vertcat(c * nu[0] - s * nu[1], s * nu[0] + c * nu[1], nu[2])
-    return eta_dot, nu_r_dot + nu_c_dot
+    nu_dot = nu_r_dot + nu_c_dot
+    if weather:  # last, so that τ_env = 0 leaves every other operation as it was
+        nu_dot = nu_dot + ca.mtimes(ca.DM(Minv), p[2:5])
+    return eta_dot, nu_dot
 
 
-def build_dynamics(v: VesselParams) -> ca.Function:
+def build_dynamics(v: VesselParams, weather: bool = False) -> ca.Function:
     """The plant as one pure CasADi Function ``f(x[8], u[2], p[2]) -> xdot[8]``.
 
     Inputs named ``x``, ``u``, ``p``; output ``xdot``. See the module docstring for the layout.
+    With ``weather``, ``p`` has :data:`NP_WEATHER` entries: the current and an environmental
+    load τ_env (wind, wave drift); with τ_env = 0 it gives the numbers of the function without
+    weather (bit for bit in CasADi's virtual machine, tested).
     """
     x = ca.SX.sym("x", NX)
     u = ca.SX.sym("u", NU)
-    p = ca.SX.sym("p", NP)
+    p = ca.SX.sym("p", NP_WEATHER if weather else NP)
     act = v.actuation
     a_cmd = saturate_command(act, u)
     a_dot = []
@@ -210,7 +225,7 @@ def build_dynamics(v: VesselParams) -> ca.Function:
             a_eff.append(a_cmd[i])
     u_r = x[3] - _current_body(x, p)[0] if math.isfinite(act.jet_speed_mps) else 0.0
     tau = generalized_forces(act, ca.vertcat(*a_eff), u_r)
-    eta_dot, nu_dot = _rigid_body_rates(v, x, tau, p)
+    eta_dot, nu_dot = _rigid_body_rates(v, x, tau, p, weather)
     xdot = ca.vertcat(eta_dot, nu_dot, *a_dot)
     return ca.Function("f", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
 

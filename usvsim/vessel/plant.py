@@ -145,6 +145,11 @@ class Plant:
         return self._stepper.backend
 
     @property
+    def kernel(self) -> str:
+        """The kernel in use: ``soa``, ``scalar`` (compiled) or ``casadi``."""
+        return self._stepper.kernel
+
+    @property
     def cruise_speed_mps(self) -> float:
         """The design speed: the autopilot config's, else the vessel's (m/s)."""
         return self.design.cruise_speed_mps

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from usvsim.common.errors import UserError
 
-__all__ = ["NotchFilter", "design_notch"]
+__all__ = ["NotchFilter", "design_notch", "notch_coefficients"]
 
 ATTENUATION_RANGE_DB = (1.0, 60.0)  # dB, accepted notch depths
 
@@ -60,19 +60,8 @@ def design_notch(
             f"notch frequency must lie in (0, π/dt) = (0, {math.pi / dt_s:.3g}) rad/s, got {omega0}"
         )
     zeta = 10.0 ** (-attenuation_db / 20.0)
-    c = omega0 / math.tan(0.5 * omega0 * dt_s)  # prewarped Tustin: s = c (z - 1) / (z + 1)
-
-    def quadratic(z: float) -> NDArray[np.float64]:
-        # c²(z-1)² + 2 z ω₀ c (z²-1) + ω₀²(z+1)² in powers z², z¹, z⁰
-        return np.array(
-            [
-                c * c + 2 * z * omega0 * c + omega0**2,
-                2 * omega0**2 - 2 * c * c,
-                c * c - 2 * z * omega0 * c + omega0**2,
-            ]
-        )
-
-    num, den = quadratic(zeta), quadratic(1.0)
+    b, a = notch_coefficients(np.array([omega0]), attenuation_db, dt_s)
+    num, den = b[0], a[0]
     if lowpass_rad_s is not None:
         if not 0 < lowpass_rad_s < math.pi / dt_s:
             raise UserError(
@@ -84,3 +73,22 @@ def design_notch(
         # c (z - 1) + ω_f (z + 1)
         den = np.asarray(np.polymul(den, [cf + lowpass_rad_s, lowpass_rad_s - cf]), float)
     return NotchFilter(num / den[0], den / den[0], omega0, zeta, dt_s)
+
+
+def notch_coefficients(
+    omega0: NDArray[np.float64], attenuation_db: float, dt_s: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The notch of :func:`design_notch` (no low-pass) for N frequencies at once: numerator b and
+    denominator a, each (N, 3), a[:, 0] = 1. Checks nothing (the caller clips ω₀ below π/dt)."""
+    w = np.asarray(omega0, dtype=float)[:, None]
+    zeta = 10.0 ** (-attenuation_db / 20.0)
+    c = w / np.tan(0.5 * w * dt_s)  # prewarped Tustin: s = c (z - 1) / (z + 1)
+
+    def quadratic(z: float) -> NDArray[np.float64]:
+        # c²(z-1)² + 2 z ω₀ c (z²-1) + ω₀²(z+1)² in powers z², z¹, z⁰
+        return np.concatenate(
+            [c * c + 2 * z * w * c + w**2, 2 * w**2 - 2 * c * c, c * c - 2 * z * w * c + w**2], 1
+        )
+
+    num, den = quadratic(zeta), quadratic(1.0)
+    return num / den[:, :1], den / den[:, :1]

@@ -42,6 +42,7 @@ __all__ = [
     "SeaState",
     "WaterlinePolygon",
     "WaveResponse",
+    "drift_pressure",
     "drift_table",
     "encounter_frequency",
     "jonswap",
@@ -49,6 +50,7 @@ __all__ = [
     "reflection_squared",
     "sea_state_from_code",
     "wave_displacement",
+    "wave_motion_discrete",
     "wave_motion_init",
     "wave_motion_step",
     "wave_response",
@@ -196,6 +198,16 @@ def wave_motion_init(rng: np.random.Generator, resp: WaveResponse) -> NDArray[np
     return np.einsum("nij,nj->ni", _chol2(p), rng.standard_normal((resp.omega0.size, 2)))
 
 
+def wave_motion_discrete(
+    resp: WaveResponse, dt_s: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Φ (N, 2, 2) and the lower Cholesky factor L (N, 2, 2) of the exact discrete model
+    x' = Φ x + L ξ, L Lᵀ = P∞ - Φ P∞ Φᵀ, ξ ~ N(0, I)."""
+    phi, p = _transition(resp, dt_s)
+    qd = p - np.einsum("nij,njk,nlk->nil", phi, p, phi)
+    return phi, _chol2(qd)
+
+
 def wave_motion_step(
     x: NDArray[np.float64], rng: np.random.Generator, resp: WaveResponse, dt_s: float
 ) -> NDArray[np.float64]:
@@ -203,9 +215,8 @@ def wave_motion_step(
 
     x[:, 1] is the wave elevation ζ (m); ω₀ x[:, 0] the horizontal displacement (m).
     """
-    phi, p = _transition(resp, dt_s)
-    qd = p - np.einsum("nij,njk,nlk->nil", phi, p, phi)
-    noise = np.einsum("nij,nj->ni", _chol2(qd), rng.standard_normal(x.shape))
+    phi, chol = wave_motion_discrete(resp, dt_s)
+    noise = np.einsum("nij,nj->ni", chol, rng.standard_normal(x.shape))
     return np.einsum("nij,nj->ni", phi, x) + noise
 
 
@@ -254,6 +265,22 @@ def reflection_squared(omega: ArrayLike, draft_m: float) -> NDArray[np.float64]:
     return 1.0 / (1.0 + ratio**2)
 
 
+def drift_pressure(
+    hs_m: ArrayLike,
+    tp_s: ArrayLike,
+    draft_m: float = USV105_WATERLINE.draft_m,
+    gamma: float = 3.3,
+) -> NDArray[np.float64]:
+    """p_d = ρ g ∫ S(ω) R²(ω) dω (N/m) per boat, shape (N,): the drift load per metre of a wall
+    met head-on (module docstring); 0 in a calm sea."""
+    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))[:, None]
+    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))[:, None]
+    omega = np.linspace(0.05, 15.0, 3000)  # rad/s; S ∝ ω⁻⁵ leaves < 1e-4 m0 above
+    s = jonswap(omega, hs, np.where(hs > 0, tp, 1.0), gamma)
+    m_r = np.trapezoid(s * reflection_squared(omega, draft_m), omega, axis=1)  # m²
+    return np.asarray(RHO_WATER * G * m_r, dtype=float)
+
+
 def mean_drift_force(
     hs_m: ArrayLike,
     tp_s: ArrayLike,
@@ -263,11 +290,7 @@ def mean_drift_force(
     gamma: float = 3.3,
 ) -> NDArray[np.float64]:
     """Mean drift [X (N), Y (N), N (N m)] in body axes, shape (N, 3) (module docstring's model)."""
-    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))[:, None]
-    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))[:, None]
-    omega = np.linspace(0.05, 15.0, 3000)  # rad/s; S ∝ ω⁻⁵ leaves < 1e-4 m0 above
-    s = jonswap(omega, hs, np.where(hs > 0, tp, 1.0), gamma)
-    m_r = np.trapezoid(s * reflection_squared(omega, waterline.draft_m), omega, axis=1)  # m²
+    pressure = drift_pressure(hs_m, tp_s, waterline.draft_m, gamma)  # N/m, per metre of lit wall
     v = np.asarray(waterline.vertices, dtype=float)
     a, b = v, np.roll(v, -1, axis=0)
     edge = b - a
@@ -278,7 +301,6 @@ def mean_drift_force(
     k_hat = np.stack([np.cos(rel), np.sin(rel)], -1).reshape(-1, 2)
     nk = k_hat @ normal.T  # (N, S)
     lit = np.where(nk < 0.0, nk**2, 0.0) * length  # m, illuminated segments only
-    pressure = np.asarray(RHO_WATER * G * m_r, dtype=float)  # N/m, per metre of lit wall
     force = -pressure[:, None, None] * lit[:, :, None] * normal[None]  # (N, S, 2)
     moment = mid[None, :, 0] * force[..., 1] - mid[None, :, 1] * force[..., 0]
     return np.concatenate([force.sum(1), moment.sum(1, keepdims=True)], -1)

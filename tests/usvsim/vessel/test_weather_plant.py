@@ -1,0 +1,161 @@
+"""The plant in wind and waves (usvsim.vessel.weather_plant, issue 38): the compiled weather
+step equals the calm plant bit for bit without weather, its loads equal the NumPy references,
+and its gusts and wave motion have the designed statistics."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from usvsim.common.errors import UserError
+from usvsim.vessel.autopilot import AutopilotConfig
+from usvsim.vessel.plant import Plant
+from usvsim.vessel.weather.loads import USV105_HULL, drift_loads, wind_loads
+from usvsim.vessel.weather.waves import drift_pressure, mean_drift_force, sea_state_from_code
+from usvsim.vessel.weather.wind import wind_forces
+from usvsim.vessel.weather_plant import SeaConditions, WeatherPlant, wave_offsets
+
+
+def _poses(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    eta = np.c_[rng.uniform(-100, 100, (n, 2)), rng.uniform(-3, 3, n)]
+    return eta, rng.uniform(-math.pi, math.pi, n)
+
+
+@pytest.mark.parametrize(
+    ("backend", "autopilot"),
+    [("casadi", "pid"), ("casadi", "rover"), ("soa", "pid"), ("scalar", "pid"), ("soa", "rover")],
+)
+def test_no_weather_gives_the_calm_plant(backend: str, autopilot: str) -> None:
+    """No wind, calm sea, wave filter on (it passes through where there are no waves), a current:
+    after 300 steps the plant and autopilot states equal Plant.step's bit for bit in CasADi's
+    virtual machine (every weather term is an exact zero). Compiled, the weather kernel is another
+    C function, so the compiler contracts (FMA) and packs some operations differently: agreement
+    to 1e-9 m and 1e-9 rad, not bits. The calm Plant itself is unchanged (its own tests)."""
+    plant = Plant(
+        "default",
+        autopilot=AutopilotConfig.from_name(autopilot),
+        current=(0.4, 1.0),
+        backend=backend,  # type: ignore[arg-type]
+    )
+    weather = WeatherPlant(plant, seed=3)
+    assert weather.kernel == plant.kernel == backend
+    n = 48
+    eta, ref = _poses(n)
+    _, calm = plant.step(plant.initial_state(eta), ref, n_steps=300)
+    start = weather.initial_state(eta, SeaConditions.uniform(n))
+    _, wavy = weather.step(start, ref, n_steps=300)
+    if backend == "casadi":
+        assert np.array_equal(calm, wavy[:, :, :13])
+    else:
+        np.testing.assert_allclose(wavy[:, :, :3], calm[:, :, :3], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(wavy[:, :, :13], calm, rtol=1e-9, atol=1e-9)
+
+
+def test_kernel_wind_load_is_the_excess_over_still_air() -> None:
+    nu, psi, v, beta = (ca.SX.sym(k, n) for k, n in (("nu", 3), ("psi", 1), ("v", 1), ("b", 1)))
+    f = ca.Function("w", [nu, psi, v, beta], [wind_loads(USV105_HULL, nu, psi, v, beta)])
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        state = rng.normal(size=3) * [3.0, 1.0, 0.2]
+        heading, speed, direction = rng.uniform(-3, 3), rng.uniform(0.5, 20), rng.uniform(-3, 3)
+        got = np.asarray(f(state, heading, speed, direction)).ravel()
+        want = (
+            wind_forces(state[None], [heading], [speed], [direction])[0]
+            - wind_forces(state[None], [heading], [0.0], [direction])[0]
+        )
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-9)
+    # at rest: the whole wind force; without wind: exactly nothing, moving or not
+    at_rest = np.asarray(f([0, 0, 0], 0.0, 10.0, math.pi / 2)).ravel()
+    want = wind_forces(np.zeros((1, 3)), [0], [10], [math.pi / 2])[0]
+    np.testing.assert_allclose(at_rest, want, rtol=1e-12, atol=1e-9)
+    assert at_rest[1] == pytest.approx(833.765625, rel=1e-9)  # ½ ρ V² c_y A_L, to starboard
+    assert np.all(np.asarray(f([3.0, 0.5, 0.1], 0.3, 0.0, 1.0)) == 0.0)
+
+
+def test_kernel_drift_load_equals_the_reference_at_every_heading() -> None:
+    psi, p, beta = (ca.SX.sym(k) for k in ("psi", "p", "b"))
+    f = ca.Function("d", [psi, p, beta], [drift_loads(USV105_HULL, psi, p, beta)])
+    sea = sea_state_from_code(4)
+    pressure = drift_pressure([sea.hs_m], [sea.tp_s])[0]
+    # following seas meet only the stern transom (3.5 m wide, normal -x): X = p_d 3.5 m ahead
+    assert mean_drift_force([sea.hs_m], [sea.tp_s], [0.0], [0.0])[0, 0] == pytest.approx(
+        3.5 * pressure, rel=1e-12
+    )
+    for heading in np.linspace(-math.pi, math.pi, 13):
+        want = mean_drift_force([sea.hs_m], [sea.tp_s], [0.7], [heading])[0]
+        got = np.asarray(f(heading, pressure, 0.7)).ravel()
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+
+
+def test_beam_wind_pushes_the_boat_downwind_and_a_calm_sea_does_not() -> None:
+    """10 m/s wind towards east on boats holding north at 3 m/s: the track drifts east, at a
+    rate between 0 and the drift of a boat at rest (0.573 m/s, test_weather)."""
+    plant = Plant("default")
+    weather = WeatherPlant(plant, seed=0)
+    n = 8
+    eta = np.zeros((n, 3))
+    cond = SeaConditions.uniform(n, 10.0, math.pi / 2, gust_intensity=0.0)
+    end, _ = weather.step(weather.initial_state(eta, cond), np.zeros(n), n_steps=1200)
+    east_rate = end.x[:, 1] / 120.0  # m/s
+    assert np.all(east_rate > 0.05)
+    assert np.all(east_rate < 0.573)
+    assert np.ptp(end.x[:, 1]) < 1e-9  # no gusts, no waves: every boat the same
+
+
+def test_same_seed_same_weather_other_seed_other_gusts() -> None:
+    plant = Plant("default")
+    n = 6
+    eta, ref = _poses(n)
+    cond = SeaConditions.uniform(n, 12.0, 1.0, sea_state_from_code(3, 2.0))
+    runs = []
+    for seed in (5, 5, 6):
+        weather = WeatherPlant(plant, seed=seed)
+        runs.append(weather.step(weather.initial_state(eta, cond), ref, n_steps=200)[1])
+    assert np.array_equal(runs[0], runs[1])
+    assert not np.allclose(runs[0], runs[2])
+
+
+def test_gusts_and_wave_motion_have_their_stationary_spread() -> None:
+    """Gust std σ_g = I V̄ = 1 m/s; wave elevation std H_s / 4 (sea state 4: 0.47 m)."""
+    plant = Plant("default")
+    weather = WeatherPlant(plant, seed=9)
+    n = 256
+    sea = sea_state_from_code(4, 0.5)
+    cond = SeaConditions.uniform(n, 10.0, 0.0, sea, gust_intensity=0.1)
+    _, traj = weather.step(weather.initial_state(np.zeros((n, 3)), cond), 0.0, n_steps=600)
+    gust, elevation = traj[:, ::20, 13], traj[:, ::20, 15]
+    assert gust.std() == pytest.approx(1.0, rel=0.05)
+    assert elevation.std() == pytest.approx(sea.hs_m / 4, rel=0.05)
+
+
+def test_sensed_heading_carries_the_wave_yaw_and_the_filter_follows_it() -> None:
+    """Sea state 4 from 45° off the bow: the sensed heading (state psi_in1) is the true one plus
+    wave_offsets' Δψ, and the filtered heading stays within a degree of the true mean course."""
+    plant = Plant("default")
+    weather = WeatherPlant(plant, seed=1)
+    n = 16
+    cond = SeaConditions.uniform(n, sea=sea_state_from_code(4, math.radians(135)))
+    state = weather.initial_state(np.zeros((n, 3)), cond)
+    state, _ = weather.step(state, 0.0, n_steps=1)
+    before = wave_offsets(state)  # Δψ at the new state is sensed at the next step
+    after, _ = weather.step(state, 0.0, n_steps=1)
+    np.testing.assert_allclose(after.m[:, 3], state.x[:, 2] + before[:, 2], rtol=0, atol=1e-12)
+    assert np.std(before[:, 2]) > math.radians(0.2)  # waves are seen
+
+
+def test_bad_conditions_raise_one_line() -> None:
+    plant = Plant("default")
+    weather = WeatherPlant(plant)
+    bad = SeaConditions.uniform(2, wind_speed_mps=10.0)
+    bad = SeaConditions(
+        bad.wind_speed_mps * 5, bad.wind_dir_rad, bad.gust_intensity, bad.hs_m, bad.tp_s,
+        bad.wave_dir_rad,
+    )  # fmt: skip
+    with pytest.raises(UserError, match="wind speed"):
+        weather.initial_state(np.zeros((2, 3)), bad)
+    with pytest.raises(UserError, match="finite numbers"):
+        weather.initial_state(np.zeros((3, 3)), SeaConditions.uniform(2))
