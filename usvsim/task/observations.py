@@ -259,25 +259,32 @@ def scene_observation(
     """
     n, j = radii_m.shape
     out = np.zeros((n, 4 + SCENE_FEATURES * k), dtype=np.float32)
-    r_g, b_g = relative_polar(pos_ne, psi_rad, goal_ne)
+    # the goal and every disc in one pass: range and bearing (n, 1 + J)
+    r_all, b_all = relative_polar(
+        pos_ne, psi_rad, np.concatenate([goal_ne[:, None, :], centres_ne], axis=1)
+    )
     c, s = np.cos(psi_rad), np.sin(psi_rad)
 
     def body(v: FloatArray) -> tuple[FloatArray, FloatArray]:  # NED → (forward, starboard)
         cc, ss = (c, s) if v.ndim == 2 else (c[:, None], s[:, None])
         return cc * v[..., 0] + ss * v[..., 1], -ss * v[..., 0] + cc * v[..., 1]
 
-    out[:, 0], out[:, 1] = r_g, b_g
+    out[:, 0], out[:, 1] = r_all[:, 0], b_all[:, 0]
     out[:, 2], out[:, 3] = body(velocity_ne)
     if j == 0:
         return out
-    r, b = relative_polar(pos_ne, psi_rad, centres_ne)
+    r, b = r_all[:, 1:], b_all[:, 1:]
     edge = np.where(valid, r - radii_m, np.inf)
     order = np.argsort(edge, axis=1, kind="stable")[:, :k]
-    rows = np.arange(n)[:, None]
     m = order.shape[1]
-    ok = valid[rows, order]
-    vx, vy = body(obstacle_velocity_ne[rows, order] - velocity_ne[:, None, :])
-    feats = np.stack([r[rows, order], b[rows, order], radii_m[rows, order], vx, vy, ok], axis=-1)
-    feats[~ok] = 0.0
+    # every disc's features (n J, 6), an empty slot's all zeros, then the k nearest of each
+    # boat gathered in one call
+    table = np.empty((n * j, SCENE_FEATURES))
+    table[:, 0], table[:, 1], table[:, 2] = r.ravel(), b.ravel(), radii_m.ravel()
+    vx, vy = body(obstacle_velocity_ne - velocity_ne[:, None, :])
+    table[:, 3], table[:, 4] = vx.ravel(), vy.ravel()
+    table[:, 5] = valid.ravel()
+    table[~valid.ravel()] = 0.0
+    feats = table[order + np.arange(0, n * j, j)[:, None]]  # (n, m, 6)
     out[:, 4 : 4 + SCENE_FEATURES * m] = feats.reshape(n, -1)
     return out

@@ -90,15 +90,14 @@ void usv_scene_distances(int n, int T, int K, int M, double r_pole, double half_
         const long i = (long)b * M + m;
         if (!vessel_ok[i]) continue;
         const double course = v_course[i], speed = v_speed[i], turn = v_turn[i];
-        const double chi = course + turn * t;
-        const double sin_chi = sin(chi), cos_chi = cos(chi);
         double dx, dy;
-        if (fabs(turn * t) < 1e-9) {
+        if (fabs(turn * t) < 1e-9) {  /* a straight course: no sin/cos of the course now */
           dx = speed * t * cos0[m];
           dy = speed * t * sin0[m];
         } else {
-          dx = speed / turn * (sin_chi - sin0[m]);
-          dy = speed / turn * (cos0[m] - cos_chi);
+          const double chi = course + turn * t;
+          dx = speed / turn * (sin(chi) - sin0[m]);
+          dy = speed / turn * (cos0[m] - cos(chi));
         }
         dxs[nd] = x - (v_p0[2 * i] + dx); dys[nd] = y - (v_p0[2 * i + 1] + dy);
         rs[nd] = v_radius[i];
