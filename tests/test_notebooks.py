@@ -4,19 +4,28 @@ Execution is slow (all ten take minutes on two cores), so it runs with ``-m slow
 notebooks' small budgets (``USVSIM_NOTEBOOK_QUICK=1``, read by the notebooks that train or run
 large episode sets). ``MPLBACKEND=Agg`` is set as ``.ci/run`` sets it: a notebook must select the
 inline backend itself, or its figures stay blank in Jupyter and in the documentation site.
+
+In CI the notebooks run once, in the documentation build (``docs/hooks/gen_notebooks.py``: it
+executes them and fails the build when a notebook page lacks its plots); ``.ci/run`` sets
+``USVSIM_NOTEBOOKS_IN_DOCS=1`` and the slow execution test here is then skipped. The default run
+checks that page check against mkdocs-jupyter's own rendering of a small executed notebook.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES_DIR = ROOT / "examples"
 EXAMPLES = sorted(EXAMPLES_DIR.glob("*.ipynb"))
-QUICK_ENV = "USVSIM_NOTEBOOK_QUICK"  # "1": the notebooks' small budgets (tests, CI)
+QUICK_ENV = "USVSIM_NOTEBOOK_QUICK"  # "1": the notebooks' small budgets (tests)
+IN_DOCS_ENV = "USVSIM_NOTEBOOKS_IN_DOCS"  # "1" (.ci/run): the docs build executes them instead
 
 # inline figures each notebook shows when executed with the small budgets
 FIGURES = {
@@ -61,7 +70,53 @@ def test_notebook_selects_the_inline_backend_first(path: Path) -> None:
     assert not [s for s in sources if "matplotlib.use(" in s or "switch_backend" in s]
 
 
+def _gen_notebooks() -> Any:
+    """``docs/hooks/gen_notebooks.py``, the docs build's notebook module."""
+    hooks = str(ROOT / "docs" / "hooks")
+    if hooks not in sys.path:
+        sys.path.insert(0, hooks)
+    import gen_notebooks
+
+    return gen_notebooks
+
+
+def test_page_check_names_a_page_without_its_plots() -> None:
+    check = _gen_notebooks().check_pages
+    assert check({"a.ipynb": 3, "b.ipynb": 1}, {"a.ipynb": 3, "b.ipynb": 1}) == []
+    assert check({"a.ipynb": 0}, {"a.ipynb": 0}) == [
+        "a.ipynb: 0 images on its page, 0 plots executed"
+    ]
+    assert check({"a.ipynb": 2}, {"a.ipynb": 3}) == [
+        "a.ipynb: 2 images on its page, 3 plots executed"
+    ]
+    assert check({}, {"a.ipynb": 1}) == ["a.ipynb: no page was built"]
+
+
+def test_built_page_images_are_counted_as_mkdocs_jupyter_renders_them(tmp_path: Path) -> None:
+    """Two inline plots, executed as the docs build executes, converted by mkdocs-jupyter: the
+    page check counts two images (and none before execution)."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    convert = pytest.importorskip("mkdocs_jupyter.convert")
+    gen = _gen_notebooks()
+    code = "%matplotlib inline\nimport matplotlib.pyplot as plt\n"
+    code += "plt.plot([0, 1])\nplt.show()\nplt.plot([1, 0])\nplt.show()\nprint('done')"
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
+    path = tmp_path / "plots.ipynb"
+    nbformat.write(nb, path)
+    assert gen.count_page_images(convert.nb2html(str(path))) == 0
+    env = {**os.environ, "MPLBACKEND": gen.INLINE}
+    nbclient.NotebookClient(nb, kernel_name="python3").execute(env=env)
+    nbformat.write(nb, path)
+    assert gen.count_images(path) == 2
+    assert gen.count_page_images(convert.nb2html(str(path))) == 2
+
+
 @pytest.mark.slow
+@pytest.mark.skipif(
+    os.environ.get(IN_DOCS_ENV) == "1",
+    reason=f"{IN_DOCS_ENV}=1: the docs build executes the notebooks and checks their plots",
+)
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)
 def test_notebook_executes_and_shows_its_figures(
     path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch

@@ -100,8 +100,10 @@ def pole_episode_png() -> bytes:
     while not done:
         obs, _, terminated, truncated, _ = env.step(np.asarray(helmsman.act(obs[None]))[0])
         done = terminated or truncated
+    frame = env.render()
+    assert isinstance(frame, np.ndarray)  # render_mode="rgb_array": one (H, W, 3) frame
     buf = io.BytesIO()
-    plt.imsave(buf, env.render(), format="png")
+    plt.imsave(buf, frame, format="png")
     env.close()
     return buf.getvalue()
 

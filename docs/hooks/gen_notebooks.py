@@ -3,13 +3,18 @@
 Each notebook of ``examples/`` runs top to bottom in a fresh kernel (nbclient), in a scratch
 working directory (so nothing lands in ``examples/``), with matplotlib's inline backend even
 where ``MPLBACKEND=Agg`` is set (``.ci/run`` sets it; an inherited Agg would leave every plot
-blank). A cell error stops the build. ``USVSIM_DOCS_EXECUTE=0`` skips the execution (a quick
-local preview; the pages then show the notebooks as committed).
+blank). A cell error stops the build, and so does a built notebook page without an image or
+with fewer images than its notebook plotted (:func:`check_pages`, after the build: the plots
+must reach the site). ``USVSIM_DOCS_EXECUTE=0`` skips the execution and that check (a quick
+local preview; the pages then show the notebooks as committed). This build is where the
+notebooks run in CI: ``.ci/run`` sets ``USVSIM_NOTEBOOKS_IN_DOCS=1`` so that ``pytest -m slow``
+does not run them a second time (``tests/test_notebooks.py``).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -42,6 +47,11 @@ def _execute(path: Path, out_dir: Path, env: dict[str, str], execute: bool) -> f
     return time.perf_counter() - start
 
 
+def executing() -> bool:
+    """Whether this build executes the notebooks (``USVSIM_DOCS_EXECUTE``, default on)."""
+    return os.environ.get("USVSIM_DOCS_EXECUTE", "1") != "0"
+
+
 def execute_all(out_dir: Path, log: Any) -> dict[str, float]:
     """Execute every notebook into ``out_dir`` (same file names); returns {name: seconds}.
 
@@ -50,7 +60,7 @@ def execute_all(out_dir: Path, log: Any) -> dict[str, float]:
     """
     from concurrent.futures import ThreadPoolExecutor
 
-    execute = os.environ.get("USVSIM_DOCS_EXECUTE", "1") != "0"
+    execute = executing()
     jobs = int(os.environ.get("USVSIM_DOCS_JOBS", min(2, os.cpu_count() or 1)))
     env = {**os.environ, "MPLBACKEND": INLINE, "OMP_NUM_THREADS": "1"}
     paths = notebooks()
@@ -76,6 +86,27 @@ def count_images(path: Path) -> int:
         for out in cell.get("outputs", [])
         if {"image/png", "image/svg+xml"} & set(out.get("data", {}))
     )
+
+
+_PAGE_IMAGE = re.compile(r"<img\b[^>]*\bsrc=[\"']data:image/(?:png|jpeg|svg\+xml)")
+
+
+def count_page_images(html: str) -> int:
+    """Images embedded in a built notebook page (mkdocs-jupyter inlines each plot as a
+    ``data:image/...`` ``<img>``)."""
+    return len(_PAGE_IMAGE.findall(html))
+
+
+def check_pages(pages: dict[str, int], outputs: dict[str, int]) -> list[str]:
+    """What is wrong with the built notebook pages: a page without an image, or with fewer
+    images than its executed notebook has plots (a plot lost on the way to the site); a
+    notebook without a built page. ``pages``/``outputs``: {notebook name: image count}."""
+    problems = [f"{name}: no page was built" for name in outputs if name not in pages]
+    for name, shown in pages.items():
+        plotted = outputs.get(name, 0)
+        if shown == 0 or shown < plotted:
+            problems.append(f"{name}: {shown} images on its page, {plotted} plots executed")
+    return problems
 
 
 def index_page(names: list[str], images: dict[str, int], times: dict[str, float]) -> str:

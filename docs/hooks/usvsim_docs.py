@@ -11,6 +11,8 @@ Generated at every build, from the code and the tools' outputs, so none of it is
   ``usvsim demo`` (:mod:`gen_plant`);
 - ``api/*.md``: mkdocstrings pages (:mod:`gen_api`);
 - ``notebooks/*.ipynb``: ``examples/`` executed (:mod:`gen_notebooks`), rendered by mkdocs-jupyter;
+  the images on each built notebook page are counted and the build fails where a page lacks the
+  plots its notebook drew (:func:`on_post_build`);
 - ``changelog.md``: the repository's ``CHANGELOG.md``.
 """
 
@@ -24,6 +26,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from mkdocs.exceptions import PluginError
 from mkdocs.plugins import event_priority
 from mkdocs.structure.files import File, Files
 
@@ -49,9 +52,15 @@ class _Build:
     """What one build generated and the placeholders' replacements (one instance per build)."""
 
     def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the previous build (``mkdocs serve`` rebuilds in one process)."""
         self.tmp: Path | None = None
         self.fragments: dict[str, str] = {}
         self.plant_images: list[str] = []
+        self.notebook_plots: dict[str, int] = {}  # {notebook: plots in its executed outputs}
+        self.notebook_pages: dict[str, int] = {}  # {notebook: images on its built page}
 
 
 _build = _Build()
@@ -125,6 +134,7 @@ def _notebooks(files: Files, config: Any) -> None:
     out.mkdir(parents=True)
     times = gen_notebooks.execute_all(out, log)
     images = {name: gen_notebooks.count_images(out / name) for name in times}
+    _build.notebook_plots = images
     for name in times:
         files.append(File(f"notebooks/{name}", src_dir=str(_build.tmp / "nbsrc"),
                           dest_dir=config["site_dir"],
@@ -136,7 +146,7 @@ def _notebooks(files: Files, config: Any) -> None:
 @event_priority(50)  # before mkdocs-jupyter's on_files, which wraps the notebooks it finds
 def on_files(files: Files, config: Any) -> Files:
     """Generate the pages and images of the module docstring."""
-    _build.__init__()
+    _build.reset()
     _build.tmp = Path(tempfile.mkdtemp(prefix="usvsim-docs-"))
     _env_pages(files, config)
     _add(files, config, "cli.md", gen_cli.cli_markdown())
@@ -173,7 +183,22 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str
     return re.sub(r"<!-- generated:([a-z0-9-]+) -->", fragment, markdown)
 
 
+def on_post_page(output: str, page: Any, config: Any) -> str:
+    """Count the images on each built notebook page (checked in :func:`on_post_build`)."""
+    uri = page.file.src_uri
+    if uri.startswith("notebooks/") and uri.endswith(".ipynb"):
+        _build.notebook_pages[Path(uri).name] = gen_notebooks.count_page_images(output)
+    return output
+
+
 def on_post_build(config: Any) -> None:
-    """Remove the build's scratch folder (executed notebooks)."""
+    """Fail the build if a notebook's plots did not reach its page (executed builds only); log
+    the images per notebook page; remove the build's scratch folder (executed notebooks)."""
     if _build.tmp is not None:
         shutil.rmtree(_build.tmp, ignore_errors=True)
+    for name, count in sorted(_build.notebook_pages.items()):
+        log.info("notebook page %s: %d images", name, count)
+    if gen_notebooks.executing():
+        problems = gen_notebooks.check_pages(_build.notebook_pages, _build.notebook_plots)
+        if problems:
+            raise PluginError("notebook pages without their plots: " + "; ".join(problems))
