@@ -91,9 +91,10 @@ def helmsman_table(payload: dict[str, Any]) -> str:
 
 
 def overtaking_table(payload: dict[str, Any], helmsmen: tuple[str, ...] = BASELINES) -> str:
-    """Per overtaking Imazu problem and helmsman: compliance % of the problem's encounters, the
-    overtaking encounters failed, and of those the ones that crossed the target's course line
-    ahead of its bow (penalty ``overtaking_ahead``)."""
+    """Per overtaking Imazu problem and helmsman: compliance % of all the problem's encounters
+    / overtaking (give-way) encounters scored / of those failed / overtaking encounters that
+    crossed the target's course line less than ``ahead_range_m`` ahead of its bow (penalty
+    ``overtaking_ahead``)."""
     chosen = [h for h in helmsmen if h in payload["helmsmen"]]
     by = {(r["episode_set"], r["helmsman"]): r for r in payload["rows"]}
     lines = [
@@ -108,10 +109,11 @@ def overtaking_table(payload: dict[str, Any], helmsmen: tuple[str, ...] = BASELI
             if r is None:
                 cells.append("–")
                 continue
+            n_ot = int(r.get("encounters_overtaking_give_way", 0))
             failed = int(r.get("violations_overtaking_give_way_failed", 0))
             ahead = int(r.get("violations_overtaking_ahead", 0))
-            comp = f"{100 * r['compliance_rate']:.0f} %" if r["encounters"] else "–"
-            cells.append(f"{comp}; OT failed {failed}, ahead {ahead}")
+            comp = f"{100 * r['compliance_rate']:.0f}" if r["encounters"] else "–"
+            cells.append(f"{comp} / {n_ot} / {failed} / {ahead}")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

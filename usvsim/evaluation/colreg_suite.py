@@ -55,6 +55,7 @@ __all__ = [
     "colreg_episodes",
     "colreg_row",
     "colreg_set_names",
+    "encounters_by_type",
     "made_for_traffic",
     "run_colreg",
     "run_colreg_args",
@@ -178,6 +179,7 @@ class ColregRow:
     mean_score: float  # mean encounter score in [0, 1]; NaN without encounters
     violations: dict[str, int] = field(default_factory=dict)  # failed encounters per rule
     wall_s: float = 0.0  # s, evaluation and scoring of the set
+    by_type: dict[str, int] = field(default_factory=dict)  # scored encounters per type
 
     def flat(self) -> dict[str, Any]:
         """Flat dict for CSV and JSON."""
@@ -198,6 +200,7 @@ class ColregRow:
             "compliance_ci95_high": c.upper,
             "mean_score": self.mean_score,
             **{f"violations_{k}": v for k, v in sorted(self.violations.items())},
+            **{f"encounters_{k}": v for k, v in sorted(self.by_type.items())},
             "wall_s": self.wall_s,
         }
 
@@ -224,6 +227,15 @@ def colreg_compliance(result: Any) -> tuple[Proportion, float, dict[str, int]]:
     return summary.compliance or _empty(), summary.mean_score, per_rule
 
 
+def encounters_by_type(result: Any) -> dict[str, int]:
+    """Scored encounters per type (``head_on``, ``overtaking_give_way``, ...) of a
+    :class:`usvsim.evaluation.colreg.ColregResult`; types without one left out."""
+    from usvsim.evaluation.colreg import summarize_colreg
+
+    by = summarize_colreg(result).by_type
+    return {name: d["encounters"] for name, d in by.items() if d["encounters"]}
+
+
 def colreg_columns(tracks: Any) -> dict[str, Any]:
     """The COLREG columns of a stress-suite row (:class:`usvsim.evaluation.bench.BenchRow`) for
     the tracks of its episodes: encounters, compliant ones, rate with its Wilson interval, mean
@@ -245,7 +257,8 @@ def colreg_row(helmsman: str, set_name: str, run: Any, wall_s: float) -> ColregR
     """The row of an :class:`usvsim.evaluation.colreg_rollout.EncounterRun`, scored."""
     from usvsim.evaluation.colreg import evaluate_colreg
 
-    compliance, mean, per_rule = colreg_compliance(evaluate_colreg(run.tracks))
+    result = evaluate_colreg(run.tracks)
+    compliance, mean, per_rule = colreg_compliance(result)
     ok = sum(bool(r.success) for r in run.records)
     return ColregRow(
         helmsman,
@@ -256,6 +269,7 @@ def colreg_row(helmsman: str, set_name: str, run: Any, wall_s: float) -> ColregR
         mean,
         per_rule,
         wall_s,
+        encounters_by_type(result),
     )
 
 

@@ -111,6 +111,8 @@ def test_cli_colreg_suite_json(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert len(rows) == 4 and all(r["episodes"] == 5 for r in rows.values())
     row = rows[("sb-mpc", "imazu-02")]
     assert 0.0 <= row["compliance_ci95_low"] <= row["compliance_rate"] <= 1.0
+    # Imazu 2: one target crossing from starboard, so every encounter is a give-way crossing
+    assert row["encounters_crossing_give_way"] == row["encounters"] == 5
     assert {"colreg.md", "colreg.csv", "colreg-heatmap.png"} <= {p.name for p in tmp_path.iterdir()}
 
 
