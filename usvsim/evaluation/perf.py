@@ -25,6 +25,7 @@ __all__ = [
     "measure_plant",
     "open_water_env_throughput",
     "open_water_figures",
+    "open_water_speed_table",
     "open_water_throughput",
     "per_boat_loop_rate",
     "profile_steps",
@@ -320,6 +321,8 @@ def _everything_figures(seconds: float) -> dict[str, Any]:
 PROFILE_WORKLOADS: tuple[tuple[str, str, ObservationKind], ...] = (
     ("study task", "", "positional"),
     ("study task", "", "radar+goal"),
+    ("OpenWater-v0", "", "scene"),  # the training env on its family (issue 40)
+    ("OpenWater-v0", "", "radar+goal"),
     ("everything set", "everything", "positional"),
     ("everything set", "everything", "radar+goal"),
     ("everything set", "everything", "scene"),
@@ -329,7 +332,8 @@ PROFILE_WORKLOADS: tuple[tuple[str, str, ObservationKind], ...] = (
 def profile_steps(seconds: float = 2.0, n_boats: int = 256, top: int = 8) -> dict[str, Any]:
     """Where a decision step's time goes (``usvsim perf --profile``): cProfile over about
     ``seconds`` of steps of each :data:`PROFILE_WORKLOADS` entry (the study task's vector env
-    with autoresets; the ``everything`` stress set on the open-water batch), at ``n_boats``.
+    and ``OpenWater-v0`` on its family, with autoresets; the ``everything`` stress set on the
+    open-water batch), at ``n_boats``.
 
     Per workload: steps/s under the profiler (slower than without it), ms per step, and the
     ``top`` functions by their own time (``tottime``) with calls and ms per step and share of
@@ -350,7 +354,7 @@ def profile_steps(seconds: float = 2.0, n_boats: int = 256, top: int = 8) -> dic
             sim.reset(None, list(stress_episodes(select_sets([set_name])[0], n_boats)))
             step: Callable[[Any], Any] = sim.step
         else:
-            env = PoleAvoidanceVectorEnv(n_boats, observation=kind, action="gaussian")
+            env = _make_env(label, kind, n_boats)
             env.reset(seed=0)
             step = env.step
         for k in range(3):
@@ -395,6 +399,62 @@ def _function_name(where: tuple[str, int, str]) -> str:
     else:
         path = parts[-1]
     return f"{path}:{line}({name})"
+
+
+def _make_env(label: str, kind: ObservationKind, n_envs: int) -> Any:
+    """The study task's vector env or, for ``label`` ``OpenWater-v0``, the open-water one."""
+    if label == "OpenWater-v0":
+        from usvsim.task.openwater_env import OpenWaterVectorEnv
+
+        return OpenWaterVectorEnv(n_envs, observation=kind, action="gaussian")
+    return PoleAvoidanceVectorEnv(n_envs, observation=kind, action="gaussian")
+
+
+OPEN_WATER_SPEED_TARGET = 150_000  # decision steps/s at N = 256 on 2 cores (issue 40)
+
+
+def open_water_speed_table(
+    sizes: tuple[int, ...] = (64, 256, 1024), seconds: float = 2.0, rounds: int = 5
+) -> dict[str, Any]:
+    """Decision steps per second of ``OpenWater-v0`` (scene and radar+goal, on its family,
+    random Gaussian actions, autoresets drawing new episodes included) beside the study task's
+    env (positional) at each of ``sizes`` boats, measured in the same run: per size, ``rounds``
+    interleaved turns of ``seconds / rounds`` for each env (a change of machine load hits all
+    alike), the median turn reported, with each open-water rate as a share of the study's
+    (``benchmarks/openwater_speed.py`` prints it; issue 40's bar: 150,000 at N = 256)."""
+    workloads: tuple[tuple[str, ObservationKind], ...] = (
+        ("study task", "positional"),
+        ("OpenWater-v0", "scene"),
+        ("OpenWater-v0", "radar+goal"),
+    )
+    rows = []
+    for n in sizes:
+        envs = {f"{label} {kind}": _make_env(label, kind, n) for label, kind in workloads}
+        turns: dict[str, list[float]] = {name: [] for name in envs}
+        for env in envs.values():
+            env.reset(seed=0)
+        for _ in range(rounds):
+            for name, env in envs.items():
+                turns[name].append(_decision_rate(env.step, n, seconds / rounds))
+        rates = {name: float(np.median(r)) for name, r in turns.items()}
+        study = rates["study task positional"]
+        rows.append(
+            {
+                "n_boats": n,
+                "decision_steps_per_s": {name: round(r) for name, r in rates.items()},
+                "over_study_task": {
+                    name: round(r / study, 3)
+                    for name, r in rates.items()
+                    if name != "study task positional"
+                },
+            }
+        )
+    return {
+        "rows": rows,
+        "target_N=256": OPEN_WATER_SPEED_TARGET,
+        "load_average_1min": _load_average(),
+        "cpus": os.cpu_count(),
+    }
 
 
 def _env_figures(seconds: float) -> dict[str, Any]:

@@ -62,3 +62,18 @@ def test_env_figures_carry_issue_17s_bars_and_say_which_noise_path_ran(monkeypat
     assert env["targets"] == {"positional N=256": 200_000, "radar+goal N=256": 100_000}
     assert env["decision_steps_per_s"]["positional N=256"] == 2560
     assert env["sensor_noise"] == ("numpy" if load_kernel() is None else "compiled")
+
+
+def test_open_water_speed_table_puts_each_env_beside_the_study_task():
+    result = perf.open_water_speed_table(sizes=(4,), seconds=0.06, rounds=2)
+    (row,) = result["rows"]
+    rates = row["decision_steps_per_s"]
+    assert row["n_boats"] == 4 and set(rates) == {
+        "study task positional",
+        "OpenWater-v0 scene",
+        "OpenWater-v0 radar+goal",
+    }
+    assert all(r > 0 for r in rates.values())
+    for name, share in row["over_study_task"].items():
+        assert share == pytest.approx(rates[name] / rates["study task positional"], rel=0.01)
+    assert result["target_N=256"] == 150_000
