@@ -2,6 +2,9 @@
 
 A *boat-substep* is one 0.1 s plant step (autopilot + RK4) of one boat; a *decision step* is one
 environment step (20 plant steps + navigation + observation) of one boat.
+
+Why this module is long: it is the one home of every figure ``usvsim perf`` prints (plant
+kernels, torch plant, envs, open water, the profile), all timed by the same few helpers.
 """
 
 from __future__ import annotations
