@@ -6,10 +6,9 @@ boat (each boat its own weather, as per-boat inputs of the compiled kernel):
 1. **Sensed heading and yaw rate** ψ_m = ψ + Δψ_w, r_m = r + Δr_w: the first-order wave-frequency
    yaw of :func:`usvsim.vessel.weather.waves.wave_displacement`, Δψ_w = c_ψ k₀ d sin 2(β_wv − ψ),
    d = ω₀ ξ₀ and Δr_w = c_ψ k₀ ω₀ ξ₁ sin 2(β_wv − ψ) (its rate, ψ̇ in the sine neglected);
-2. **Wave filter**: ψ_m and r_m each pass a discrete notch (Fossen 2021 §13,
-   :func:`usvsim.vessel.weather.filters.notch_coefficients`, direct form I); the heading one is
-   written in differences to the newest sample, wrapped with ``ssa``, so it works across ±π. With
-   b = [1, 0, 0], a = [1, 0, 0] it passes the input through unchanged (wave filter off);
+2. **Wave filter**: a Kalman observer (:mod:`usvsim.vessel.weather.observer`, Fossen 2021
+   §13.3) estimates the low-frequency ψ̂, r̂ from the compass ψ_m and the actuators' yaw moment;
+   where a boat's filter is off (input ``wave_filter`` = 0) the autopilot gets ψ_m, r_m exactly;
 3. the autopilot (:func:`usvsim.vessel.autopilot.control_law`) on the filtered ψ and r;
 4. one RK4 step of the vessel with current and the environmental load τ_env
    (:func:`usvsim.vessel.model.build_dynamics` with ``weather``): wind V_w = max(V̄ + g, 0) from
@@ -30,12 +29,12 @@ No wind, a calm sea and the wave filter off give the plant and autopilot states 
 :class:`usvsim.vessel.plant.Plant` bit for bit (tested): every weather term enters as an exact
 zero. The wave motion runs at the encounter frequency of the sea's peak for each boat's initial
 heading and speed, held for the episode (ASSUMED: a steady course; a turning boat meets a
-changing frequency). The notch sits at the same frequency (the autopilot is given it, as an
-encounter-frequency estimator would).
+changing frequency). The observer's wave model uses the same frequency (the autopilot is given
+it, as an encounter-frequency estimator would).
 
-Shapes (N boats, T steps): state ``s = [x (8), c (5), m (11)]`` per boat with ``m`` the weather
+Shapes (N boats, T steps): state ``s = [x (8), c (5), m (8)]`` per boat with ``m`` the weather
 states :data:`WEATHER_STATES`; per-boat inputs ``w = [ψ_ref, U_ref, V_c, β_c, ...]`` of
-:data:`WEATHER_INPUTS`; trajectory (N, T, 24).
+:data:`WEATHER_INPUTS`; trajectory (N, T, 21).
 """
 
 from __future__ import annotations
@@ -51,11 +50,17 @@ from usvsim.common.angles import ssa_casadi
 from usvsim.common.errors import UserError
 from usvsim.vessel.autopilot import NG, AutopilotKind, control_law
 from usvsim.vessel.codegen import BatchStepper
-from usvsim.vessel.model import NX, build_dynamics, rk4_expr
+from usvsim.vessel.model import NX, build_dynamics, generalized_forces, rk4_expr
 from usvsim.vessel.plant import NS, Plant, PlantState
 from usvsim.vessel.vessels import VesselParams
-from usvsim.vessel.weather.filters import notch_coefficients
 from usvsim.vessel.weather.loads import USV105_HULL, WeatherHull, environment_loads
+from usvsim.vessel.weather.observer import (
+    OBSERVER_STATES,
+    ObserverNoise,
+    observer_gains,
+    observer_step,
+    wrap_difference,
+)
 from usvsim.vessel.weather.waves import (
     HS_MAX_M,
     SeaState,
@@ -99,24 +104,16 @@ WEATHER_INPUTS = (
     "l10",
     "l11",
     "yaw_gain",  # -, c_ψ
-    "nb1",  # notch numerator b1, b2 (b0 is implied: unit DC gain)
-    "nb2",
-    "na1",  # notch denominator a1, a2
-    "na2",
+    "wave_filter",  # 1: the autopilot gets the observer's estimate, 0: the compass and gyro
+    # steady-state Kalman gains of the observer, per state (OBSERVER_STATES) and measurement
+    *(f"gain_{k}_{y}" for k in OBSERVER_STATES for y in ("compass", "gyro")),
 )
 #: Weather states per boat, in order (after the calm plant's 13).
 WEATHER_STATES = (
     "gust",  # m/s
     "xi0",  # wave motion filter state; d = ω₀ ξ₀ (m)
     "xi1",  # its derivative, the wave elevation (m)
-    "psi_in1",  # rad, sensed heading one and two samples back
-    "psi_in2",
-    "psi_out1",  # rad, filtered heading one and two samples back
-    "psi_out2",
-    "r_in1",  # rad/s, sensed yaw rate one and two samples back
-    "r_in2",
-    "r_out1",  # rad/s, filtered yaw rate one and two samples back
-    "r_out2",
+    *(f"obs_{k}" for k in OBSERVER_STATES),  # the wave filter's prior (observer module)
 )
 NWI, NWS = len(WEATHER_INPUTS), len(WEATHER_STATES)
 _I = {name: i for i, name in enumerate(WEATHER_INPUTS)}
@@ -124,25 +121,16 @@ _S = {name: NS + i for i, name in enumerate(WEATHER_STATES)}
 G = 9.81  # m/s², as usvsim.vessel.weather.waves
 
 
-def _wrap(angle: ca.SX) -> ca.SX:
-    """``angle`` (rad) to about [-π, π] by the nearest multiple of 2π: a floor, which vectorises,
-    where ``ssa``'s two fmod calls do not (used on differences of headings only)."""
-    return angle - 2.0 * math.pi * ca.floor(angle / (2.0 * math.pi) + 0.5)
-
-
-def _notch(w: ca.SX, u: ca.SX, back: list[ca.SX], wrap: bool) -> ca.SX:
-    """Direct form I notch output for input ``u`` and [u₋₁, u₋₂, y₋₁, y₋₂] (differences to u)."""
-    d = [_wrap(b - u) if wrap else b - u for b in back]
-    return u + (
-        w[_I["nb1"]] * d[0] + w[_I["nb2"]] * d[1] - w[_I["na1"]] * d[2] - w[_I["na2"]] * d[3]
-    )
-
-
 def build_weather_step(
-    vessel: VesselParams, kind: AutopilotKind, dt_s: float, hull: WeatherHull = USV105_HULL
+    vessel: VesselParams,
+    kind: AutopilotKind,
+    dt_s: float,
+    yaw_model: tuple[float, float],
+    hull: WeatherHull = USV105_HULL,
 ) -> ca.Function:
-    """``step(s[24], w[23], g[NG], e[3]) -> s_next[24]`` (module docstring); ``e`` three
-    uniforms in [0, 1) (gust, wave motion ×2)."""
+    """``step(s[21], w[25], g[NG], e[3]) -> s_next[21]`` (module docstring); ``e`` three
+    uniforms in [0, 1) (gust, wave motion ×2); ``yaw_model`` (m kg m², d N m s/rad) the
+    autopilot's design model, used by the observer."""
     f = build_dynamics(vessel, weather=True)
     s = ca.SX.sym("s", NS + NWS)
     w = ca.SX.sym("w", NWI)
@@ -155,11 +143,22 @@ def build_weather_step(
     shape = w[_I["yaw_gain"]] * omega**2 / G * ca.sin(2.0 * (w[_I["wave_dir"]] - psi))
     psi_m = psi + shape * (omega * s[_S["xi0"]])
     r_m = r + shape * (omega * s[_S["xi1"]])
-    # 2. wave filter
-    psi_back = [s[_S[k]] for k in ("psi_in1", "psi_in2", "psi_out1", "psi_out2")]
-    r_back = [s[_S[k]] for k in ("r_in1", "r_in2", "r_out1", "r_out2")]
-    psi_f = _notch(w, psi_m, psi_back, wrap=True)
-    r_f = _notch(w, r_m, r_back, wrap=False)
+    # 2. wave filter: the observer on the compass and the actuators' yaw moment
+    m_yaw, d_yaw = yaw_model
+    prior = [s[_S[f"obs_{k}"]] for k in OBSERVER_STATES]
+    gains = [w[_I[f"gain_{k}_{y}"]] for k in OBSERVER_STATES for y in ("compass", "gyro")]
+    phi = [w[_I[k]] for k in ("phi00", "phi01", "phi10", "phi11")]
+    tau_n = generalized_forces(vessel.actuation, x[6:8], x[3])[2]
+    on = w[_I["wave_filter"]]  # 0: exactly the sensed values
+    # off: the prior restarts from the sensors at every step, so it stays finite (0 × finite)
+    prior = [on * z for z in prior]
+    prior[2] = prior[2] + (1.0 - on) * psi_m
+    prior[3] = prior[3] + (1.0 - on) * r
+    psi_hat, r_hat, prior_next = observer_step(
+        prior, psi_m, r_m, tau_n, gains, phi, m_yaw, d_yaw, dt_s
+    )
+    psi_f = psi_m + on * wrap_difference(psi_hat - psi_m)
+    r_f = r_m + on * (r_hat - r_m)
     # 3. autopilot on what it senses
     x_sensed = ca.vertcat(x[0], x[1], psi_f, x[3], x[4], r_f, x[6], x[7])
     a_cmd, c_next = control_law(vessel, kind, x_sensed, c, w[0:2], g, dt_s)
@@ -179,10 +178,7 @@ def build_weather_step(
     xi1_next = (
         w[_I["phi10"]] * xi0 + w[_I["phi11"]] * xi1 + w[_I["l10"]] * xi[1] + w[_I["l11"]] * xi[2]
     )
-    m_next = ca.vertcat(
-        gust, xi0_next, xi1_next, psi_m, psi_back[0], psi_f, psi_back[2], r_m, r_back[0], r_f,
-        r_back[2],
-    )  # fmt: skip
+    m_next = ca.vertcat(gust, xi0_next, xi1_next, *prior_next)
     return ca.Function(
         "usv_wx_step",
         [s, w, g, e],
@@ -249,8 +245,8 @@ class SeaConditions:
 
 @dataclass(frozen=True)
 class WeatherPlantState:
-    """N boats: plant ``x`` (N, 8), autopilot ``c`` (N, 5), weather states ``m`` (N, 11) and
-    the per-episode weather inputs ``inputs`` (N, 19) (:data:`WEATHER_INPUTS` from wind_mean)."""
+    """N boats: plant ``x`` (N, 8), autopilot ``c`` (N, 5), weather states ``m`` (N, 8) and
+    the per-episode weather inputs ``inputs`` (N, 21) (:data:`WEATHER_INPUTS` from wind_mean)."""
 
     x: NDArray[np.float64]
     c: NDArray[np.float64]
@@ -285,11 +281,13 @@ def weather_inputs(
     heading_rad: NDArray[np.float64],
     dt_s: float,
     gusts: GustParams,
-    wave_filter_db: float | None,
+    wave_filter: ObserverNoise | None,
+    yaw_model: tuple[float, float],
     yaw_gain: float = 1.0,
 ) -> tuple[NDArray[np.float64], WaveResponse]:
-    """Per-boat weather inputs (N, 19) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
-    wave response they were built from."""
+    """Per-boat weather inputs (N, 21) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
+    wave response they were built from; ``wave_filter`` None: the filter off for every boat,
+    else its tuning (calm boats keep it off: nothing to filter, and no estimator lag)."""
     n = cond.hs_m.size
     resp = _encounter_response(cond, speed_mps, heading_rad, dt_s)
     phi, chol = wave_motion_discrete(resp, dt_s)
@@ -313,14 +311,14 @@ def weather_inputs(
     for name, (i, j) in {"l00": (0, 0), "l10": (1, 0), "l11": (1, 1)}.items():
         out[:, col[name]] = chol[:, i, j]
     out[:, col["yaw_gain"]] = yaw_gain
-    if wave_filter_db is not None:
-        wavy = cond.hs_m > 0  # calm boats keep the pass-through: no filter lag without waves
-        b, den = notch_coefficients(resp.omega0, wave_filter_db, dt_s)
-        # direct form I in differences to the newest input: y = u + b1 Δu₁ + b2 Δu₂ − a1 Δy₁ …
-        out[:, col["nb1"]] = np.where(wavy, b[:, 1], 0.0)
-        out[:, col["nb2"]] = np.where(wavy, b[:, 2], 0.0)
-        out[:, col["na1"]] = np.where(wavy, den[:, 1], 0.0)
-        out[:, col["na2"]] = np.where(wavy, den[:, 2], 0.0)
+    if wave_filter is not None:
+        wavy = cond.hs_m > 0
+        scale = yaw_gain * resp.omega0**3 / G * np.sin(2.0 * (cond.wave_dir_rad - heading_rad))
+        gains = observer_gains(phi, chol, scale, *yaw_model, dt_s, wave_filter)
+        out[:, col["wave_filter"]] = wavy
+        for k, name in enumerate(OBSERVER_STATES):
+            for j, y in enumerate(("compass", "gyro")):
+                out[:, col[f"gain_{name}_{y}"]] = np.where(wavy, gains[:, k, j], 0.0)
     return out, resp
 
 
@@ -346,8 +344,9 @@ class WeatherPlant:
         Seeds the gusts and the wave motion (same seed, same conditions: same trajectories).
     gusts : GustParams, optional
         Gust time constant (the intensity is per boat, in :class:`SeaConditions`).
-    wave_filter_db : float or None
-        Depth of the heading and yaw-rate notch at the encounter frequency (dB); None: off.
+    wave_filter : bool
+        The autopilot gets the wave filter's heading and yaw rate (boats in waves), or the
+        compass and gyro's (False).
     hull : WeatherHull
         Windage and waterline (default usv105's).
     """
@@ -357,14 +356,18 @@ class WeatherPlant:
         plant: Plant,
         seed: int = 0,
         gusts: GustParams | None = None,
-        wave_filter_db: float | None = 20.0,
+        wave_filter: bool = True,
         hull: WeatherHull = USV105_HULL,
+        observer: ObserverNoise | None = None,
     ) -> None:
         self.plant = plant
         self.gusts = gusts or GustParams()
-        self.wave_filter_db = wave_filter_db
+        self.wave_filter = (observer or ObserverNoise()) if wave_filter else None
+        self.yaw_model = (float(plant.design.nomoto.m), float(plant.design.nomoto.d))
         self.rng = np.random.default_rng(seed)
-        self.step_function = build_weather_step(plant.vessel, plant.kind, plant.dt_s, hull)
+        self.step_function = build_weather_step(
+            plant.vessel, plant.kind, plant.dt_s, self.yaw_model, hull
+        )
         self._stepper = BatchStepper(self.step_function, backend=plant.kernel)  # type: ignore[arg-type]
 
     @property
@@ -381,16 +384,22 @@ class WeatherPlant:
         n = calm.n_boats
         conditions.check(n)
         inputs, resp = weather_inputs(
-            conditions, calm.x[:, 3], calm.x[:, 2], self.plant.dt_s, self.gusts, self.wave_filter_db
+            conditions,
+            calm.x[:, 3],
+            calm.x[:, 2],
+            self.plant.dt_s,
+            self.gusts,
+            self.wave_filter,
+            self.yaw_model,
         )
         m = np.zeros((n, NWS))
         sigma = conditions.gust_intensity * conditions.wind_speed_mps
         m[:, 0] = sigma * self.rng.standard_normal(n)
         m[:, 1:3] = wave_motion_init(self.rng, resp)
         state = WeatherPlantState(calm.x, calm.c, m, inputs)
-        dpsi = wave_offsets(state)[:, 2]
-        m[:, 3:7] = (calm.x[:, 2] + dpsi)[:, None]  # the filter starts settled on the sensed ψ
-        m[:, 7:11] = calm.x[:, 5:6]
+        obs = {k: 3 + i for i, k in enumerate(OBSERVER_STATES)}
+        m[:, obs["psi"]] = calm.x[:, 2] + wave_offsets(state)[:, 2]  # starts on the compass
+        m[:, obs["r"]] = calm.x[:, 5]
         return state
 
     def step(
@@ -401,7 +410,7 @@ class WeatherPlant:
         n_steps: int = 1,
     ) -> tuple[WeatherPlantState, NDArray[np.float64]]:
         """Advance all boats ``n_steps`` plant steps, references held; returns the new state and
-        the trajectory (N, n_steps, 24) of [x, c, m] after each step."""
+        the trajectory (N, n_steps, 21) of [x, c, m] after each step."""
         n = state.x.shape[0]
         psi_ref = np.broadcast_to(np.asarray(psi_ref_rad, dtype=float), (n,))
         speed = self.plant.cruise_speed_mps if speed_ref_mps is None else speed_ref_mps

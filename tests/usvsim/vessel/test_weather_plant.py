@@ -14,7 +14,13 @@ from usvsim.common.errors import UserError
 from usvsim.vessel.autopilot import AutopilotConfig
 from usvsim.vessel.plant import Plant
 from usvsim.vessel.weather.loads import USV105_HULL, drift_loads, wind_loads
-from usvsim.vessel.weather.waves import drift_pressure, mean_drift_force, sea_state_from_code
+from usvsim.vessel.weather.waves import (
+    WaveResponse,
+    drift_pressure,
+    mean_drift_force,
+    sea_state_from_code,
+    wave_displacement,
+)
 from usvsim.vessel.weather.wind import wind_forces
 from usvsim.vessel.weather_plant import SeaConditions, WeatherPlant, wave_offsets
 
@@ -30,7 +36,7 @@ def _poses(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     [("casadi", "pid"), ("casadi", "rover"), ("soa", "pid"), ("scalar", "pid"), ("soa", "rover")],
 )
 def test_no_weather_gives_the_calm_plant(backend: str, autopilot: str) -> None:
-    """No wind, calm sea, wave filter on (it passes through where there are no waves), a current:
+    """No wind, calm sea, wave filter on (it stays off where there are no waves), a current:
     after 300 steps the plant and autopilot states equal Plant.step's bit for bit in CasADi's
     virtual machine (every weather term is an exact zero). Compiled, the weather kernel is another
     C function, so the compiler contracts (FMA) and packs some operations differently: agreement
@@ -132,19 +138,19 @@ def test_gusts_and_wave_motion_have_their_stationary_spread() -> None:
     assert elevation.std() == pytest.approx(sea.hs_m / 4, rel=0.05)
 
 
-def test_sensed_heading_carries_the_wave_yaw_and_the_filter_follows_it() -> None:
-    """Sea state 4 from 45° off the bow: the sensed heading (state psi_in1) is the true one plus
-    wave_offsets' Δψ, and the filtered heading stays within a degree of the true mean course."""
+def test_sensed_wave_motion_is_the_reference_displacement() -> None:
+    """wave_offsets (the kernel's sensed wave motion) equals waves.wave_displacement for the
+    kernel's wave state, and sea state 4 from 45° off the bow yaws the compass visibly."""
     plant = Plant("default")
     weather = WeatherPlant(plant, seed=1)
     n = 16
     cond = SeaConditions.uniform(n, sea=sea_state_from_code(4, math.radians(135)))
-    state = weather.initial_state(np.zeros((n, 3)), cond)
-    state, _ = weather.step(state, 0.0, n_steps=1)
-    before = wave_offsets(state)  # Δψ at the new state is sensed at the next step
-    after, _ = weather.step(state, 0.0, n_steps=1)
-    np.testing.assert_allclose(after.m[:, 3], state.x[:, 2] + before[:, 2], rtol=0, atol=1e-12)
-    assert np.std(before[:, 2]) > math.radians(0.2)  # waves are seen
+    state, _ = weather.step(weather.initial_state(np.zeros((n, 3)), cond), 0.0, n_steps=50)
+    omega = state.inputs[:, 6]
+    resp = WaveResponse(omega, np.full(n, 0.1), np.ones(n))  # only ω₀ enters the displacement
+    want = wave_displacement(state.m[:, 1:3], resp, cond.wave_dir_rad, state.x[:, 2])
+    np.testing.assert_allclose(wave_offsets(state), want, rtol=1e-12, atol=1e-15)
+    assert np.std(want[:, 2]) > math.radians(0.5)
 
 
 def test_bad_conditions_raise_one_line() -> None:
