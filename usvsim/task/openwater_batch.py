@@ -32,7 +32,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from usvsim.task.batch import ActionKind, PoleAvoidanceBatch, within_radius
+from usvsim.task.batch import ActionKind, PoleAvoidanceBatch
 from usvsim.task.observations import (
     GOAL_STANDARDIZATION,
     ObservationKind,
@@ -44,7 +44,7 @@ from usvsim.task.observations import (
 from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
 from usvsim.task.radar import RadarConfig
 from usvsim.task.scenario import Scenario
-from usvsim.task.scene_distances import PackedDiscs, nearest_and_hits
+from usvsim.task.scene_distances import PackedDiscs, judge_period, nearest_and_hits
 from usvsim.task.scene_radar import RadarDegradation, RadarStreams, render_scene
 from usvsim.vessel.plant import Plant
 
@@ -230,15 +230,19 @@ class OpenWaterBatch:
         """Smallest pole-equivalent distance (n, T) m and any-hit flags (n, T) of boats ``idx``
         at positions ``pos`` (n, T, ≥ 2) and episode times ``t_s`` (n, T)
         (:func:`usvsim.task.scene_distances.nearest_and_hits`)."""
-        s = self
-        arrays = (s.centres, s.radii, s.static_ok, s.v_p0, s.v_course, s.v_speed, s.v_turn,
-                  s.v_radius, s.vessel_ok)  # fmt: skip
-        if not (isinstance(idx, slice) and idx == slice(None)):  # all: views, no copies
-            arrays = tuple(a[idx] for a in arrays)
-        discs = PackedDiscs(*arrays)
         return nearest_and_hits(
-            pos, t_s, discs, self._r_pole, self._half_beam, self._distance_backend
-        )
+            pos, t_s, self._discs_now(idx), self._r_pole, self._half_beam,
+            self._distance_backend,
+        )  # fmt: skip
+
+    def _discs_now(self, idx: Any = slice(None)) -> PackedDiscs:
+        """The discs of boats ``idx`` as the distance kernels take them (all: views, no
+        copies; read now, since a caller may steer the vessels between steps)."""
+        arrays = (self.centres, self.radii, self.static_ok, self.v_p0, self.v_course,
+                  self.v_speed, self.v_turn, self.v_radius, self.vessel_ok)  # fmt: skip
+        if not (isinstance(idx, slice) and idx == slice(None)):
+            arrays = tuple(a[idx] for a in arrays)
+        return PackedDiscs(*arrays)
 
     def observe(self, kind: ObservationKind) -> Any:
         """Every boat's ``kind`` observation now (the step's own is ``observation_kind``'s), from
@@ -272,16 +276,15 @@ class OpenWaterBatch:
         T = sc.steps_per_decision
         steps = self._n_dec[:, None] * T + np.arange(1, T + 1)
         t: FloatArray = steps.astype(np.float64) * sc.dt_s  # (N, T) episode time
-        d_min_t, hit = self._nearest_and_hits(traj, t)
-        dx, dy = traj[:, :, 0] - self.goal_ne[:, 0:1], traj[:, :, 1] - self.goal_ne[:, 1:2]
-        in_goal = within_radius(dx, dy, sc.goal_radius_m)
-        collision: NDArray[np.bool_] = np.any(hit, axis=1)
-        reached: NDArray[np.bool_] = np.any(in_goal, axis=1)
+        judged = judge_period(
+            traj, t, self._discs_now(), self.goal_ne, self._r_pole, self._half_beam,
+            sc.goal_radius_m, self._distance_backend,
+        )  # fmt: skip
+        reached, collision = judged.reached_goal, judged.collision
         terminated: NDArray[np.bool_] = reached | collision
-        end = np.where(terminated, np.argmax(hit | in_goal, axis=1), T - 1)
-        upto = np.where(np.arange(T) > end[:, None], np.inf, d_min_t)
-        self._min_d = np.minimum(self._min_d, upto.min(axis=1))
-        first = (self._n_dec * T + np.argmax(in_goal, axis=1) + 1) * sc.dt_s
+        end = judged.end_step
+        self._min_d = np.minimum(self._min_d, judged.nearest_m)
+        first = (self._n_dec * T + judged.first_goal_step + 1) * sc.dt_s
         self._t_goal = np.where(reached & np.isinf(self._t_goal), first, self._t_goal)
         self._n_dec += 1
         rows = np.arange(self.n_boats)
@@ -294,8 +297,8 @@ class OpenWaterBatch:
             truncated=(time_limit | out_of_area) & ~terminated,
             heading_change_rad=dpsi,
             min_distance_m=self._min_d.copy(),
-            distance_to_obstacle_m=d_min_t[rows, end],
-            distance_to_goal_m=np.hypot(dx[rows, end], dy[rows, end]),
+            distance_to_obstacle_m=judged.distance_to_obstacle_m,
+            distance_to_goal_m=judged.distance_to_goal_m,
             reached_goal=reached,
             collision=collision,
             out_of_area=out_of_area,

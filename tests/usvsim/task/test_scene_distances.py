@@ -116,3 +116,29 @@ def test_open_water_records_are_the_same_with_the_numpy_distances(
     for got, want in zip(compiled, reference, strict=True):
         for name, value in want.items():
             np.testing.assert_allclose(got[name], value, rtol=1e-12, err_msg=name)
+
+
+@pytest.mark.parametrize(("k", "m"), [(6, 3), (4, 0), (0, 3), (0, 0)])
+def test_compiled_judge_equals_the_numpy_reference(k: int, m: int) -> None:
+    """The compiled period judge against the NumPy reference, on paths that hit discs and pass
+    through goals (and a NaN position), bit for bit."""
+    rng = np.random.default_rng(100 + k * 10 + m)
+    n, steps = 400, 20
+    discs = _random_discs(rng, n, k, m)
+    start = rng.uniform(-150.0, 150.0, (n, 1, 2))
+    traj = np.zeros((n, steps, 13))
+    traj[:, :, :2] = start + np.cumsum(rng.uniform(-6.0, 6.0, (n, steps, 2)), axis=1)
+    goal = traj[:, rng.integers(steps), :2] + rng.uniform(-15.0, 15.0, (n, 2))
+    traj[7, 5, 0] = np.nan
+    t = rng.uniform(0.0, 300.0, (n, 1)) + 0.1 * np.arange(1, steps + 1)
+    args = (traj, t, discs, goal, 1.0, 1.2, 10.0)
+    ref = scene_distances.judge_period(*args, backend="numpy")
+    got = scene_distances.judge_period(*args, backend="compiled")
+    assert ref.reached_goal.any() and not ref.reached_goal.all()
+    if k or m:
+        assert ref.collision.any() and not ref.collision.all()
+    for name in ("nearest_m", "collision", "reached_goal", "end_step", "first_goal_step",
+                 "distance_to_obstacle_m", "distance_to_goal_m"):  # fmt: skip
+        a, b = getattr(ref, name), getattr(got, name)
+        assert a.dtype == b.dtype, name
+        np.testing.assert_array_equal(a, b, err_msg=name)
