@@ -183,3 +183,24 @@ def test_trafficgen_baseline_sets_hold_situations_with_their_number_of_targets(t
     assert len({s.title for s in situations}) == len(situations)  # every combination once
     episodes = colreg_episodes(tg, len(situations), "validation")
     assert [len(e.vessels) for e in episodes] == [targets] * len(situations)
+
+
+def test_radar_models_see_the_imazu_targets_on_their_radar() -> None:
+    """The radar observation of a colreg rollout holds the targets: blank without them, lit
+    once the head-on target of Imazu 1 is within radar range (straight ahead, 2 s decisions)."""
+    from dataclasses import replace
+
+    from usvsim.evaluation.imazu import imazu_episodes
+    from usvsim.task.openwater_batch import OpenWaterBatch
+
+    episodes = list(imazu_episodes(1, 2, "validation"))
+    lit = {}
+    for label, eps in (("targets", episodes), ("none", [replace(e, vessels=()) for e in episodes])):
+        sim = OpenWaterBatch(len(eps), observation="radar+goal", action="gaussian")
+        sim.reset(None, eps)
+        lit[label] = [
+            float(np.abs(sim.step(np.zeros((len(eps), 1))).observation["radar"]).sum())
+            for _ in range(40)
+        ]
+    assert max(lit["none"]) == 0.0
+    assert lit["targets"][0] == 0.0 and max(lit["targets"]) > 0.0  # out of range, then seen
