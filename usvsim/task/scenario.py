@@ -25,7 +25,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import ndtr
 
 from usvsim.common.angles import ssa
 from usvsim.task.noise_kernel import load_kernel as load_noise_kernel
@@ -341,4 +340,6 @@ class BoatNoise:
 
     def random(self, size: tuple[int, ...]) -> FloatArray:
         """Uniform [0, 1) numbers of shape ``size`` (boats first): ``Φ(z)`` of standard normals."""
+        from scipy.special import ndtr  # lazily: the torch path imports this module without SciPy
+
         return ndtr(self.standard_normal(size))
