@@ -50,6 +50,7 @@ from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
 from usvsim.task.radar import RadarConfig, UniformSource, render_radar
+from usvsim.task.scene_kernel import MAX_SCENE_DISCS, load_scene_kernel
 
 __all__ = [
     "GOAL_STANDARDIZATION",
@@ -251,11 +252,15 @@ def scene_observation(
     obstacle_velocity_ne: FloatArray,
     valid: NDArray[np.bool_],
     k: int = SCENE_K,
+    backend: Literal["auto", "compiled", "numpy"] = "auto",
 ) -> NDArray[np.float32]:
     """The ``scene`` observation (N, 4 + 6 k) float32 (module docstring).
 
     ``pos_ne``, ``velocity_ne``, ``goal_ne`` (N, 2); ``psi_rad`` (N,); ``centres_ne`` (N, J, 2),
     ``radii_m`` (N, J), ``obstacle_velocity_ne`` (N, J, 2) m/s over ground, ``valid`` (N, J).
+    Ranges and bearings come from NumPy; the slots (sort, features) from the compiled kernel
+    of :mod:`usvsim.task.scene_kernel` where it builds (``backend="auto"``; the same numbers),
+    else from NumPy (``"numpy"``, the reference).
     """
     n, j = radii_m.shape
     out = np.zeros((n, 4 + SCENE_FEATURES * k), dtype=np.float32)
@@ -264,12 +269,24 @@ def scene_observation(
         pos_ne, psi_rad, np.concatenate([goal_ne[:, None, :], centres_ne], axis=1)
     )
     c, s = np.cos(psi_rad), np.sin(psi_rad)
+    out[:, 0], out[:, 1] = r_all[:, 0], b_all[:, 0]
+    numbers = (r_all, b_all, radii_m, obstacle_velocity_ne, velocity_ne, c)
+    kernel = load_scene_kernel() if backend != "numpy" else None
+    if backend == "compiled" and kernel is None:
+        raise ValueError("backend 'compiled': the scene kernel did not build (no C compiler?)")
+    if kernel is not None and j <= MAX_SCENE_DISCS and all(a.dtype == np.float64 for a in numbers):
+        arrays = [
+            np.ascontiguousarray(a)
+            for a in (r_all[:, 1:], b_all[:, 1:], radii_m, valid.astype(np.bool_, copy=False),
+                      obstacle_velocity_ne, velocity_ne, c, s)
+        ]  # fmt: skip
+        kernel(n, j, k, *(a.ctypes.data for a in arrays), out.ctypes.data)
+        return out
 
     def body(v: FloatArray) -> tuple[FloatArray, FloatArray]:  # NED → (forward, starboard)
         cc, ss = (c, s) if v.ndim == 2 else (c[:, None], s[:, None])
         return cc * v[..., 0] + ss * v[..., 1], -ss * v[..., 0] + cc * v[..., 1]
 
-    out[:, 0], out[:, 1] = r_all[:, 0], b_all[:, 0]
     out[:, 2], out[:, 3] = body(velocity_ne)
     if j == 0:
         return out
