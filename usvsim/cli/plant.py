@@ -163,6 +163,10 @@ def run_perf(args: PerfArgs) -> int:
 
         return _print_profile(profile_steps(max(args.seconds, 1.0)), args.json)
     result = measure(args.seconds, env=args.env, device=args.device)
+    if args.env and args.device != "cpu":  # the study task's env on the torch device too
+        from usvsim.task.torch_env import torch_env_rates
+
+        result["torch_env"] = torch_env_rates(args.device, seconds=args.seconds)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -190,6 +194,21 @@ def run_perf(args: PerfArgs) -> int:
             + ", ".join(
                 f"{k}: {v:,}" + (f" ({ratios[k]}x C)" if k in ratios else "")
                 for k, v in torch_plant["boat_substeps_per_s"].items()
+            )
+        )
+    torch_env = result.get("torch_env")
+    if torch_env:
+        over = torch_env["over_C_path"]
+        print(
+            f"torch env, study task positional ({torch_env['device']}, same run, load "
+            f"{torch_env['load_average_1min']}): env steps/s "
+            + "; ".join(
+                f"{n} "
+                + ", ".join(
+                    f"{k}: {v:,}" + (f" ({over[n][k]}x C)" if k in over[n] else "")
+                    for k, v in row.items()
+                )
+                for n, row in torch_env["env_steps_per_s"].items()
             )
         )
     env = result.get("env", {})

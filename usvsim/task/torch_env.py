@@ -45,7 +45,9 @@ and are not range-checked here (a check would wait for the device): the CPU env 
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 import time
 from collections.abc import Callable
 from typing import Any, Literal
@@ -65,7 +67,12 @@ from usvsim.task.torch_episodes import (
 )
 from usvsim.vessel.torch_plant import DTYPES, TorchPlant
 
-__all__ = ["TorchPoleAvoidanceEnv", "measure_env_steps"]
+__all__ = [
+    "TorchPoleAvoidanceEnv",
+    "compiled_substep",
+    "measure_env_steps",
+    "plant_and_filter",
+]
 
 Columns = tuple[torch.Tensor, ...]
 N_CATEGORIES = 41  # usvsim.task.batch.N_CATEGORIES (study: 0 → -30°, 20 → 0°, 40 → +30°)
@@ -97,7 +104,9 @@ class TorchPoleAvoidanceEnv:
         Sensor noise from a device generator, or each episode's NumPy stream (test mode: needs
         ``episodes="numpy"``; reads the restarted boats back to the host every step).
     compile : bool
-        Wrap a plant step + filter step in ``torch.compile`` (GPU).
+        Run a plant step + filter step through ``torch.compile`` (for a GPU: one fused kernel
+        instead of ~800 small ones per plant step; the first step compiles, which takes a
+        while); ``compile_backend`` is its backend (``"eager"`` only traces: a dry run).
     """
 
     def __init__(
@@ -116,6 +125,7 @@ class TorchPoleAvoidanceEnv:
         episodes_per_boat: int = 8,
         noise: Literal["device", "replay"] = "device",
         compile: bool = False,
+        compile_backend: str = "inductor",
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
@@ -165,9 +175,12 @@ class TorchPoleAvoidanceEnv:
         self._n_decisions = torch.zeros(n, dtype=torch.int64, device=self.device)
         self._started = torch.zeros(n, dtype=torch.int64, device=self.device)  # episodes begun
         self._ready = False
-        self._substep: Callable[..., tuple[Columns, Columns]] = self._plant_and_filter
-        if compile:
-            self._substep = torch.compile(self._plant_and_filter, dynamic=False)
+        # numbers shared by all boats: 0-d tensors, built once
+        self._gains = self._shared(self.plant.kernel.gains)
+        self._current = self._shared(self.plant.current)
+        self._substep: Callable[..., tuple[Columns, Columns]] = (
+            compiled_substep(compile_backend) if compile else plant_and_filter
+        )
 
     # ----------------------------------------------------------------------------- state
     @property
@@ -246,12 +259,8 @@ class TorchPoleAvoidanceEnv:
         centre = (N_CATEGORIES - 1) // 2
         return (a.to(self.dtype) - centre) * (max_rad / centre)
 
-    def _plant_and_filter(
-        self, s: Columns, n: Columns, w: Columns, e: tuple[Any, ...]
-    ) -> tuple[Columns, Columns]:
-        """One plant step, then the sensors and the filter on the new true state."""
-        s = self.plant.advance(s, w, 1)
-        return s, self.nav.step(n, s[: self.plant.kernel.nx], e)
+    def _shared(self, values: tuple[float, ...]) -> Columns:
+        return tuple(torch.tensor(values, dtype=self.dtype, device=self.device).unbind(0))
 
     @torch.no_grad()
     def step(
@@ -262,12 +271,13 @@ class TorchPoleAvoidanceEnv:
             raise RuntimeError("call reset() before step()")
         sc, T = self.scenario, self.T
         dpsi = self.heading_change_rad(actions)
-        w = (torch_ssa(self._n[8] + dpsi), self._speed)
+        w = (torch_ssa(self._n[8] + dpsi), self._speed, *self._current)
+        plant_step, nav_step, nx = self.plant.kernel.step, self.nav.step, self.plant.kernel.nx
         es = self.layout.step_inputs(self.noise.decision_normals(self.layout.draws))
         s, n = tuple(self._s.unbind(0)), tuple(self._n.unbind(0))
         xs, ys = [], []
         for j in range(T):  # the plant steps of one decision
-            s, n = self._substep(s, n, w, es[j])
+            s, n = self._substep(plant_step, nav_step, nx, s, n, w, self._gains, es[j])
             xs.append(s[0])
             ys.append(s[1])
         self._s, self._n = torch.stack(s), torch.stack(n)
@@ -326,6 +336,29 @@ class TorchPoleAvoidanceEnv:
         return pole, goal
 
 
+def plant_and_filter(
+    plant_step: Callable[..., Columns],
+    nav_step: Callable[..., Columns],
+    nx: int,
+    s: Columns,
+    n: Columns,
+    w: Columns,
+    g: Columns,
+    e: tuple[Any, ...],
+) -> tuple[Columns, Columns]:
+    """One plant step (``plant_step(s, w, g)``, the generated closed-loop step), then the
+    sensors and the filter (``nav_step``) on the new true plant state (its first ``nx``)."""
+    s = plant_step(s, w, g)
+    return s, nav_step(n, s[:nx], e)
+
+
+@functools.cache
+def compiled_substep(backend: str = "inductor") -> Callable[..., tuple[Columns, Columns]]:
+    """:func:`plant_and_filter` through ``torch.compile`` with ``backend`` (shape-generic: one
+    compilation serves every N), made once per process and backend."""
+    return torch.compile(plant_and_filter, dynamic=True, backend=backend)
+
+
 def measure_env_steps(env: TorchPoleAvoidanceEnv, seconds: float = 1.0) -> float:
     """Env steps (boat decisions) per second of ``env``: random actions drawn once, steps until
     ``seconds`` have passed (at least 2), a GPU synchronised before each clock reading."""
@@ -346,3 +379,37 @@ def measure_env_steps(env: TorchPoleAvoidanceEnv, seconds: float = 1.0) -> float
             sync()
     sync()
     return env.num_envs * steps / (time.perf_counter() - start)
+
+
+def torch_env_rates(
+    device: str, sizes: tuple[int, ...] = (256, 1024), seconds: float = 1.0
+) -> dict[str, Any]:
+    """Env steps/s of the torch env on ``device`` (float64 and float32) beside the C path's
+    (:class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`) at each of ``sizes`` boats,
+    measured in the same run, interleaved; positional observation, random Gaussian actions,
+    restarts included (``usvsim perf --device``)."""
+    from usvsim.task.vector_env import PoleAvoidanceVectorEnv  # the C path (gymnasium)
+
+    rows: dict[str, dict[str, float]] = {}
+    for n in sizes:
+        cpu = PoleAvoidanceVectorEnv(n)
+        cpu.reset(seed=0)
+        actions = np.random.default_rng(0).uniform(-1.0, 1.0, (n, 1))
+        steps, start = 0, time.perf_counter()
+        while steps < 2 or time.perf_counter() - start < seconds:
+            cpu.step(actions)
+            steps += 1
+        row = {"C path": n * steps / (time.perf_counter() - start)}
+        for dtype in ("float64", "float32"):
+            env = TorchPoleAvoidanceEnv(n, device=device, dtype=dtype)
+            row[dtype] = measure_env_steps(env, seconds)
+        rows[f"N={n}"] = row
+    return {
+        "device": device,
+        "env_steps_per_s": {k: {c: round(v) for c, v in r.items()} for k, r in rows.items()},
+        "over_C_path": {
+            k: {d: round(r[d] / r["C path"], 3) for d in ("float64", "float32")}
+            for k, r in rows.items()
+        },
+        "load_average_1min": round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None,
+    }
