@@ -39,6 +39,21 @@ class ManoeuvreArgs:
         default=0.0, metadata=bounds(gt=0.0, le=20.0, zero_ok=True)
     )
     out: str = "usvsim-results/manoeuvre"  # folder for the table (Markdown) and the PNG plots
+    # mean wind speed, m/s (gusts 10 %); 0: none. Weather uses usv105's windage and waterline
+    wind: float = field(default=0.0, metadata=bounds(ge=0.0, le=40.0))
+    # direction the wind blows from, deg clockwise from north (the approach course); 90: beam
+    wind_dir: float = field(default=90.0, metadata=bounds(ge=0.0, lt=360.0))
+    # WMO sea state code 0-8 (Bales 1983 H_s, T_p); waves come from the wind's direction
+    sea_state: int = field(default=0, metadata=bounds(ge=0, le=8))
+    seed: int = field(default=0, metadata=bounds(ge=0))  # gusts and wave motion
+
+    def weather(self) -> Any:
+        """The trials' :class:`usvsim.evaluation.manoeuvre.TrialWeather`, None in calm water."""
+        if self.wind == 0.0 and self.sea_state == 0:
+            return None
+        from usvsim.evaluation.manoeuvre import TrialWeather
+
+        return TrialWeather(self.wind, self.wind_dir, self.sea_state, seed=self.seed)
 
     def check(self) -> None:
         from usvsim.vessel.vessels import VESSELS, get_vessel, vessel_names
@@ -46,6 +61,13 @@ class ManoeuvreArgs:
         if self.vessel != "all" and self.vessel not in vessel_names():
             known = ", ".join(["all", *vessel_names()])
             raise UserError(f"--vessel must be one of {known}, not {self.vessel!r}")
+        if not isinstance(self.sea_state, int) or not 0 <= self.sea_state <= 8:
+            raise UserError(f"--sea-state must be an integer code 0-8, got {self.sea_state!r}")
+        if self.weather() is not None and self.vessel == "all":
+            raise UserError(
+                "--wind and --sea-state need one --vessel (the weather loads use usv105's "
+                "windage and waterline), not all"
+            )
         chosen = VESSELS.values() if self.vessel == "all" else [get_vessel(self.vessel)]
         for v in chosen:  # the hull models hold near their cruise speed; far above it they blow up
             top = MAX_SPEED_OVER_CRUISE * v.cruise_speed_mps
@@ -139,7 +161,13 @@ def run_manoeuvre(args: ManoeuvreArgs) -> int:
     reports = []
     for name in tqdm(names, desc="trials", unit="vessel", file=sys.stderr):
         check_interrupt()  # Ctrl-C / SIGTERM even if a CasADi call swallowed it
-        reports.append(manoeuvre.run_trials(VESSELS[name], args.speed or None))
+        weather = args.weather()
+        speed = args.speed or None
+        reports.append(
+            manoeuvre.run_trials(VESSELS[name], speed)
+            if weather is None
+            else manoeuvre.run_trials(VESSELS[name], speed, weather)
+        )
     table = manoeuvre.trials_table(reports)
     # one unit (Ctrl-C, SIGTERM or a crash leaves the previous table and plots as they were)
     with staged_dir(out, "manoeuvre") as staging:
