@@ -1,4 +1,5 @@
-"""Stages of ``benchmarks/gpu_check.sh``: the torch plant on a GPU, its equality and its speed.
+"""Stages of ``benchmarks/gpu_check.sh``: the torch plant and the torch pole-avoidance env on a
+GPU, their equality and their speed.
 
 Needs torch and NumPy only (the repository on ``PYTHONPATH``; no CasADi, no install). Each stage
 is one call of this script, run under its own time limit by the shell script, and appends its
@@ -11,6 +12,8 @@ Stages::
     python benchmarks/gpu_check.py env
     python benchmarks/gpu_check.py equality --device cuda
     python benchmarks/gpu_check.py bench --device cuda --dtype float32 --mode compile
+    python benchmarks/gpu_check.py env-equality --device cuda
+    python benchmarks/gpu_check.py env-bench --device cuda --dtype float32 --mode compile
     python benchmarks/gpu_check.py report
 
 ``equality``: N = 64 boats with heading and speed references redrawn every 5 s, 1,000 steps of
@@ -19,6 +22,13 @@ Stages::
 within 1e-8 rad). ``bench``: boat-substeps per second of :meth:`TorchPlant.advance` (no
 trajectory kept) at each N, eager or through ``torch.compile`` (compile time reported; a
 compiled run also checks its own equality first).
+
+``env-equality``: the study task's torch env (:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv`,
+positional), 16 boats x 40 decisions with the CPU env's episodes and noise replayed
+(``episodes="numpy"``, ``noise="replay"``), on the device in float64 and float32 against the same
+env on torch-cpu in float64 (itself tested against the C path in the CPU test suite):
+observations, rewards and flags. ``env-bench``: env steps (boat decisions of 2 s, restarts
+included) per second at each N, eager or with the plant + filter step compiled.
 """
 
 from __future__ import annotations
@@ -261,6 +271,142 @@ def stage_bench(
             torch.cuda.empty_cache()
 
 
+ENV_BOATS, ENV_DECISIONS = 16, 40
+# float64 bars of the env against torch-cpu (the CPU suite's, tests/usvsim/task/test_torch_env.py)
+ENV_TOL_M, ENV_TOL_RAD, ENV_TOL_REWARD = 1e-6, 1e-7, 1e-8
+
+
+def env_run(device: str, dtype: str) -> dict[str, np.ndarray]:
+    """Observations (float64), rewards and done flags of the torch env over ENV_DECISIONS
+    decisions (actions from a fixed seed: steer to the goal, away from the pole, plus noise)."""
+    import torch
+
+    from usvsim.task.torch_env import TorchPoleAvoidanceEnv
+
+    env = TorchPoleAvoidanceEnv(
+        ENV_BOATS, device=device, dtype=dtype, episodes="numpy", episodes_per_boat=8,
+        noise="replay", observation_dtype="float64",
+    )  # fmt: skip
+    obs, _ = env.reset(seed=11)
+    rng = np.random.default_rng(5)
+    out: dict[str, list[np.ndarray]] = {"obs": [], "reward": [], "terminated": [], "truncated": []}
+    for _ in range(ENV_DECISIONS):
+        o = obs.double().cpu().numpy()
+        away = np.where(o[:, 0] < 25.0, -np.sign(o[:, 1]) * 0.8, 0.0)
+        a = np.clip(2.0 * o[:, 3] + away + rng.normal(0.0, 0.4, ENV_BOATS), -1.0, 1.0)
+        obs, reward, terminated, truncated, _ = env.step(torch.as_tensor(a[:, None]))
+        out["obs"].append(obs.double().cpu().numpy())
+        out["reward"].append(reward.double().cpu().numpy())
+        out["terminated"].append(terminated.cpu().numpy())
+        out["truncated"].append(truncated.cpu().numpy())
+    return {k: np.stack(v) for k, v in out.items()}
+
+
+def stage_env_equality(device: str, dtypes: list[str]) -> None:
+    t0 = time.perf_counter()
+    ref = env_run("torch-cpu", "float64")
+    record("env_reference", seconds=round(time.perf_counter() - t0, 2), device="torch-cpu")
+    for dtype in dtypes:
+        t0 = time.perf_counter()
+        got = env_run(device, dtype)
+        # a boat whose episode ends at another step is in another episode from then on: compare
+        # each boat up to its first flag difference
+        differs = (got["terminated"] != ref["terminated"]) | (got["truncated"] != ref["truncated"])
+        first = np.where(differs.any(0), differs.argmax(0), ENV_DECISIONS)
+        upto = (np.arange(ENV_DECISIONS)[:, None] < first[None, :])[..., None]
+        diff = got["obs"] - ref["obs"]
+        diff[..., 1::2] = (diff[..., 1::2] + np.pi) % (2 * np.pi) - np.pi  # bearings wrapped
+        d_obs = np.where(upto, np.abs(diff), 0.0)
+        d_reward = np.where(upto[..., 0], np.abs(got["reward"] - ref["reward"]), 0.0)
+        flags_equal = not bool(differs.any())
+        fields = {
+            "max_range_diff_m": float(d_obs[..., 0::2].max()),
+            "max_bearing_diff_rad": float(d_obs[..., 1::2].max()),
+            "max_reward_diff": float(d_reward.max()),
+            "flags_equal": flags_equal,
+            "boats_flags_identical": int((first == ENV_DECISIONS).sum()),
+            "flag_agreement": float(1.0 - differs.mean()),
+            "episodes_ended": int((ref["terminated"] | ref["truncated"]).sum()),
+        }
+        within = None
+        if dtype == "float64":
+            within = (
+                flags_equal
+                and fields["max_range_diff_m"] <= ENV_TOL_M
+                and fields["max_bearing_diff_rad"] <= ENV_TOL_RAD
+                and fields["max_reward_diff"] <= ENV_TOL_REWARD
+            )
+        record(
+            "env_equality", device=device, dtype=dtype, boats=ENV_BOATS, decisions=ENV_DECISIONS,
+            seconds=round(time.perf_counter() - t0, 2), within_tolerance=within, **fields,
+        )  # fmt: skip
+
+
+def stage_env_bench(
+    device: str, dtype: str, mode: str, sizes: list[int], seconds: float, backend: str
+) -> None:
+    import torch
+
+    from usvsim.task.torch_env import TorchPoleAvoidanceEnv, measure_env_steps
+
+    for n in sizes:
+        try:
+            t0 = time.perf_counter()
+            env = TorchPoleAvoidanceEnv(
+                n, device=device, dtype=dtype, compile=mode == "compile", compile_backend=backend
+            )
+            env.reset(seed=0)
+            env.step(torch.zeros((n, 1), device=env.device))  # compiles on the first call
+            _sync(env.device)
+            first_s = time.perf_counter() - t0
+            rate = measure_env_steps(env, seconds)
+        except torch.cuda.OutOfMemoryError as err:
+            record("env_bench", device=device, dtype=dtype, mode=mode, n=n, error=str(err)[:200])
+            break
+        record(
+            "env_bench", device=device, dtype=dtype, mode=mode,
+            backend=backend if mode == "compile" else None, n=n,
+            first_step_s=round(first_s, 2), env_steps_per_s=round(rate),
+        )  # fmt: skip
+        del env
+        if device.startswith("cuda"):
+            torch.cuda.empty_cache()
+
+
+def _env_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
+    text = [
+        "",
+        f"study task env (positional), {ENV_BOATS} boats x {ENV_DECISIONS} decisions with the "
+        "CPU env's episodes and noise, against torch-cpu float64:",
+    ]
+    for e in grouped.get("env_equality", []):
+        verdict = {True: "ok", False: "EXCEEDED", None: "stated, no bar"}[e["within_tolerance"]]
+        text.append(
+            f"  {e['device']:>9} {e['dtype']:>8} max |d range| {e['max_range_diff_m']:.3g} m, "
+            f"|d bearing| {e['max_bearing_diff_rad']:.3g} rad, |d reward| "
+            f"{e['max_reward_diff']:.3g}, flags {'equal' if e['flags_equal'] else 'differ'} "
+            f"({e['boats_flags_identical']}/{ENV_BOATS} boats throughout; "
+            f"{e['episodes_ended']} episodes ended): {verdict}"
+        )
+    rates = [b for b in grouped.get("env_bench", []) if "env_steps_per_s" in b]
+    columns = sorted({(b["mode"], b["dtype"]) for b in rates})
+    text += ["", "study task env steps/s (one 2 s decision of one boat, 20 plant steps):"]
+    text.append("  " + f"{'N':>10}" + "".join(f"{m + ' ' + d:>20}" for m, d in columns))
+    for n in sorted({b["n"] for b in rates}):
+        cells = []
+        for m, d in columns:
+            hit = [b for b in rates if b["n"] == n and (b["mode"], b["dtype"]) == (m, d)]
+            cells.append(f"{hit[-1]['env_steps_per_s']:>20.3e}" if hit else f"{'-':>20}")
+        text.append("  " + f"{n:>10,}" + "".join(cells))
+    for b in grouped.get("env_bench", []):
+        if "error" in b:
+            text.append(f"  env {b['mode']} {b['dtype']} N={b['n']:,}: {b['error']}")
+    compiled = [b for b in rates if b["mode"] == "compile"]
+    if compiled:
+        text.append(f"  first step incl. compilation: {compiled[0]['first_step_s']} s")
+    return text
+
+
 def stage_report() -> None:
     """results.jsonl -> results.json (every line, grouped) and table.txt."""
     out = _out_dir()
@@ -306,6 +452,10 @@ def stage_report() -> None:
     for b in bench:
         if "error" in b:
             text.append(f"  {b['mode']} {b['dtype']} N={b['n']:,}: {b['error']}")
+    text += _env_table(grouped)
+    best_env = max((b.get("env_steps_per_s", 0) for b in grouped.get("env_bench", [])), default=0)
+    summary["best_env_steps_per_s"] = best_env
+    (out / "results.json").write_text(json.dumps({"summary": summary, **grouped}, indent=2))
     for s in grouped.get("stage_end", []):
         if s.get("status") != "ok":
             text.append(f"stage {s['name']}: {s['status']} after {s.get('seconds', '?')} s")
@@ -341,12 +491,27 @@ def main() -> None:
     bench.add_argument("--sizes", default="1000,10000,100000,1000000,10000000")
     bench.add_argument("--seconds", type=float, default=1.0)
     bench.add_argument("--backend", default="inductor")  # torch.compile backend
+    env_eq = sub.add_parser("env-equality")
+    env_eq.add_argument("--device", default="cuda")
+    env_eq.add_argument("--dtypes", default="float64,float32")
+    env_bench = sub.add_parser("env-bench")
+    env_bench.add_argument("--device", default="cuda")
+    env_bench.add_argument("--dtype", default="float32", choices=["float32", "float64"])
+    env_bench.add_argument("--mode", default="eager", choices=["eager", "compile"])
+    env_bench.add_argument("--sizes", default="1000,10000,100000,1000000")
+    env_bench.add_argument("--seconds", type=float, default=1.0)
+    env_bench.add_argument("--backend", default="inductor")
     sub.add_parser("report")
     args = parser.parse_args()
     if args.stage == "env":
         stage_env()
     elif args.stage == "equality":
         stage_equality(args.device, args.dtypes.split(","))
+    elif args.stage == "env-equality":
+        stage_env_equality(args.device, args.dtypes.split(","))
+    elif args.stage == "env-bench":
+        sizes = [int(float(s)) for s in args.sizes.split(",")]
+        stage_env_bench(args.device, args.dtype, args.mode, sizes, args.seconds, args.backend)
     elif args.stage == "bench":
         sizes = [int(float(s)) for s in args.sizes.split(",")]
         stage_bench(args.device, args.dtype, args.mode, sizes, args.seconds, args.backend)

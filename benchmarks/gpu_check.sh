@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The torch plant on one GPU (issue 40): equality against torch-cpu float64, then plant
-# boat-substeps/s in float32 and float64, eager and torch.compile, N = 1e3 .. 1e7.
+# The torch plant and the study task's torch env on one GPU (issue 40): equality against
+# torch-cpu float64, then plant boat-substeps/s (float32 and float64, eager and torch.compile,
+# N = 1e3 .. 1e7) and env steps/s (float32, eager and compiled, N = 1e3 .. 1e6).
 #
 #   bash benchmarks/gpu_check.sh                      # on the GPU machine, from the repo root
-#   GPU_CHECK_DEVICE=torch-cpu GPU_CHECK_SIZES=1000,4000 GPU_CHECK_COMPILE_BACKEND=eager \
-#     bash benchmarks/gpu_check.sh                    # the same stages on a CPU (a dry run)
+#   GPU_CHECK_DEVICE=torch-cpu GPU_CHECK_SIZES=1000,4000 GPU_CHECK_ENV_SIZES=64,256 \
+#     GPU_CHECK_COMPILE_BACKEND=eager bash benchmarks/gpu_check.sh   # a dry run on a CPU
 #
 # Needs python with torch and numpy; nothing of this project is installed (the repository goes on
 # PYTHONPATH; no CasADi). Where torch is missing it tries `pip install torch numpy` once and says
@@ -13,7 +14,8 @@
 # runs out of time does not stop the next. At the end: $OUT/results.json and $OUT/table.txt.
 #
 # Environment: OUT (default ./gpu-out), GPU_CHECK_DEVICE (cuda), GPU_CHECK_SIZES
-# (1000,10000,100000,1000000,10000000), GPU_CHECK_SECONDS (timed seconds per point, 1.0),
+# (1000,10000,100000,1000000,10000000), GPU_CHECK_ENV_SIZES (1000,10000,100000,1000000),
+# GPU_CHECK_SECONDS (timed seconds per point, 1.0),
 # GPU_CHECK_COMPILE_BACKEND (inductor; eager only traces, for a dry run), GPU_CHECK_BUDGET_S,
 # GPU_CHECK_LIMIT_SCALE (integer factor on every stage's limit, 1).
 set -uo pipefail
@@ -22,6 +24,7 @@ export OUT="${OUT:-./gpu-out}"
 mkdir -p "$OUT"
 DEVICE="${GPU_CHECK_DEVICE:-cuda}"
 SIZES="${GPU_CHECK_SIZES:-1000,10000,100000,1000000,10000000}"
+ENV_SIZES="${GPU_CHECK_ENV_SIZES:-1000,10000,100000,1000000}"
 SECONDS_PER_POINT="${GPU_CHECK_SECONDS:-1.0}"
 BACKEND="${GPU_CHECK_COMPILE_BACKEND:-inductor}"
 BUDGET="${GPU_CHECK_BUDGET_S:-470}"
@@ -91,10 +94,20 @@ bench() {
   run "bench-$1-$2" "$3" "$PY" benchmarks/gpu_check.py bench --device "$DEVICE" --dtype "$1" \
     --mode "$2" --sizes "$SIZES" --seconds "$SECONDS_PER_POINT" --backend "$BACKEND"
 }
-bench float32 compile 170
-bench float32 eager 50
-bench float64 eager 50
-bench float64 compile 130
+env_bench() {
+  run "env-bench-$1-$2" "$3" "$PY" benchmarks/gpu_check.py env-bench --device "$DEVICE" \
+    --dtype "$1" --mode "$2" --sizes "$ENV_SIZES" --seconds "$SECONDS_PER_POINT" \
+    --backend "$BACKEND"
+}
+# most wanted first (a stage gets at most what is left of the budget): the plant's float32
+# target, the env's equality and speed, then the rest of the plant table
+bench float32 compile 150
+run env-equality 60 "$PY" benchmarks/gpu_check.py env-equality --device "$DEVICE"
+env_bench float32 compile 150
+env_bench float32 eager 60
+bench float32 eager 40
+bench float64 eager 40
+bench float64 compile 100
 
 "$PY" benchmarks/gpu_check.py report 2>&1 | tee -a "$LOG"
 rm -f "$OUT/reference.npy"  # 7 MB of intermediate numbers
