@@ -18,7 +18,7 @@ from usvsim.nav.torch_nav_codegen import DEFAULT_NAV_KERNEL_PATH, default_nav_ke
 from usvsim.task.batch import heading_change_rad
 from usvsim.task.observations import relative_polar
 from usvsim.task.scenario import BoatNoise, Scenario, draw_episode, episode_geometry
-from usvsim.task.torch_env import TorchPoleAvoidanceEnv
+from usvsim.task.torch_env import TorchPoleAvoidanceEnv, torch_env_rates
 from usvsim.task.torch_episodes import episode_geometry_torch
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv, boat_generators
 
@@ -296,3 +296,11 @@ def test_wrong_actions_and_options_are_refused() -> None:
     with pytest.raises(ValueError, match="needs episodes='numpy'"):
         TorchPoleAvoidanceEnv(2, noise="replay")
     assert isinstance(ca.SX, type)  # CasADi present in the test run (the generator needs it)
+
+
+def test_perf_figures_stand_beside_the_c_path() -> None:
+    figures = torch_env_rates("torch-cpu", sizes=(8,), seconds=0.1)
+    rates = figures["env_steps_per_s"]["N=8"]
+    assert set(rates) == {"C path", "float64", "float32"} and min(rates.values()) > 0
+    ratio = figures["over_C_path"]["N=8"]["float64"]
+    assert ratio == pytest.approx(rates["float64"] / rates["C path"], rel=0.01, abs=1e-3)
