@@ -16,7 +16,7 @@ decisions); :meth:`NavigatedPlant.step` takes and updates a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -38,6 +38,7 @@ from usvsim.nav.sensors import period_steps
 from usvsim.vessel.codegen import BatchStepper, GatheredSteps
 from usvsim.vessel.model import NX
 from usvsim.vessel.plant import NS, Plant, PlantState
+from usvsim.vessel.weather_plant import NWI, NWS, WeatherPlant, sensed_offsets_expr
 
 __all__ = ["PACKED", "NavigatedPlant", "PackedLayout"]
 
@@ -67,6 +68,9 @@ class PackedLayout:
         Estimated heading ψ (rad).
     size : int
         Entries per boat.
+    weather : slice
+        The weather states of :mod:`usvsim.vessel.weather_plant` (empty without weather),
+        between the controller and the filter.
     """
 
     plant: slice
@@ -77,23 +81,27 @@ class PackedLayout:
     nav_vel: slice
     nav_psi: int
     size: int
+    weather: slice = field(default_factory=lambda: slice(NS, NS))
 
     @classmethod
-    def build(cls) -> PackedLayout:
-        """The layout of :class:`NavigatedPlant`: ``x`` (NX), ``c`` (NS − NX), ``n`` (NAV_NS)."""
+    def build(cls, n_weather: int = 0) -> PackedLayout:
+        """The layout of :class:`NavigatedPlant`: ``x`` (NX), ``c`` (NS − NX), the weather
+        states (``n_weather``, 0 without weather), ``n`` (NAV_NS)."""
+        base = NS + n_weather
 
         def nav(name: str) -> int:
-            return NS + NAV_STATE_FIELDS.index(name)
+            return base + NAV_STATE_FIELDS.index(name)
 
         return cls(
             plant=slice(0, NX),
             controller=slice(NX, NS),
             closed_loop=slice(0, NS),
-            nav=slice(NS, NS + NAV_NS),
+            nav=slice(base, base + NAV_NS),
             nav_pos=slice(nav("p_n"), nav("p_e") + 1),
             nav_vel=slice(nav("w_n"), nav("w_e") + 1),
             nav_psi=nav("psi"),
-            size=NS + NAV_NS,
+            size=base + NAV_NS,
+            weather=slice(NS, base),
         )
 
 
@@ -110,20 +118,41 @@ class NavigatedPlant:
         The batched plant (its closed-loop step function is reused).
     nav_config : NavConfig
         The navigator's configuration (its ``dt_s`` must equal the plant's).
+    weather : WeatherPlant, optional
+        Step the boats in wind and waves instead (:mod:`usvsim.vessel.weather_plant`, built on
+        the same ``plant``, with ``innovations="normal"``): the packed state gains the weather
+        states (:attr:`layout`), :meth:`run` takes the per-boat weather inputs and three more
+        standard normals per boat and step, and the filter's GNSS position, compass and gyro see
+        the first-order wave motion (:func:`usvsim.vessel.weather_plant.sensed_offsets_expr`;
+        the GNSS velocity does not).
     """
 
-    def __init__(self, plant: Plant, nav_config: NavConfig) -> None:
+    def __init__(
+        self, plant: Plant, nav_config: NavConfig, weather: WeatherPlant | None = None
+    ) -> None:
         if abs(plant.dt_s - nav_config.dt_s) > 1e-12:
             raise ValueError(f"NavConfig.dt_s {nav_config.dt_s} != plant dt_s {plant.dt_s}")
+        if weather is not None and weather.plant is not plant:
+            raise ValueError("NavigatedPlant: the weather plant must be built on this plant")
         self.plant = plant
         self.nav_config = nav_config
+        self.weather = weather
+        self.layout = PACKED if weather is None else PackedLayout.build(NWS)
         nav_fn = build_nav_step(nav_config)
-        s = ca.SX.sym("s", PACKED.size)
-        w = ca.SX.sym("w", 4)
+        lay = self.layout
+        s = ca.SX.sym("s", lay.size)
         g = ca.SX.sym("g", plant.gains.size)
-        e = ca.SX.sym("e", 8)
-        s_plant = plant.step_function(s[PACKED.closed_loop], w, g)
-        n_next = nav_fn(s[PACKED.nav], s_plant[PACKED.plant], e)
+        if weather is None:
+            w, e = ca.SX.sym("w", 4), ca.SX.sym("e", 8)
+            s_plant = plant.step_function(s[PACKED.closed_loop], w, g)
+            n_next = nav_fn(s[PACKED.nav], s_plant[PACKED.plant], e)
+        else:
+            w, e = ca.SX.sym("w", NWI), ca.SX.sym("e", 8 + 3)
+            s_plant = weather.step_function(s[0 : lay.weather.stop], w, g, e[8:11])
+            d = sensed_offsets_expr(s_plant, w)
+            x = s_plant[lay.plant]
+            sensed = ca.vertcat(x[0] + d[0], x[1] + d[1], x[2] + d[2], x[3], x[4], x[5] + d[3])
+            n_next = nav_fn(s[lay.nav], ca.vertcat(sensed, x[6:8]), e[0:8])
         # noise layouts repeat with the sensor schedule: cache them per phase of the cycle
         self._cycle = int(
             np.lcm(
@@ -193,8 +222,15 @@ class NavigatedPlant:
         normals: FloatArray,
         current: FloatArray | None = None,
         gnss_available: NDArray[np.bool_] | None = None,
+        weather_inputs: FloatArray | None = None,
+        weather_normals: FloatArray | None = None,
     ) -> FloatArray:
         """Advance packed states ``s0`` (N, 28) = [x, c, n] ``n_steps`` plant steps.
+
+        With weather (:attr:`weather`): ``s0`` is (N, :attr:`layout`.size) = [x, c, m, n],
+        ``weather_inputs`` (N, 26) each boat's per-episode weather
+        (:attr:`usvsim.vessel.weather_plant.WeatherPlantState.inputs`) and ``weather_normals``
+        (N, 3 n_steps) its next standard normals (gust, wave motion ×2 per step).
 
         ``psi_ref_rad`` (N,) rad and ``speed_ref_mps`` (m/s, all boats or (N,)) are held over
         the steps; ``normals`` (N, :meth:`draws_needed`) are each boat's next standard normals,
@@ -206,7 +242,7 @@ class NavigatedPlant:
         psi_ref = np.asarray(psi_ref_rad, dtype=float)
         if not (np.all(np.isfinite(psi_ref)) and np.all(np.isfinite(speed_ref_mps))):
             raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
-        w = np.empty((psi_ref.shape[0], 4))
+        w = np.empty((psi_ref.shape[0], 4 if self.weather is None else NWI))
         w[:, 0], w[:, 1] = psi_ref, speed_ref_mps
         w[:, 2], w[:, 3] = self.plant.current
         if current is not None:
@@ -214,6 +250,15 @@ class NavigatedPlant:
         noise = self.noise_steps(first_step_index, n_steps, normals)
         if gnss_available is not None:
             noise = _with_gnss_mask(noise, np.asarray(gnss_available, dtype=bool))
+        if self.weather is not None:
+            if weather_inputs is None or weather_normals is None:
+                raise ValueError(
+                    "a weather NavigatedPlant needs weather_inputs and weather_normals"
+                )
+            w[:, 4:] = weather_inputs
+            noise = _with_weather_normals(noise, np.asarray(weather_normals, dtype=float))
+        elif weather_inputs is not None or weather_normals is not None:
+            raise ValueError("weather_inputs / weather_normals given to a calm NavigatedPlant")
         return self._stepper.run(s0, w, self.plant.gains, n_steps, noise)
 
     def step(
@@ -232,6 +277,8 @@ class NavigatedPlant:
         order :meth:`Navigator.step` would draw them. Returns the new plant state, the plant
         trajectory (N, n_steps, 13) and the filter states (N, n_steps, 15) after each step.
         """
+        if self.weather is not None:
+            raise ValueError("NavigatedPlant.step is the calm path; with weather use run()")
         n = state.n_boats
         psi_ref = np.broadcast_to(np.asarray(psi_ref_rad, dtype=float), (n,))
         speed = np.broadcast_to(np.asarray(speed_ref_mps, dtype=float), (n,))
@@ -247,6 +294,20 @@ class NavigatedPlant:
         import_nav_state(navigator, last[:, PACKED.nav])
         new_state = PlantState(x=last[:, PACKED.plant].copy(), c=last[:, PACKED.controller].copy())
         return new_state, traj[:, :, PACKED.closed_loop], traj[:, :, PACKED.nav]
+
+
+def _with_weather_normals(noise: GatheredSteps, normals: FloatArray) -> GatheredSteps:
+    """``noise`` (T, 8 columns) with three more per step read from ``normals`` (N, 3 T),
+    appended to the pool: the weather step's innovations."""
+    n, m = noise.pool.shape
+    n_steps = noise.index.shape[0]
+    if normals.shape != (n, 3 * n_steps):
+        raise ValueError(f"weather_normals must have shape {(n, 3 * n_steps)}, got {normals.shape}")
+    pool = np.concatenate([noise.pool, normals], axis=1)
+    extra = m + np.arange(3 * n_steps, dtype=np.int64).reshape(n_steps, 3)
+    index = np.concatenate([noise.index, extra], axis=1)
+    factor = np.concatenate([noise.factor, np.ones((n_steps, 3))], axis=1)
+    return GatheredSteps(pool, index, factor)
 
 
 def _with_gnss_mask(noise: GatheredSteps, available: NDArray[np.bool_]) -> GatheredSteps:

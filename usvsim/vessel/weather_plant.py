@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import casadi as ca
 import numpy as np
@@ -80,6 +81,8 @@ __all__ = [
     "WeatherPlant",
     "WeatherPlantState",
     "build_weather_step",
+    "sensed_offsets",
+    "sensed_offsets_expr",
     "wave_offsets",
 ]
 
@@ -127,10 +130,12 @@ def build_weather_step(
     dt_s: float,
     yaw_model: tuple[float, float],
     hull: WeatherHull = USV105_HULL,
+    innovations: Literal["uniform", "normal"] = "uniform",
 ) -> ca.Function:
-    """``step(s[21], w[25], g[NG], e[3]) -> s_next[21]`` (module docstring); ``e`` three
-    uniforms in [0, 1) (gust, wave motion ×2); ``yaw_model`` (m kg m², d N m s/rad) the
-    autopilot's design model, used by the observer."""
+    """``step(s[21], w[30], g[NG], e[3]) -> s_next[21]`` (module docstring); ``e`` three
+    uniforms in [0, 1) (gust, wave motion ×2), or standard normals with ``innovations``
+    "normal" (a caller whose per-boat streams draw normals); ``yaw_model`` (m kg m²,
+    d N m s/rad) the autopilot's design model, used by the observer."""
     f = build_dynamics(vessel, weather=True)
     s = ca.SX.sym("s", NS + NWS)
     w = ca.SX.sym("w", NWI)
@@ -139,10 +144,9 @@ def build_weather_step(
     x, c = s[:NX], s[NX:NS]
     psi, r = x[2], x[5]
     # 1. sensed heading and yaw rate: true + first-order wave yaw
-    omega = w[_I["wave_omega"]]
-    shape = w[_I["yaw_gain"]] * omega**2 / G * ca.sin(2.0 * (w[_I["wave_dir"]] - psi))
-    psi_m = psi + shape * (omega * s[_S["xi0"]])
-    r_m = r + shape * (omega * s[_S["xi1"]])
+    offsets = sensed_offsets_expr(s, w)
+    psi_m = psi + offsets[2]
+    r_m = r + offsets[3]
     # 2. wave filter: the observer on the compass and the actuators' yaw moment
     m_yaw, d_yaw = yaw_model
     prior = [s[_S[f"obs_{k}"]] for k in OBSERVER_STATES]
@@ -171,7 +175,7 @@ def build_weather_step(
     x_next = rk4_expr(f, x, a_cmd, p, dt_s)
     x_next[2] = ssa_casadi(x_next[2])
     # 5. gust and wave motion, exact discretisations; innovations of zero mean, unit variance
-    xi = math.sqrt(12.0) * (e - 0.5)
+    xi = math.sqrt(12.0) * (e - 0.5) if innovations == "uniform" else e
     gust = w[_I["gust_a"]] * s[_S["gust"]] + w[_I["gust_gain"]] * xi[0]
     xi0, xi1 = s[_S["xi0"]], s[_S["xi1"]]
     xi0_next = w[_I["phi00"]] * xi0 + w[_I["phi01"]] * xi1 + w[_I["l00"]] * xi[1]
@@ -246,7 +250,7 @@ class SeaConditions:
 @dataclass(frozen=True)
 class WeatherPlantState:
     """N boats: plant ``x`` (N, 8), autopilot ``c`` (N, 5), weather states ``m`` (N, 8) and
-    the per-episode weather inputs ``inputs`` (N, 21) (:data:`WEATHER_INPUTS` from wind_mean)."""
+    the per-episode weather inputs ``inputs`` (N, 26) (:data:`WEATHER_INPUTS` from wind_mean)."""
 
     x: NDArray[np.float64]
     c: NDArray[np.float64]
@@ -285,7 +289,7 @@ def weather_inputs(
     yaw_model: tuple[float, float],
     yaw_gain: float = 1.0,
 ) -> tuple[NDArray[np.float64], WaveResponse]:
-    """Per-boat weather inputs (N, 21) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
+    """Per-boat weather inputs (N, 26) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
     wave response they were built from; ``wave_filter`` None: the filter off for every boat,
     else its tuning (calm boats keep it off: nothing to filter, and no estimator lag)."""
     n = cond.hs_m.size
@@ -322,15 +326,35 @@ def weather_inputs(
     return out, resp
 
 
+def sensed_offsets_expr(s: ca.SX, w: ca.SX) -> ca.SX:
+    """What the sensors add to the true state (CasADi): [Δn (m), Δe (m), Δψ (rad), Δr (rad/s)]
+    of the first-order wave motion, from a weather step's state ``s`` and inputs ``w``
+    (:func:`usvsim.vessel.weather.waves.wave_displacement`; Δr its rate, ψ̇ in the sine
+    neglected). The GNSS velocity is not displaced (the orbital velocity is left out)."""
+    omega, beta = w[_I["wave_omega"]], w[_I["wave_dir"]]
+    shape = w[_I["yaw_gain"]] * omega**2 / G * ca.sin(2.0 * (beta - s[2]))
+    d = omega * s[_S["xi0"]]
+    return ca.vertcat(d * ca.cos(beta), d * ca.sin(beta), shape * d, shape * (omega * s[_S["xi1"]]))
+
+
+def sensed_offsets(
+    x: NDArray[np.float64], m: NDArray[np.float64], inputs: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`sensed_offsets_expr` in NumPy: plant states ``x`` (..., 8), weather states ``m``
+    (..., 8), weather inputs ``inputs`` (..., 26) → (..., 4)."""
+    col = {name: i - 4 for name, i in _I.items()}
+    omega, beta = inputs[..., col["wave_omega"]], inputs[..., col["wave_dir"]]
+    shape = inputs[..., col["yaw_gain"]] * omega**2 / G * np.sin(2.0 * (beta - x[..., 2]))
+    d = omega * m[..., 1]
+    return np.stack(
+        [d * np.cos(beta), d * np.sin(beta), shape * d, shape * (omega * m[..., 2])], -1
+    )
+
+
 def wave_offsets(state: WeatherPlantState) -> NDArray[np.float64]:
     """First-order wave motion [Δn (m), Δe (m), Δψ (rad)] (N, 3) the sensors add to the true η
     (:func:`usvsim.vessel.weather.waves.wave_displacement`, with the kernel's numbers)."""
-    col = {name: i - 4 for name, i in _I.items()}
-    omega = state.inputs[:, col["wave_omega"]]
-    beta = state.inputs[:, col["wave_dir"]]
-    d = omega * state.m[:, 1]
-    shape = state.inputs[:, col["yaw_gain"]] * omega**2 / G * np.sin(2.0 * (beta - state.x[:, 2]))
-    return np.stack([d * np.cos(beta), d * np.sin(beta), shape * d], -1)
+    return sensed_offsets(state.x, state.m, state.inputs)[:, :3]
 
 
 class WeatherPlant:
@@ -349,6 +373,11 @@ class WeatherPlant:
         compass and gyro's (False).
     hull : WeatherHull
         Windage and waterline (default usv105's).
+    observer : ObserverNoise, optional
+        The wave filter's tuning (default :class:`ObserverNoise`).
+    innovations : "uniform" or "normal"
+        What drives the gusts and wave motion (module docstring): uniforms (cheap to draw) or
+        standard normals (for callers whose per-boat streams draw normals).
     """
 
     def __init__(
@@ -359,14 +388,16 @@ class WeatherPlant:
         wave_filter: bool = True,
         hull: WeatherHull = USV105_HULL,
         observer: ObserverNoise | None = None,
+        innovations: Literal["uniform", "normal"] = "uniform",
     ) -> None:
         self.plant = plant
         self.gusts = gusts or GustParams()
         self.wave_filter = (observer or ObserverNoise()) if wave_filter else None
         self.yaw_model = (float(plant.design.nomoto.m), float(plant.design.nomoto.d))
         self.rng = np.random.default_rng(seed)
+        self.innovations = innovations
         self.step_function = build_weather_step(
-            plant.vessel, plant.kind, plant.dt_s, self.yaw_model, hull
+            plant.vessel, plant.kind, plant.dt_s, self.yaw_model, hull, innovations
         )
         self._stepper = BatchStepper(self.step_function, backend=plant.kernel)  # type: ignore[arg-type]
 
@@ -422,8 +453,13 @@ class WeatherPlant:
         if not np.all(np.isfinite(w[:, :2])):
             raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
         s0 = np.concatenate([state.x, state.c, state.m], axis=1)
-        uniforms = self.rng.random((n, int(n_steps), 3))
-        traj = self._stepper.run(s0, w, self.plant.gains, int(n_steps), uniforms)
+        shape = (n, int(n_steps), 3)
+        draws = (
+            self.rng.random(shape)
+            if self.innovations == "uniform"
+            else self.rng.standard_normal(shape)
+        )
+        traj = self._stepper.run(s0, w, self.plant.gains, int(n_steps), draws)
         last = traj[:, -1]
         new = WeatherPlantState(
             last[:, :NX].copy(), last[:, NX:NS].copy(), last[:, NS:].copy(), state.inputs

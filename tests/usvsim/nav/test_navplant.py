@@ -135,3 +135,49 @@ def test_started_rows_equal_a_masked_navigator_reset():
     np.testing.assert_array_equal(rows, export_nav_state(nav)[idx])
     np.testing.assert_array_equal(rows[:, 0:2], est.pos_ne[idx])
     np.testing.assert_array_equal(rows[:, 8], est.psi[idx])
+
+
+def test_weather_fused_step_equals_weather_plant_then_navigator_on_sensed_motion(plant):
+    """With weather, the fused step equals WeatherPlant.step then Navigator.run on the sensed
+    pose and yaw rate (true + first-order wave motion); with no weather, the calm fused step."""
+    from usvsim.vessel.weather.waves import sea_state_from_code
+    from usvsim.vessel.weather_plant import SeaConditions, WeatherPlant, sensed_offsets
+
+    cfg, n, T = NavConfig(), 8, 20
+    state, rng = boats(plant, n, 5)
+    cond = SeaConditions.uniform(n, 10.0, 1.0, sea_state_from_code(4, 2.4))
+    weather = WeatherPlant(plant, seed=0, innovations="normal")
+    fused = NavigatedPlant(plant, cfg, weather)
+    assert fused.layout.size == PACKED.size + 8
+    start = weather.initial_state(state.eta, cond)
+    nav = Navigator(cfg, n)
+    nav.reset(state.eta, state.nu, np.random.default_rng(1))
+    s0 = np.concatenate([start.x, start.c, start.m, export_nav_state(nav)], axis=1)
+    psi_ref = rng.uniform(-3, 3, n)
+    normals = rng.standard_normal((n, fused.draws_needed(1, T)))
+    wx = rng.standard_normal((n, 3 * T))
+    packed = fused.run(s0, psi_ref, 3.0, T, 1, normals, None, None, start.inputs, wx)
+    # reference: the weather plant with the same innovations, then the navigator on what it senses
+    weather.rng = _Replay(wx.reshape(n, T, 3))
+    _, traj = weather.step(start, psi_ref, 3.0, n_steps=T)
+    x, m = traj[:, :, 0:8], traj[:, :, 13:21]
+    d = sensed_offsets(x, m, np.broadcast_to(start.inputs[:, None, :], (n, T, 26)))
+    eta = x[:, :, 0:3] + d[:, :, 0:3]
+    nu = np.concatenate([x[:, :, 3:5], x[:, :, 5:6] + d[:, :, 3:4]], axis=2)
+    est = nav.run(eta, nu, RecordingRng(normals), 1)
+    lay = fused.layout
+    np.testing.assert_allclose(packed[:, :, 0:21], traj, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(packed[:, :, lay.nav_pos], est.pos_ne, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(packed[:, :, lay.nav_psi], est.psi, rtol=1e-9, atol=1e-9)
+    assert np.std(d[:, :, 0]) > 0.05  # the GNSS does see the waves (m)
+
+
+class _Replay:
+    """A Generator stand-in whose standard_normal returns given numbers."""
+
+    def __init__(self, values: np.ndarray) -> None:
+        self.values = values
+
+    def standard_normal(self, shape):
+        assert shape == self.values.shape
+        return self.values
