@@ -1,4 +1,4 @@
-"""The pole-avoidance task as batched tensor code on any torch device (positional observation).
+"""The pole-avoidance task as batched tensor code on any torch device (positional and radar).
 
 :class:`TorchPoleAvoidanceEnv` is :class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv` (autoreset
 ``SAME_STEP``) with everything of a step on the device: the plant (:mod:`usvsim.vessel.
@@ -15,7 +15,8 @@ One decision step of N boats (T = 20 plant steps of 0.1 s)::
     T × [ plant step (autopilot, RK4) ; sensors + Kalman filter ]
     done   : from the true positions at every plant step
     reward : from the true distances at the period's end (or the first goal / collision step)
-    obs    : [r_pole, φ_pole, r_goal, φ_goal] from the estimate (m, rad)
+    obs    : from the estimate: [r_pole, φ_pole, r_goal, φ_goal] (m, rad), or the radar image
+             (and the standardised goal vector) (:mod:`usvsim.task.torch_observations`)
     restart: boats whose episode ended start their next one (obs is the new episode's first)
 
 Equality with the CPU environment: with ``episodes="numpy"`` (the CPU env's episode draws) and
@@ -29,12 +30,13 @@ Returns of :meth:`~TorchPoleAvoidanceEnv.step` (tensors on the device):
 ==================  ==========  =================================================================
 name                shape       meaning
 ==================  ==========  =================================================================
-obs                 (N, 4)      ``observation_dtype`` (float32 like the CPU env): after a restart
-                                the new episode's first observation
+obs                 (N, 4)      positional, ``observation_dtype`` (float32 like the CPU env);
+                                radar: (N, 1, 50, 119) uint8; radar+goal: a dict of both; after a
+                                restart the new episode's first observation
 reward              (N,)        the study's reward (:class:`usvsim.task.reward.GaussianReward`)
 terminated          (N,) bool   goal reached or collision
 truncated           (N,) bool   time limit or out of the area, not terminated
-info                dict        ``final_obs`` (N, 4) the last observation of every boat before a
+info                dict        ``final_obs`` the last observation of every boat before a
                                 restart, and the CPU env's info entries (``reward_pole``,
                                 ``distance_to_pole_m``, ``is_success``, ``time_s``, …) as (N,)
 ==================  ==========  =================================================================
@@ -56,6 +58,7 @@ import numpy as np
 import torch
 
 from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_state, torch_ssa
+from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
 from usvsim.task.scenario import Scenario
 from usvsim.task.torch_episodes import (
@@ -64,6 +67,14 @@ from usvsim.task.torch_episodes import (
     NoiseSource,
     ReplayNoise,
     TorchEpisodes,
+)
+from usvsim.task.torch_observations import (
+    TORCH_OBSERVATIONS,
+    TorchObservation,
+    radar_image,
+    relative_polar_torch,
+    select_rows,
+    standardized_goal,
 )
 from usvsim.vessel.torch_plant import DTYPES, TorchPlant
 
@@ -88,8 +99,10 @@ class TorchPoleAvoidanceEnv:
     dtype : "float64" | "float32"
         Number type of the simulation.
     action : "gaussian" | "categorical"
-    observation : "positional"
-        The only one so far (radar: not yet).
+    observation : "positional" | "radar" | "radar+goal"
+        As the CPU env's (:mod:`usvsim.task.torch_observations`).
+    radar : RadarConfig, optional
+        Image geometry; clutter and intensity noise are not drawn on the device (refused).
     observation_dtype : "float32" | "float64"
         float32 as the CPU env; float64 keeps the simulation's numbers (tests).
     scenario : Scenario, optional
@@ -118,6 +131,7 @@ class TorchPoleAvoidanceEnv:
         action: Literal["gaussian", "categorical"] = "gaussian",
         observation: str = "positional",
         observation_dtype: str = "float32",
+        radar: RadarConfig | None = None,
         scenario: Scenario | None = None,
         reward: GaussianReward | None = None,
         nav: Any = None,
@@ -129,10 +143,13 @@ class TorchPoleAvoidanceEnv:
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
-        if observation != "positional":
+        if observation not in TORCH_OBSERVATIONS:
             raise ValueError(
-                f"the torch env has the positional observation only so far, got {observation!r}"
+                f"observation must be one of {TORCH_OBSERVATIONS} on torch, got {observation!r}"
             )
+        self.radar = radar or RadarConfig()
+        if self.radar.clutter_probability > 0 or self.radar.noise_amplitude > 0:
+            raise ValueError("radar clutter and intensity noise are not drawn by the torch env")
         if action not in ("gaussian", "categorical"):
             raise ValueError(f"action must be 'gaussian' or 'categorical', got {action!r}")
         if observation_dtype not in DTYPES:
@@ -146,6 +163,7 @@ class TorchPoleAvoidanceEnv:
             raise ValueError("the torch env computes the GaussianReward only")
         self.num_envs = n = num_envs
         self.action_kind = action
+        self.observation_kind = observation
         self.scenario = sc = scenario or Scenario()
         self.plant = TorchPlant("default", dt_s=sc.dt_s, device=device, dtype=dtype)
         self.device, self.dtype = self.plant.device, self.plant.dtype
@@ -195,7 +213,7 @@ class TorchPoleAvoidanceEnv:
 
     # ----------------------------------------------------------------------------- reset
     @torch.no_grad()
-    def reset(self, *, seed: int | None = None) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+    def reset(self, *, seed: int | None = None) -> tuple[TorchObservation, dict[str, torch.Tensor]]:
         """Start every boat's first episode; ``seed`` seeds the episode and noise draws (boat i's
         NumPy episodes from ``seed + i``, as the CPU env)."""
         if seed is None:
@@ -208,7 +226,7 @@ class TorchPoleAvoidanceEnv:
         self._ready = True
         return obs, {"pole_ne": self.pole_ne.clone(), "goal_ne": self.goal_ne.clone()}
 
-    def _restart(self, boats: torch.Tensor, obs: torch.Tensor) -> torch.Tensor:
+    def _restart(self, boats: torch.Tensor, obs: TorchObservation) -> TorchObservation:
         """Start the next episode of ``boats`` (N,) bool, everything selected on the device;
         returns ``obs`` with those boats' rows their first observation."""
         ep = self.episodes.next(self._started)
@@ -229,15 +247,19 @@ class TorchPoleAvoidanceEnv:
         self._min_pole = torch.where(boats, ep.start_distance_m, self._min_pole)
         self._t_goal = torch.where(boats, math.inf, self._t_goal)
         self._n_decisions = torch.where(boats, 0, self._n_decisions)
-        return torch.where(col, self._observe(), obs)
+        return select_rows(boats, self._observe(), obs)
 
-    def _observe(self) -> torch.Tensor:
-        """[r_pole, φ_pole, r_goal, φ_goal] (N, 4) from the estimate (``relative_polar``)."""
+    def _observe(self) -> TorchObservation:
+        """The observation of every boat from its estimate (module docstring)."""
         pos, psi = self._n[0:2].T, self._n[8]
-        d = torch.stack([self.pole_ne, self.goal_ne], dim=1) - pos[:, None, :]
-        r = torch.hypot(d[..., 0], d[..., 1])
-        b = torch_ssa(torch.atan2(d[..., 1], d[..., 0]) - psi[:, None])
-        return torch.stack([r[:, 0], b[:, 0], r[:, 1], b[:, 1]], 1).to(self.observation_dtype)
+        r, b = relative_polar_torch(pos, psi, torch.stack([self.pole_ne, self.goal_ne], dim=1))
+        if self.observation_kind == "positional":
+            obs = torch.stack([r[:, 0], b[:, 0], r[:, 1], b[:, 1]], 1)
+            return obs.to(self.observation_dtype)
+        image = radar_image(r[:, 0], b[:, 0], self.scenario.pole_radius_m, self.radar)
+        if self.observation_kind == "radar":
+            return image
+        return {"radar": image, "goal": standardized_goal(r[:, 1], b[:, 1])}
 
     # ----------------------------------------------------------------------------- step
     def heading_change_rad(self, actions: Any) -> torch.Tensor:
@@ -265,7 +287,7 @@ class TorchPoleAvoidanceEnv:
     @torch.no_grad()
     def step(
         self, actions: Any
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, dict[str, torch.Tensor]]:
+    ) -> tuple[TorchObservation, torch.Tensor, torch.Tensor, torch.Tensor, dict[str, Any]]:
         """One decision step of every boat, finished boats restarted (module docstring)."""
         if not self._ready:
             raise RuntimeError("call reset() before step()")

@@ -16,10 +16,12 @@ from usvsim.nav.models import NavConfig
 from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_state
 from usvsim.nav.torch_nav_codegen import DEFAULT_NAV_KERNEL_PATH, default_nav_kernel_source
 from usvsim.task.batch import heading_change_rad
-from usvsim.task.observations import relative_polar
+from usvsim.task.observations import GOAL_STANDARDIZATION, relative_polar
+from usvsim.task.radar import RadarConfig, render_radar
 from usvsim.task.scenario import BoatNoise, Scenario, draw_episode, episode_geometry
 from usvsim.task.torch_env import TorchPoleAvoidanceEnv, torch_env_rates
 from usvsim.task.torch_episodes import episode_geometry_torch
+from usvsim.task.torch_observations import GOAL_MEAN, GOAL_STD, radar_image, standardized_goal
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv, boat_generators
 
 N_BOATS, N_STEPS, SEED = 16, 160, 11
@@ -291,8 +293,10 @@ def test_wrong_actions_and_options_are_refused() -> None:
     env.reset(seed=0)
     with pytest.raises(ValueError, match=r"gaussian actions must be floats of shape \(2, 1\)"):
         env.step(torch.zeros(2))
-    with pytest.raises(ValueError, match="positional observation only"):
-        TorchPoleAvoidanceEnv(2, observation="radar")
+    with pytest.raises(ValueError, match="observation must be one of"):
+        TorchPoleAvoidanceEnv(2, observation="scene")
+    with pytest.raises(ValueError, match="clutter"):
+        TorchPoleAvoidanceEnv(2, radar=RadarConfig(clutter_probability=0.01))
     with pytest.raises(ValueError, match="needs episodes='numpy'"):
         TorchPoleAvoidanceEnv(2, noise="replay")
     assert isinstance(ca.SX, type)  # CasADi present in the test run (the generator needs it)
@@ -304,3 +308,46 @@ def test_perf_figures_stand_beside_the_c_path() -> None:
     assert set(rates) == {"C path", "float64", "float32"} and min(rates.values()) > 0
     ratio = figures["over_C_path"]["N=8"]["float64"]
     assert ratio == pytest.approx(rates["float64"] / rates["C path"], rel=0.01, abs=1e-3)
+
+
+def test_radar_image_equals_render_radar() -> None:
+    """Ranges near and beyond 200 m, bearings across the field of view's edges and ±π, a pole
+    so close that its box wraps past ±π."""
+    rng = np.random.default_rng(8)
+    rho = np.concatenate([rng.uniform(0.0, 220.0, 500), [0.5, 1.2, 199.0, 201.5, 0.0]])
+    phi = np.concatenate([rng.uniform(-4.0, 4.0, 500), [3.1, -3.1, 2.09, -2.1, 0.0]])
+    for radius in (1.0, 3.0):
+        expected = render_radar(rho, phi, radius, RadarConfig())
+        got = radar_image(torch.as_tensor(rho), torch.as_tensor(phi), radius, RadarConfig())
+        np.testing.assert_array_equal(got.numpy(), expected)
+    assert expected[:, 0].any(axis=(1, 2)).sum() > 200  # most poles are in view
+
+
+def test_goal_vector_equals_the_cpu_envs() -> None:
+    assert GOAL_MEAN == GOAL_STANDARDIZATION.mean and GOAL_STD == GOAL_STANDARDIZATION.std
+    x = np.random.default_rng(3).uniform(-50.0, 300.0, (64, 2))
+    got = standardized_goal(torch.as_tensor(x[:, 0]), torch.as_tensor(x[:, 1])).numpy()
+    np.testing.assert_array_equal(got, GOAL_STANDARDIZATION.apply(x))
+
+
+def test_radar_goal_observations_equal_the_cpu_env() -> None:
+    """radar+goal, 16 boats x 40 decisions replayed (restarts included): the images equal pixel
+    for pixel, the goal vectors to one float32 step."""
+    cpu = PoleAvoidanceVectorEnv(N_BOATS, observation="radar+goal")
+    env = TorchPoleAvoidanceEnv(N_BOATS, observation="radar+goal", episodes="numpy", noise="replay")
+    c_obs, _ = cpu.reset(seed=SEED)
+    t_obs, _ = env.reset(seed=SEED)
+    rng = np.random.default_rng(6)
+    done = 0
+    for _ in range(40):
+        assert isinstance(t_obs, dict)
+        np.testing.assert_array_equal(t_obs["radar"].numpy(), c_obs["radar"])
+        want = c_obs["goal"]
+        assert np.all(np.abs(t_obs["goal"].numpy() - want) <= np.spacing(np.abs(want)))
+        b_goal = want[:, 1] * GOAL_STANDARDIZATION.std[1]
+        a = np.clip(2.0 * b_goal + rng.normal(0.0, 0.5, N_BOATS), -1.0, 1.0)[:, None]
+        c_obs, _, c_te, c_tr, _ = cpu.step(a)
+        t_obs, _, t_te, t_tr, _ = env.step(torch.as_tensor(a))
+        np.testing.assert_array_equal(t_te.numpy() | t_tr.numpy(), c_te | c_tr)
+        done += int((c_te | c_tr).sum())
+    assert done >= 10
