@@ -165,3 +165,48 @@ def test_bad_conditions_raise_one_line() -> None:
         weather.initial_state(np.zeros((2, 3)), bad)
     with pytest.raises(UserError, match="finite numbers"):
         weather.initial_state(np.zeros((3, 3)), SeaConditions.uniform(2))
+
+
+class _Uniforms:
+    """A Generator stand-in whose random() returns given numbers."""
+
+    def __init__(self, values: np.ndarray) -> None:
+        self.values = values
+
+    def random(self, shape: tuple[int, ...]) -> np.ndarray:
+        assert shape == self.values.shape
+        return self.values
+
+
+def test_weather_step_has_a_torch_twin_equal_to_the_c_kernel() -> None:
+    """The weather step generated as torch code (usvsim.vessel.torch_codegen, the calm torch
+    kernel's generator) on torch-cpu in float64 follows the compiled C kernel: 16 boats in 10 m/s
+    wind and sea state 4, filter on, 300 steps, positions within 1e-9 m (measured 1.1e-11 m)."""
+    torch = pytest.importorskip("torch")
+    from usvsim.vessel.torch_codegen import torch_function_source
+
+    plant = Plant("default")
+    weather = WeatherPlant(plant, seed=2)
+    n, steps = 16, 300
+    eta, ref = _poses(n, 4)
+    start = weather.initial_state(
+        eta, SeaConditions.uniform(n, 10.0, 1.0, sea_state_from_code(4, 2.4))
+    )
+    uniforms = np.random.default_rng(8).random((n, steps, 3))
+    weather.rng = _Uniforms(uniforms)  # type: ignore[assignment]
+    _, traj = weather.step(start, ref, n_steps=steps)
+    namespace: dict[str, object] = {"torch": torch, "math": math}
+    exec(torch_function_source(weather.step_function, "wx_step", "weather step"), namespace)
+    step = namespace["wx_step"]
+    s = [torch.tensor(c) for c in np.concatenate([start.x, start.c, start.m], axis=1).T]
+    w = np.zeros((n, 30))
+    w[:, 0], w[:, 1], w[:, 4:] = ref, plant.cruise_speed_mps, start.inputs
+    w_cols = [torch.tensor(c) for c in w.T]
+    g_cols = [torch.tensor(float(v), dtype=torch.float64) for v in plant.gains]
+    worst = 0.0
+    for k in range(steps):
+        e_cols = [torch.tensor(c) for c in uniforms[:, k, :].T]
+        s = list(step(s, w_cols, g_cols, e_cols))  # type: ignore[operator]
+        pos = np.stack([s[0].numpy(), s[1].numpy()], axis=1)
+        worst = max(worst, float(np.abs(pos - traj[:, k, 0:2]).max()))
+    assert worst <= 1e-9, worst
