@@ -28,7 +28,8 @@ positional), 16 boats x 40 decisions with the CPU env's episodes and noise repla
 (``episodes="numpy"``, ``noise="replay"``), on the device in float64 and float32 against the same
 env on torch-cpu in float64 (itself tested against the C path in the CPU test suite):
 observations, rewards and flags. ``env-bench``: env steps (boat decisions of 2 s, restarts
-included) per second at each N, eager or with the plant + filter step compiled.
+included) per second at each N, eager or with the plant + filter step compiled, positional or
+radar(+goal) observation.
 """
 
 from __future__ import annotations
@@ -343,7 +344,13 @@ def stage_env_equality(device: str, dtypes: list[str]) -> None:
 
 
 def stage_env_bench(
-    device: str, dtype: str, mode: str, sizes: list[int], seconds: float, backend: str
+    device: str,
+    dtype: str,
+    mode: str,
+    sizes: list[int],
+    seconds: float,
+    backend: str,
+    observation: str = "positional",
 ) -> None:
     import torch
 
@@ -353,18 +360,22 @@ def stage_env_bench(
         try:
             t0 = time.perf_counter()
             env = TorchPoleAvoidanceEnv(
-                n, device=device, dtype=dtype, compile=mode == "compile", compile_backend=backend
-            )
+                n, device=device, dtype=dtype, observation=observation,
+                compile=mode == "compile", compile_backend=backend,
+            )  # fmt: skip
             env.reset(seed=0)
             env.step(torch.zeros((n, 1), device=env.device))  # compiles on the first call
             _sync(env.device)
             first_s = time.perf_counter() - t0
             rate = measure_env_steps(env, seconds)
         except torch.cuda.OutOfMemoryError as err:
-            record("env_bench", device=device, dtype=dtype, mode=mode, n=n, error=str(err)[:200])
+            record(
+                "env_bench", device=device, dtype=dtype, mode=mode, observation=observation,
+                n=n, error=str(err)[:200],
+            )  # fmt: skip
             break
         record(
-            "env_bench", device=device, dtype=dtype, mode=mode,
+            "env_bench", device=device, dtype=dtype, mode=mode, observation=observation,
             backend=backend if mode == "compile" else None, n=n,
             first_step_s=round(first_s, 2), env_steps_per_s=round(rate),
         )  # fmt: skip
@@ -389,18 +400,25 @@ def _env_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
             f"{e['episodes_ended']} episodes ended): {verdict}"
         )
     rates = [b for b in grouped.get("env_bench", []) if "env_steps_per_s" in b]
-    columns = sorted({(b["mode"], b["dtype"]) for b in rates})
+
+    def column(b: dict[str, Any]) -> tuple[str, str, str]:
+        return (b.get("observation", "positional"), b["mode"], b["dtype"])
+
+    columns = sorted({column(b) for b in rates})
     text += ["", "study task env steps/s (one 2 s decision of one boat, 20 plant steps):"]
-    text.append("  " + f"{'N':>10}" + "".join(f"{m + ' ' + d:>20}" for m, d in columns))
+    text.append("  " + f"{'N':>10}" + "".join(f"{' '.join(c):>30}" for c in columns))
     for n in sorted({b["n"] for b in rates}):
         cells = []
-        for m, d in columns:
-            hit = [b for b in rates if b["n"] == n and (b["mode"], b["dtype"]) == (m, d)]
-            cells.append(f"{hit[-1]['env_steps_per_s']:>20.3e}" if hit else f"{'-':>20}")
+        for c in columns:
+            hit = [b for b in rates if b["n"] == n and column(b) == c]
+            cells.append(f"{hit[-1]['env_steps_per_s']:>30.3e}" if hit else f"{'-':>30}")
         text.append("  " + f"{n:>10,}" + "".join(cells))
     for b in grouped.get("env_bench", []):
         if "error" in b:
-            text.append(f"  env {b['mode']} {b['dtype']} N={b['n']:,}: {b['error']}")
+            text.append(
+                f"  env {b.get('observation', '')} {b['mode']} {b['dtype']} N={b['n']:,}: "
+                f"{b['error']}"
+            )
     compiled = [b for b in rates if b["mode"] == "compile"]
     if compiled:
         text.append(f"  first step incl. compilation: {compiled[0]['first_step_s']} s")
@@ -501,6 +519,9 @@ def main() -> None:
     env_bench.add_argument("--sizes", default="1000,10000,100000,1000000")
     env_bench.add_argument("--seconds", type=float, default=1.0)
     env_bench.add_argument("--backend", default="inductor")
+    env_bench.add_argument(
+        "--observation", default="positional", choices=["positional", "radar", "radar+goal"]
+    )
     sub.add_parser("report")
     args = parser.parse_args()
     if args.stage == "env":
@@ -511,7 +532,9 @@ def main() -> None:
         stage_env_equality(args.device, args.dtypes.split(","))
     elif args.stage == "env-bench":
         sizes = [int(float(s)) for s in args.sizes.split(",")]
-        stage_env_bench(args.device, args.dtype, args.mode, sizes, args.seconds, args.backend)
+        stage_env_bench(
+            args.device, args.dtype, args.mode, sizes, args.seconds, args.backend, args.observation
+        )
     elif args.stage == "bench":
         sizes = [int(float(s)) for s in args.sizes.split(",")]
         stage_bench(args.device, args.dtype, args.mode, sizes, args.seconds, args.backend)

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The torch plant and the study task's torch env on one GPU (issue 40): equality against
 # torch-cpu float64, then plant boat-substeps/s (float32 and float64, eager and torch.compile,
-# N = 1e3 .. 1e7) and env steps/s (float32, eager and compiled, N = 1e3 .. 1e6).
+# N = 1e3 .. 1e7) and env steps/s (float32, eager and compiled, N = 1e3 .. 1e6; positional,
+# and radar+goal compiled).
 #
 #   bash benchmarks/gpu_check.sh                      # on the GPU machine, from the repo root
 #   GPU_CHECK_DEVICE=torch-cpu GPU_CHECK_SIZES=1000,4000 GPU_CHECK_ENV_SIZES=64,256 \
@@ -94,10 +95,11 @@ bench() {
   run "bench-$1-$2" "$3" "$PY" benchmarks/gpu_check.py bench --device "$DEVICE" --dtype "$1" \
     --mode "$2" --sizes "$SIZES" --seconds "$SECONDS_PER_POINT" --backend "$BACKEND"
 }
-env_bench() {
-  run "env-bench-$1-$2" "$3" "$PY" benchmarks/gpu_check.py env-bench --device "$DEVICE" \
+env_bench() {  # dtype mode limit [observation]
+  local obs="${4:-positional}"
+  run "env-bench-$obs-$1-$2" "$3" "$PY" benchmarks/gpu_check.py env-bench --device "$DEVICE" \
     --dtype "$1" --mode "$2" --sizes "$ENV_SIZES" --seconds "$SECONDS_PER_POINT" \
-    --backend "$BACKEND"
+    --backend "$BACKEND" --observation "$obs"
 }
 # most wanted first (a stage gets at most what is left of the budget): the plant's float32
 # target, the env's equality and speed, then the rest of the plant table
@@ -105,6 +107,7 @@ bench float32 compile 150
 run env-equality 60 "$PY" benchmarks/gpu_check.py env-equality --device "$DEVICE"
 env_bench float32 compile 150
 env_bench float32 eager 60
+env_bench float32 compile 60 radar+goal
 bench float32 eager 40
 bench float64 eager 40
 bench float64 compile 100
