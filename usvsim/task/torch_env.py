@@ -70,6 +70,7 @@ from usvsim.task.torch_episodes import (
 )
 from usvsim.task.torch_observations import (
     TORCH_OBSERVATIONS,
+    RadarGrid,
     TorchObservation,
     radar_image,
     relative_polar_torch,
@@ -150,6 +151,7 @@ class TorchPoleAvoidanceEnv:
         self.radar = radar or RadarConfig()
         if self.radar.clutter_probability > 0 or self.radar.noise_amplitude > 0:
             raise ValueError("radar clutter and intensity noise are not drawn by the torch env")
+        self._radar_grid: RadarGrid | None = None
         if action not in ("gaussian", "categorical"):
             raise ValueError(f"action must be 'gaussian' or 'categorical', got {action!r}")
         if observation_dtype not in DTYPES:
@@ -256,7 +258,9 @@ class TorchPoleAvoidanceEnv:
         if self.observation_kind == "positional":
             obs = torch.stack([r[:, 0], b[:, 0], r[:, 1], b[:, 1]], 1)
             return obs.to(self.observation_dtype)
-        image = radar_image(r[:, 0], b[:, 0], self.scenario.pole_radius_m, self.radar)
+        if self._radar_grid is None:
+            self._radar_grid = RadarGrid.build(self.radar, self.dtype, self.device)
+        image = radar_image(r[:, 0], b[:, 0], self.scenario.pole_radius_m, self._radar_grid)
         if self.observation_kind == "radar":
             return image
         return {"radar": image, "goal": standardized_goal(r[:, 1], b[:, 1])}

@@ -74,15 +74,16 @@ class EpisodeStarts:
 
 def episode_geometry_torch(
     scenario: Scenario,
+    poles_ne: torch.Tensor,
     pole_index: torch.Tensor,
     distance_m: torch.Tensor,
     bearing_rad: torch.Tensor,
     offset_rad: torch.Tensor,
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """:func:`usvsim.task.scenario.episode_geometry` on tensors (N,): pole (N, 2), start pose
-    (N, 3) and goal (N, 2), the same equations in the same order (inputs are not checked)."""
-    poles = torch.tensor(scenario.poles_ne, dtype=distance_m.dtype, device=distance_m.device)
-    pole = poles[pole_index]
+    (N, 3) and goal (N, 2), the same equations in the same order (inputs are not checked);
+    ``poles_ne`` (P, 2) is ``scenario.poles_ne`` on the device."""
+    pole = poles_ne[pole_index]
     out = torch.stack([torch.cos(bearing_rad), torch.sin(bearing_rad)], dim=-1)
     start = pole + distance_m[:, None] * out
     psi0 = torch_ssa(bearing_rad + math.pi + offset_rad)
@@ -124,6 +125,7 @@ class TorchEpisodes:
         self._gen = torch.Generator(device=device)
         self._table: EpisodeStarts | None = None
         self._rows = torch.arange(n_boats, device=device)
+        self._poles = torch.tensor(scenario.poles_ne, dtype=dtype, device=device)
 
     def seed(self, seed: int) -> None:
         """Restart the draws: boat i's table from ``default_rng(seed + i)`` (NumPy source) and
@@ -168,7 +170,9 @@ class TorchEpisodes:
         distance = self._uniform(*sc.start_distance_range_m)
         bearing = self._uniform(0.0, 2.0 * math.pi)
         offset = self._uniform(*sc.heading_offset_range_rad)
-        pole, eta, goal = episode_geometry_torch(sc, pole_index, distance, bearing, offset)
+        pole, eta, goal = episode_geometry_torch(
+            sc, self._poles, pole_index, distance, bearing, offset
+        )
         seeds = torch.full((self.n,), -1, dtype=torch.int64, device=self.device)
         return EpisodeStarts(pole, eta, goal, distance, seeds)
 

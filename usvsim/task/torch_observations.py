@@ -18,6 +18,7 @@ kind            observation                            tensor
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -29,6 +30,7 @@ __all__ = [
     "GOAL_MEAN",
     "GOAL_STD",
     "TORCH_OBSERVATIONS",
+    "RadarGrid",
     "TorchObservation",
     "radar_image",
     "relative_polar_torch",
@@ -56,8 +58,30 @@ def relative_polar_torch(
     return r, torch_ssa(torch.atan2(d[..., 1], d[..., 0]) - psi_rad[:, None])
 
 
+@dataclass(frozen=True)
+class RadarGrid:
+    """The radar image's pixel edges as tensors on the device, built once (not per step)."""
+
+    range_hi: torch.Tensor  # (rows,) m, upper row edges
+    range_lo: torch.Tensor  # (rows,) m, lower row edges
+    bearing_lo: torch.Tensor  # (cols,) rad, left column edges
+    bearing_hi: torch.Tensor  # (cols,) rad, right column edges, the last one just past +fov
+
+    @classmethod
+    def build(cls, cfg: RadarConfig, dtype: torch.dtype, device: torch.device) -> RadarGrid:
+        """The edges of :class:`usvsim.task.radar.RadarConfig` as :func:`render_radar` uses them."""
+        r_edges, b_edges = cfg.range_edges_m, cfg.bearing_edges_rad
+        b_hi = b_edges[1:].copy()
+        b_hi[-1] = np.nextafter(b_hi[-1], np.inf)  # the last column includes +half_fov
+
+        def put(a: np.ndarray) -> torch.Tensor:
+            return torch.as_tensor(a, dtype=dtype, device=device)
+
+        return cls(put(r_edges[1:]), put(r_edges[:-1]), put(b_edges[:-1]), put(b_hi))
+
+
 def radar_image(
-    range_m: torch.Tensor, bearing_rad: torch.Tensor, radius_m: float, cfg: RadarConfig
+    range_m: torch.Tensor, bearing_rad: torch.Tensor, radius_m: float, grid: RadarGrid
 ) -> torch.Tensor:
     """:func:`usvsim.task.radar.render_radar` of one obstacle per boat: (N, 1, rows, cols) uint8,
     255 where the obstacle's polar box touches the pixel. ``range_m``, ``bearing_rad`` (N,).
@@ -65,31 +89,23 @@ def radar_image(
     The box's wrap past ±π is always evaluated (the NumPy original evaluates it only where a
     box is wide enough to wrap: elsewhere the shifted tests are all false, so the images are the
     same). Clutter and intensity noise are not drawn here (the caller refuses them)."""
-    dev, dt = range_m.device, range_m.dtype
     phi = torch_ssa(bearing_rad)
-    r_edges = torch.as_tensor(cfg.range_edges_m, dtype=dt, device=dev)
     lo_r, hi_r = (range_m - radius_m)[:, None], (range_m + radius_m)[:, None]
-    rows = (r_edges[1:] > lo_r) & (r_edges[:-1] <= hi_r)  # (N, rows)
+    rows = (grid.range_hi > lo_r) & (grid.range_lo <= hi_r)  # (N, rows)
     half = torch.asin(torch.clamp(radius_m / torch.clamp(range_m, min=1e-12), max=1.0))
-    b_edges = cfg.bearing_edges_rad
-    b_hi_np = b_edges[1:].copy()
-    b_hi_np[-1] = np.nextafter(b_hi_np[-1], np.inf)
-    b_lo = torch.as_tensor(b_edges[:-1], dtype=dt, device=dev)
-    b_hi = torch.as_tensor(b_hi_np, dtype=dt, device=dev)
     lo_b, hi_b = (phi - half)[:, None], (phi + half)[:, None]
-    cols = (b_hi > lo_b) & (b_lo <= hi_b)
+    cols = (grid.bearing_hi > lo_b) & (grid.bearing_lo <= hi_b)  # (N, cols)
     for shift in (-2.0 * math.pi, 2.0 * math.pi):
-        cols |= (b_hi > lo_b + shift) & (b_lo <= hi_b + shift)
+        cols |= (grid.bearing_hi > lo_b + shift) & (grid.bearing_lo <= hi_b + shift)
     lit = rows[:, :, None] & cols[:, None, :]
     return (lit.to(torch.uint8) * 255)[:, None]
 
 
 def standardized_goal(range_m: torch.Tensor, bearing_rad: torch.Tensor) -> torch.Tensor:
-    """The ``goal`` entry of ``radar+goal`` (N, 2) float32: ``(x − mean) / std``."""
-    x = torch.stack([range_m, bearing_rad], dim=-1)
-    mean = torch.tensor(GOAL_MEAN, dtype=x.dtype, device=x.device)
-    std = torch.tensor(GOAL_STD, dtype=x.dtype, device=x.device)
-    return ((x - mean) / std).to(torch.float32)
+    """The ``goal`` entry of ``radar+goal`` (N, 2) float32: ``(x − mean) / std`` per column."""
+    r = (range_m - GOAL_MEAN[0]) / GOAL_STD[0]
+    b = (bearing_rad - GOAL_MEAN[1]) / GOAL_STD[1]
+    return torch.stack([r, b], dim=-1).to(torch.float32)
 
 
 def select_rows(

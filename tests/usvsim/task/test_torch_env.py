@@ -21,7 +21,13 @@ from usvsim.task.radar import RadarConfig, render_radar
 from usvsim.task.scenario import BoatNoise, Scenario, draw_episode, episode_geometry
 from usvsim.task.torch_env import TorchPoleAvoidanceEnv, torch_env_rates
 from usvsim.task.torch_episodes import episode_geometry_torch
-from usvsim.task.torch_observations import GOAL_MEAN, GOAL_STD, radar_image, standardized_goal
+from usvsim.task.torch_observations import (
+    GOAL_MEAN,
+    GOAL_STD,
+    RadarGrid,
+    radar_image,
+    standardized_goal,
+)
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv, boat_generators
 
 N_BOATS, N_STEPS, SEED = 16, 160, 11
@@ -211,8 +217,10 @@ def test_episode_draws_and_geometry_equal_the_cpu_envs() -> None:
     def t(values: list[float]) -> torch.Tensor:
         return torch.tensor(values, dtype=torch.float64)
 
+    poles = torch.tensor(sc.poles_ne, dtype=torch.float64)
+    index = torch.tensor([s.pole_index for s in specs])
     pole, eta, goal = episode_geometry_torch(
-        sc, torch.tensor([s.pole_index for s in specs]), t([s.start_distance_m for s in specs]),
+        sc, poles, index, t([s.start_distance_m for s in specs]),
         t([s.start_bearing_rad for s in specs]), t([s.heading_offset_rad for s in specs]),
     )  # fmt: skip
     np.testing.assert_array_equal(pole.numpy(), geo.pole_ne)
@@ -318,7 +326,8 @@ def test_radar_image_equals_render_radar() -> None:
     phi = np.concatenate([rng.uniform(-4.0, 4.0, 500), [3.1, -3.1, 2.09, -2.1, 0.0]])
     for radius in (1.0, 3.0):
         expected = render_radar(rho, phi, radius, RadarConfig())
-        got = radar_image(torch.as_tensor(rho), torch.as_tensor(phi), radius, RadarConfig())
+        grid = RadarGrid.build(RadarConfig(), torch.float64, torch.device("cpu"))
+        got = radar_image(torch.as_tensor(rho), torch.as_tensor(phi), radius, grid)
         np.testing.assert_array_equal(got.numpy(), expected)
     assert expected[:, 0].any(axis=(1, 2)).sum() > 200  # most poles are in view
 
