@@ -367,6 +367,7 @@ def stage_env_bench(
             env.step(torch.zeros((n, 1), device=env.device))  # compiles on the first call
             _sync(env.device)
             first_s = time.perf_counter() - t0
+            syncs = _step_syncs(env, n) if n == sizes[0] else None
             rate = measure_env_steps(env, seconds)
         except torch.cuda.OutOfMemoryError as err:
             record(
@@ -377,11 +378,31 @@ def stage_env_bench(
         record(
             "env_bench", device=device, dtype=dtype, mode=mode, observation=observation,
             backend=backend if mode == "compile" else None, n=n,
-            first_step_s=round(first_s, 2), env_steps_per_s=round(rate),
+            first_step_s=round(first_s, 2), env_steps_per_s=round(rate), step_syncs=syncs,
         )  # fmt: skip
         del env
         if device.startswith("cuda"):
             torch.cuda.empty_cache()
+
+
+def _step_syncs(env: Any, n: int) -> str | None:
+    """On a GPU: whether a step waits for the device (torch's sync debug mode raises on every
+    synchronising call): "none" or the error's first line; None elsewhere."""
+    import torch
+
+    if env.device.type != "cuda":
+        return None
+    actions = torch.zeros((n, 1), device=env.device)
+    torch.cuda.set_sync_debug_mode("error")
+    try:
+        for _ in range(3):
+            env.step(actions)
+        found = "none"
+    except RuntimeError as err:
+        found = str(err).splitlines()[0][:200]
+    finally:
+        torch.cuda.set_sync_debug_mode(0)
+    return found
 
 
 def _env_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
@@ -418,6 +439,12 @@ def _env_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
             text.append(
                 f"  env {b.get('observation', '')} {b['mode']} {b['dtype']} N={b['n']:,}: "
                 f"{b['error']}"
+            )
+    for b in rates:
+        if b.get("step_syncs") is not None:
+            text.append(
+                f"  host syncs in a step ({b.get('observation', 'positional')} {b['mode']} "
+                f"{b['dtype']}, N={b['n']:,}): {b['step_syncs']}"
             )
     compiled = [b for b in rates if b["mode"] == "compile"]
     if compiled:

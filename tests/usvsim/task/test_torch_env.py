@@ -360,3 +360,23 @@ def test_radar_goal_observations_equal_the_cpu_env() -> None:
         np.testing.assert_array_equal(t_te.numpy() | t_tr.numpy(), c_te | c_tr)
         done += int((c_te | c_tr).sum())
     assert done >= 10
+
+
+def test_a_step_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The device path (device episodes and noise) steps and restarts boats without reading a
+    tensor's value on the host (each read would wait for a GPU): every way to read one raises."""
+    env = TorchPoleAvoidanceEnv(32, observation="radar+goal")
+    env.reset(seed=0)
+    actions = torch.zeros((32, 1))  # straight at the pole: collisions within 20 decisions
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a tensor was read back to the host during a step")
+
+    for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
+        monkeypatch.setattr(torch.Tensor, name, refuse)
+    ended = []
+    for _ in range(20):
+        _, _, terminated, truncated, _ = env.step(actions)
+        ended.append(terminated | truncated)
+    monkeypatch.undo()
+    assert bool(torch.stack(ended).any())  # restarts happened inside the watched steps
