@@ -23,8 +23,9 @@ Equality with the CPU environment: with ``episodes="numpy"`` (the CPU env's epis
 ``noise="replay"`` (each episode's NumPy noise stream, test mode) a ``float64`` run on
 ``torch-cpu`` gives the CPU env's flags and times exactly and its observations and rewards to
 rounding: within 1e-9 over the first decisions, then drifting apart slowly (2e-7 m over 160
-decisions), as the closed loop amplifies the last bits in which torch's ``sin`` and ``cos``
-differ from the C library's (``tests/usvsim/task/test_torch_env.py``, ``docs/guide/gpu.md``).
+decisions), as the closed loop amplifies last-bit differences (torch's ``sin`` and ``cos``, the
+C kernel's fused multiply-adds); the CPU env's CasADi-VM backend differs from its C kernel by as
+much (``benchmarks/torch_env_equality.py``, ``docs/guide/gpu.md``).
 The defaults (``episodes="device"``, ``noise="device"``) draw both on the device: the same
 distributions, other numbers.
 

@@ -120,9 +120,10 @@ def test_observations_equal_the_cpu_env(replayed: dict[str, np.ndarray]) -> None
     """The estimate and the observation from it in float64: within 1e-9 over the first 10
     decisions (measured 4e-13), then positions and ranges within 1e-6 m (measured 2.2e-7 m),
     the estimated heading within 1e-8 rad (4.3e-9) and bearings within 1e-7 rad (7.5e-9).
-    torch's sin and cos differ from the C library's in the last bit for about 0.2 % of
-    arguments, and the closed loop (filter → heading reference → autopilot) amplifies such
-    bits over an episode. The float32 observations (the CPU env's type) are equal up to one
+    The closed loop (filter → heading reference → autopilot) amplifies last-bit differences
+    (torch's sin and cos, the C kernel's fused multiply-adds) over an episode: the CPU env on
+    CasADi's VM differs from its compiled C kernel by as much (benchmarks/torch_env_equality.py).
+    The float32 observations (the CPU env's type) are equal up to one
     float32 rounding step (or 1e-7 where the float64 numbers already differ by that)."""
     c_est, t_est, t_obs = replayed["c_est"], replayed["t_est"], replayed["t_obs"]
     expected = c_est[..., [3, 5, 4, 6]]  # r_pole, φ_pole, r_goal, φ_goal from the CPU estimate
