@@ -213,6 +213,20 @@ class TorchPoleAvoidanceEnv:
         return self._s.T.clone()
 
     @property
+    def single_observation_space(self) -> Any:
+        """The CPU env's single-boat observation space (a gymnasium space: needs gymnasium)."""
+        from usvsim.task.observations import observation_space
+
+        return observation_space(self.observation_kind, self.radar)  # type: ignore[arg-type]
+
+    @property
+    def single_action_space(self) -> Any:
+        """The CPU env's single-boat action space (a gymnasium space: needs gymnasium)."""
+        from usvsim.task.batch import action_space
+
+        return action_space(self.action_kind)
+
+    @property
     def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:
         """Navigation estimate now: position (N, 2) m and heading (N,) rad."""
         return self._n[0:2].T.clone(), self._n[8].clone()

@@ -240,6 +240,20 @@ def test_device_draws_follow_the_scenario() -> None:
     np.testing.assert_allclose(goal, 220.0, rtol=1e-12)
 
 
+def test_spaces_are_the_cpu_envs() -> None:
+    for kind in ("positional", "radar+goal"):
+        env = TorchPoleAvoidanceEnv(2, observation=kind, action="categorical")
+        cpu = PoleAvoidanceVectorEnv(2, observation=kind, action="categorical")  # type: ignore[arg-type]
+        assert env.single_observation_space == cpu.single_observation_space
+        assert env.single_action_space == cpu.single_action_space
+        obs, _ = env.reset(seed=0)
+        if isinstance(obs, dict):
+            row: object = {k: v[0].numpy() for k, v in obs.items()}
+        else:
+            row = obs[0].numpy()
+        assert env.single_observation_space.contains(row)
+
+
 def test_categorical_actions_map_as_the_cpu_env() -> None:
     env = TorchPoleAvoidanceEnv(41, action="categorical")
     k = np.arange(41)
