@@ -123,6 +123,7 @@ def run_demo(args: DemoArgs) -> int:
     from usvsim.evaluation.manoeuvre import run_trials, trials_summary
 
     print(trials_summary(run_trials(vessel)) + "  (usvsim manoeuvre: all trials)")
+    _print_wave_filter(vessel, plant)
     from usvsim.evaluation import plant_plots
 
     out = Path(args.out)
@@ -142,6 +143,33 @@ def run_demo(args: DemoArgs) -> int:
         plt.close(fig)
     print(f"plots written to {out}/: " + ", ".join(name for name, _ in steps))
     return 0
+
+
+# hulls shorter than this are model scale (cybership2: 1.255 m): sea state 4 would swamp them
+MIN_WAVE_FILTER_LENGTH_M = 5.0
+
+
+def _print_wave_filter(vessel: Any, plant: Any) -> None:
+    """The autopilot's wave filter: its design and what it does in sea state 4 (issue 38)."""
+    if vessel.length_m < MIN_WAVE_FILTER_LENGTH_M:
+        print(f"wave filter: not shown for a model-scale hull ({vessel.length_m:g} m)")
+        return
+    import numpy as np
+
+    from usvsim.evaluation.manoeuvre import TrialWeather, wave_filter_activity
+    from usvsim.vessel.weather_plant import WeatherPlant, wave_filter_design
+
+    weather = TrialWeather(0.0, 45.0, 4)
+    state = WeatherPlant(plant).initial_state(np.zeros((1, 3)), weather.conditions(1))
+    print(wave_filter_design(state))
+    off, on = wave_filter_activity(vessel, plant.cruise_speed_mps, weather, n=8, seconds=120.0)
+    print(
+        f"  sea state 4, heading kept with the waves 45° off the quarter: nozzle RMS "
+        f"{off.rms_deg:.1f}° → {on.rms_deg:.1f}°, its rate {off.rate_rms_deg_s:.1f} → "
+        f"{on.rate_rms_deg_s:.1f} °/s, heading error {off.heading_error_rms_deg:.2f}° → "
+        f"{on.heading_error_rms_deg:.2f}° (8 boats × 120 s; usvsim manoeuvre --vessel "
+        f"{vessel.name} --sea-state 4: 16 × 300 s)"
+    )
 
 
 def run_manoeuvre(args: ManoeuvreArgs) -> int:

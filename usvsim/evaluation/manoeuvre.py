@@ -452,7 +452,8 @@ def wave_filter_activity(
     """Heading keeping (PID autopilot) of ``n`` boats in ``weather`` for ``seconds`` after 30 s
     of settling, without and with the wave filter: (unfiltered, filtered). The course keeps the
     waves 45° off the quarter (going 135° to the course), where the first-order yaw
-    sin 2(β − ψ) is largest; the heading error is the true heading's from that course."""
+    sin 2(β − ψ) is largest; the heading error is the true heading's from that course. The
+    nozzle figures are NaN for a vessel without a lagging waterjet nozzle."""
     from usvsim.vessel.autopilot import AutopilotConfig
     from usvsim.vessel.plant import Plant
     from usvsim.vessel.weather_plant import WeatherPlant
@@ -468,8 +469,11 @@ def wave_filter_activity(
         state = sim.initial_state(eta, cond)
         state, _ = sim.step(state, course, n_steps=round(30.0 / plant.dt_s))
         _, traj = sim.step(state, course, n_steps=round(seconds / plant.dt_s))
-        nozzle = traj[:, :, 7]
-        rate = np.diff(nozzle, axis=1) / plant.dt_s
+        # the nozzle angle is in the state only for a waterjet whose steering lags (an
+        # instantaneous actuator's state does not record the command, a force is not an angle)
+        act = vessel.actuation
+        nozzle = traj[:, :, 7] if act.kind == "waterjet" and act.lag_s[1] > 0 else np.nan
+        rate = np.diff(nozzle, axis=1) / plant.dt_s if np.ndim(nozzle) else np.nan
         err = ssa(traj[:, :, 2] - course)
         out.append(
             NozzleActivity(

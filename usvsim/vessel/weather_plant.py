@@ -51,15 +51,22 @@ from usvsim.common.angles import ssa_casadi
 from usvsim.common.errors import UserError
 from usvsim.vessel.autopilot import NG, AutopilotKind, control_law
 from usvsim.vessel.codegen import BatchStepper
-from usvsim.vessel.model import NX, build_dynamics, generalized_forces, rk4_expr
+from usvsim.vessel.model import (
+    NX,
+    build_dynamics,
+    generalized_forces,
+    rk4_expr,
+    saturate_command,
+)
 from usvsim.vessel.plant import NS, Plant, PlantState
 from usvsim.vessel.vessels import VesselParams
 from usvsim.vessel.weather.loads import USV105_HULL, WeatherHull, environment_loads
 from usvsim.vessel.weather.observer import (
     OBSERVER_STATES,
     ObserverNoise,
+    observer_correct,
     observer_gains,
-    observer_step,
+    observer_predict,
     wrap_difference,
 )
 from usvsim.vessel.weather.waves import (
@@ -83,6 +90,7 @@ __all__ = [
     "build_weather_step",
     "sensed_offsets",
     "sensed_offsets_expr",
+    "wave_filter_design",
     "wave_offsets",
 ]
 
@@ -147,25 +155,29 @@ def build_weather_step(
     offsets = sensed_offsets_expr(s, w)
     psi_m = psi + offsets[2]
     r_m = r + offsets[3]
-    # 2. wave filter: the observer on the compass and the actuators' yaw moment
+    # 2. wave filter: the observer on the compass and gyro
     m_yaw, d_yaw = yaw_model
     prior = [s[_S[f"obs_{k}"]] for k in OBSERVER_STATES]
     gains = [w[_I[f"gain_{k}_{y}"]] for k in OBSERVER_STATES for y in ("compass", "gyro")]
     phi = [w[_I[k]] for k in ("phi00", "phi01", "phi10", "phi11")]
-    tau_n = generalized_forces(vessel.actuation, x[6:8], x[3])[2]
     on = w[_I["wave_filter"]]  # 0: exactly the sensed values
     # off: the prior restarts from the sensors at every step, so it stays finite (0 × finite)
     prior = [on * z for z in prior]
     prior[2] = prior[2] + (1.0 - on) * psi_m
     prior[3] = prior[3] + (1.0 - on) * r
-    psi_hat, r_hat, prior_next = observer_step(
-        prior, psi_m, r_m, tau_n, gains, phi, m_yaw, d_yaw, dt_s
-    )
+    psi_hat, r_hat, z = observer_correct(prior, psi_m, r_m, gains)
     psi_f = psi_m + on * wrap_difference(psi_hat - psi_m)
     r_f = r_m + on * (r_hat - r_m)
     # 3. autopilot on what it senses
     x_sensed = ca.vertcat(x[0], x[1], psi_f, x[3], x[4], r_f, x[6], x[7])
     a_cmd, c_next = control_law(vessel, kind, x_sensed, c, w[0:2], g, dt_s)
+    # the observer predicts with the yaw moment the actuators give over the step: their state
+    # where they lag, the saturated command where they are instantaneous (model.build_dynamics)
+    act = vessel.actuation
+    sat = saturate_command(act, a_cmd)
+    applied = ca.vertcat(*(x[6 + i] if act.lag_s[i] > 0 else sat[i] for i in range(2)))
+    tau_n = generalized_forces(act, applied, x[3])[2]
+    prior_next = observer_predict(z, tau_n, phi, m_yaw, d_yaw, dt_s)
     # 4. vessel in current, wind and wave drift
     wind = ca.fmax(w[_I["wind_mean"]] + s[_S["gust"]], 0.0)
     tau_env = environment_loads(
@@ -355,6 +367,23 @@ def wave_offsets(state: WeatherPlantState) -> NDArray[np.float64]:
     """First-order wave motion [Δn (m), Δe (m), Δψ (rad)] (N, 3) the sensors add to the true η
     (:func:`usvsim.vessel.weather.waves.wave_displacement`, with the kernel's numbers)."""
     return sensed_offsets(state.x, state.m, state.inputs)[:, :3]
+
+
+def wave_filter_design(state: WeatherPlantState) -> str:
+    """One line per boat kind: the wave filter's design for the first boat of ``state`` (the
+    encounter frequency, the wave motion's damping and the observer's steady-state gains)."""
+    col = {name: i - 4 for name, i in _I.items()}
+    row = state.inputs[0]
+    if row[col["wave_filter"]] == 0:
+        return "wave filter: off (calm sea or switched off)"
+    gains = ", ".join(
+        f"{k} {row[col[f'gain_{k}_compass']]:.3g}/{row[col[f'gain_{k}_gyro']]:.3g}"
+        for k in OBSERVER_STATES
+    )
+    return (
+        f"wave filter: Kalman observer (Fossen 2021 §13.3) at the encounter frequency "
+        f"{row[col['wave_omega']]:.3f} rad/s; steady-state gains (compass/gyro): {gains}"
+    )
 
 
 class WeatherPlant:

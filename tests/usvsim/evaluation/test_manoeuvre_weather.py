@@ -93,3 +93,14 @@ def test_args_check_rejects_weather_for_all_vessels() -> None:
 
     with pytest.raises(UserError, match="need one --vessel"):
         ManoeuvreArgs(wind=10.0).check()
+
+
+def test_demo_shows_the_wave_filter_design_and_effect(
+    tmp_path: object, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from usvsim.cli.main import main
+
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "wave filter: Kalman observer" in out and "steady-state gains" in out
+    assert "sea state 4, heading kept" in out

@@ -36,8 +36,9 @@ from scipy.linalg import solve_discrete_are
 __all__ = [
     "OBSERVER_STATES",
     "ObserverNoise",
+    "observer_correct",
     "observer_gains",
-    "observer_step",
+    "observer_predict",
     "wrap_difference",
 ]
 
@@ -118,33 +119,27 @@ def observer_gains(
     return gains[np.asarray(inverse).ravel()]
 
 
-def observer_step(
-    z_prior: list[Any],
-    psi_measured: Any,
-    r_measured: Any,
-    tau_n: Any,
-    gains: list[Any],
-    phi: list[Any],
-    m: float,
-    d: float,
-    dt_s: float,
+def observer_correct(
+    z_prior: list[Any], psi_measured: Any, r_measured: Any, gains: list[Any]
 ) -> tuple[Any, Any, list[Any]]:
-    """One observer update (CasADi): correct the prior ``z_prior`` (5) with the compass
-    ``psi_measured`` (rad) and gyro ``r_measured`` (rad/s), then predict with the yaw moment
-    ``tau_n`` (N m) held over the step.
-
-    Returns the low-frequency heading ψ̂ (rad, in [-π, π]) and yaw rate r̂ (rad/s) after the
-    correction, and the next prior (5). ``phi`` is Φ row-major (4), ``gains`` L row-major (10).
-    """
+    """Correct the prior ``z_prior`` (5) with the compass ``psi_measured`` (rad) and the gyro
+    ``r_measured`` (rad/s) (CasADi). Returns the low-frequency heading ψ̂ (rad, in [-π, π]),
+    yaw rate r̂ (rad/s) and the corrected state (5); ``gains`` L row-major (10)."""
     nu_psi = wrap_difference(psi_measured - z_prior[2] - z_prior[0])
     nu_r = r_measured - z_prior[3] - z_prior[1]
     z = [z_prior[i] + gains[2 * i] * nu_psi + gains[2 * i + 1] * nu_r for i in range(5)]
-    psi_hat = wrap_difference(z[2])
-    prior = [
+    return wrap_difference(z[2]), z[3], z
+
+
+def observer_predict(
+    z: list[Any], tau_n: Any, phi: list[Any], m: float, d: float, dt_s: float
+) -> list[Any]:
+    """The next prior (5) from the corrected state ``z`` with the yaw moment ``tau_n`` (N m)
+    applied over the step (CasADi); ``phi`` is Φ row-major (4)."""
+    return [
         phi[0] * z[0] + phi[1] * z[1],
         phi[2] * z[0] + phi[3] * z[1],
-        wrap_difference(psi_hat + dt_s * z[3]),
+        wrap_difference(z[2] + dt_s * z[3]),
         z[3] + dt_s / m * (tau_n + z[4] - d * z[3]),
         z[4],
     ]
-    return psi_hat, z[3], prior
