@@ -8,7 +8,9 @@ sets), then the overtaking Imazu problems per helmsman. Run from the repository 
     python benchmarks/colreg_table.py colreg.json --write docs/guide/colreg-suite.md
 
 ``--write`` replaces the text between the markers ``<!-- colreg-table:begin -->`` and
-``<!-- colreg-table:end -->`` (and ``colreg-overtaking:...``) of that file, atomically.
+``<!-- colreg-table:end -->`` (and ``colreg-overtaking:...``) of that file, atomically. Given
+the JSON of ``usvsim bench --suite stress --sets moving-vessels,everything --json``, it makes
+the stress suite's COLREG table instead (markers ``colreg-stress``).
 """
 
 from __future__ import annotations
@@ -118,6 +120,33 @@ def overtaking_table(payload: dict[str, Any], helmsmen: tuple[str, ...] = BASELI
     return "\n".join(lines) + "\n"
 
 
+def stress_table(payload: dict[str, Any]) -> str:
+    """From ``usvsim bench --suite stress --json``: per helmsman and traffic set, success % and
+    COLREG compliance % [Wilson 95 %] of the scored encounters (n)."""
+    rows = [r for r in payload["rows"] if r.get("colreg_encounters")]
+    sets = [s for s in payload["sets"] if any(r["episode_set"] == s for r in rows)]
+    by = {(r["episode_set"], r["helmsman"]): r for r in rows}
+    lines = [
+        f"{payload['episodes_per_set']} episodes per set, {payload['split']} split; each cell: "
+        "success % / COLREG compliance % [Wilson 95 %] (encounters scored).",
+        "",
+        "| helmsman | " + " | ".join(sets) + " |",
+        "|---" * (1 + len(sets)) + "|",
+    ]
+    for h in payload["helmsmen"]:
+        cells = []
+        for s in sets:
+            r = by.get((s, h))
+            if r is None:
+                cells.append("–")
+                continue
+            low, high = r["colreg_compliance_ci95_low"], r["colreg_compliance_ci95_high"]
+            comp = _pct(r["colreg_compliant"], r["colreg_encounters"], low, high)
+            cells.append(f"{100 * r['success_rate']:.0f} / {comp} ({r['colreg_encounters']})")
+        lines.append(f"| `{h}` | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def _replace(text: str, marker: str, body: str) -> str:
     pattern = re.compile(rf"(<!-- {marker}:begin -->\n).*?(<!-- {marker}:end -->)", flags=re.DOTALL)
     if not pattern.search(text):
@@ -130,10 +159,13 @@ def main(argv: list[str]) -> int:
         print("usage: python benchmarks/colreg_table.py COLREG_JSON [--write DOC]", file=sys.stderr)
         return 2
     payload = json.loads(Path(argv[0]).read_text())
-    tables = {
-        "colreg-table": helmsman_table(payload),
-        "colreg-overtaking": overtaking_table(payload),
-    }
+    if payload.get("suite") == "stress":
+        tables = {"colreg-stress": stress_table(payload)}
+    else:
+        tables = {
+            "colreg-table": helmsman_table(payload),
+            "colreg-overtaking": overtaking_table(payload),
+        }
     if len(argv) == 1:
         print("\n".join(tables.values()), end="")
         return 0
