@@ -1,5 +1,8 @@
 """``usvsim bench --suite stress``: every helmsman on named episode sets, each isolating one
-perturbation of the study's task, plus one with everything at once.
+perturbation of the study's task, plus one with everything at once. The weather sets
+(``wind-beam``, ``gusts``, ``sea-state-3``, ``sea-state-4``; issue 38) step the boats in wind and
+waves (:mod:`usvsim.task.weather_draw`); ``everything`` draws no weather, so its published
+figures stay valid.
 
 Each set is a member of the open-water family (:class:`usvsim.task.openwater.OpenWaterScenario`,
 drawn by :func:`usvsim.task.openwater.draw_open_water` from the set's own seed, the CRC-32 of its
@@ -39,6 +42,7 @@ import numpy as np
 from usvsim.common.splits import check_test_draw
 from usvsim.task.observations import PERCEPTION
 from usvsim.task.openwater import OpenWaterScenario, draw_open_water, from_pole_episodes
+from usvsim.task.weather_draw import WEATHER_SETS
 
 __all__ = ["SPLITS", "STRESS_SETS", "Split", "StressSet", "stress_episodes", "stress_set_names"]
 
@@ -190,6 +194,17 @@ STRESS_SETS: tuple[StressSet, ...] = (
     ),
     StressSet("speed-slow", "cruise 1.5-2 m/s", _s(speed_range_mps=(1.5, 2.0))),
     StressSet("speed-fast", "cruise 4-5 m/s", _s(speed_range_mps=(4.0, 5.0))),
+    # wind and waves (issue 38, usvsim.task.weather_draw.WEATHER_SETS); `everything` has none:
+    # its published figures stay valid (WEATHER_SETS["moderate"] is what it would gain)
+    *(
+        StressSet(name, description, _s(weather=WEATHER_SETS[name]))
+        for name, description in (
+            ("wind-beam", "wind 8-12 m/s on the beam (80-100° off the course), gusts 10 %"),
+            ("gusts", "wind 6-10 m/s from any direction, gusts 20-30 %"),
+            ("sea-state-3", "sea state 3 (H_s 0.5-1.25 m) with Beaufort 4 wind (5.5-7.9 m/s)"),
+            ("sea-state-4", "sea state 4 (H_s 1.25-2.5 m) with Beaufort 5 wind (8.0-10.7 m/s)"),
+        )
+    ),
     StressSet("waypoints", "the multi-waypoint courses, a pole on every leg", None, "waypoints"),
     StressSet("everything", "all of the above at once (moderate levels)", _EVERYTHING),
 )

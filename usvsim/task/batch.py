@@ -30,6 +30,15 @@ The Gaussian action is scaled linearly, not squashed: a policy that wants the st
 
 :class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv` wraps the batch as a native
 ``gymnasium.vector.VectorEnv`` (autoreset ``SAME_STEP``).
+
+In weather (:attr:`PoleAvoidanceBatch.in_weather`, issue 38) the plant is
+:class:`usvsim.vessel.weather_plant.WeatherPlant` fused with the filter: the packed state gains
+the weather states, and each boat with weather draws 3 T more normals per decision from its
+episode stream (after the filter's), so calm episodes' streams are untouched.
+
+Why this module is long: the batch is the one implementation of the task's step (actions, the
+fused plant and filter, calm or in weather, the flags, the reward, the observation); splitting
+it would spread one step's state over modules.
 """
 
 from __future__ import annotations
@@ -47,7 +56,7 @@ from usvsim.common.interrupt import check_interrupt
 from usvsim.nav.compiled import export_nav_state, started_nav_rows
 from usvsim.nav.filter import Navigator
 from usvsim.nav.models import NavConfig
-from usvsim.nav.navplant import PACKED, NavigatedPlant
+from usvsim.nav.navplant import PACKED, NavigatedPlant, PackedLayout
 from usvsim.task.disturbance import BoatDisturbances, EpisodeDisturbance
 from usvsim.task.observations import ObservationKind, build_observation, observation_space
 from usvsim.task.radar import RadarConfig
@@ -56,6 +65,7 @@ from usvsim.task.scenario import BoatNoise, EpisodeSpec, Scenario, episode_geome
 from usvsim.vessel.autopilot import AutopilotConfig
 from usvsim.vessel.plant import Plant, PlantState
 from usvsim.vessel.vessels import VesselParams
+from usvsim.vessel.weather_plant import WeatherPlant
 
 __all__ = [
     "ACTION_KINDS",
@@ -272,8 +282,8 @@ class PoleAvoidanceBatch:
         self._noise = BoatNoise(n)
         self._collision_m = self.scenario.pole_radius_m + self.plant.vessel.half_beam_m
         # packed per-boat state [x (8), c (5), filter n (15)], the fused step's layout (N, 28)
-        # (named slices: usvsim.nav.navplant.PACKED);
-        # the filter part is meaningful once a boat is reset
+        # (named slices: self._layout, usvsim.nav.navplant.PACKED; in weather [x, c, m (8), n],
+        # see _start_weather); the filter part is meaningful once a boat is reset
         start = self.plant.initial_state(np.zeros((n, 3)))
         self._s = np.concatenate([start.x, start.c, export_nav_state(self._nav)], axis=1)
         self.pole_ne = np.zeros((n, 2))
@@ -289,9 +299,36 @@ class PoleAvoidanceBatch:
         self.disturbances = BoatDisturbances(n, self.scenario.speed_mps, self.plant.current)
 
     @property
+    def _layout(self) -> PackedLayout:
+        """Named columns of the packed state (``PACKED``, or with the weather states)."""
+        return self._navplant.layout
+
+    @property
+    def in_weather(self) -> bool:
+        """True once a reset brought weather: the boats step in the weather plant."""
+        return self._navplant.weather is not None
+
+    def _start_weather(self) -> None:
+        """Switch to the weather plant fused with the filter (the first reset that brings
+        weather): the packed state gains the weather states ``m`` between ``c`` and ``n``, every
+        boat's the calm ones (no wind, no waves, no wave filter) until its reset gives it a
+        weather. A batch that never sees weather keeps the calm kernel and its numbers."""
+        old, n = self._s, self.n_boats
+        weather = WeatherPlant(self.plant, innovations="normal")
+        self._navplant = NavigatedPlant(self.plant, self._nav.cfg, weather)
+        lay = self._navplant.layout
+        self._s = np.zeros((n, lay.size))
+        self._s[:, lay.closed_loop] = old[:, PACKED.closed_loop]
+        self._s[:, lay.nav] = old[:, PACKED.nav]
+        self._s[:, lay.weather] = self.disturbances.start_calm_weather(
+            weather, old[:, 0:3], old[:, 3]
+        )
+
+    @property
     def state(self) -> PlantState:
         """True plant state of all boats (for evaluation and plots, never for observations)."""
-        return PlantState(x=self._s[:, PACKED.plant].copy(), c=self._s[:, PACKED.controller].copy())
+        lay = self._layout
+        return PlantState(x=self._s[:, lay.plant].copy(), c=self._s[:, lay.controller].copy())
 
     @property
     def estimate(self) -> tuple[FloatArray, FloatArray]:
@@ -301,7 +338,7 @@ class PoleAvoidanceBatch:
     @property
     def estimated_velocity(self) -> FloatArray:
         """Navigation estimate of the velocity over ground (N, 2) m/s, [v_N, v_E], now."""
-        return self._s[:, PACKED.nav_vel].copy()
+        return self._s[:, self._layout.nav_vel].copy()
 
     def reset(
         self,
@@ -311,24 +348,33 @@ class PoleAvoidanceBatch:
     ) -> Observation:
         """Start new episodes for ``boats`` (``None``: all) from ``specs`` (one per boat).
 
-        ``disturbances`` (one per boat, or None for none): per-episode speed, current and GNSS
-        faults (:mod:`usvsim.task.disturbance`). Returns the first observation of the reset
-        boats only (leading axis ``len(specs)``).
+        ``disturbances`` (one per boat, or None for none): per-episode speed, current, GNSS
+        faults and weather (:mod:`usvsim.task.disturbance`; the first weather switches the
+        batch to the weather plant, :meth:`_start_weather`). Returns the first observation of
+        the reset boats only (leading axis ``len(specs)``).
         """
         idx = np.arange(self.n_boats) if boats is None else np.asarray(boats, dtype=np.intp)
         if len(specs) != idx.size:
             raise ValueError(f"need one EpisodeSpec per reset boat ({idx.size}), got {len(specs)}")
         geo = episode_geometry(self.scenario, specs)
         self.disturbances.set(idx, [None] * idx.size if disturbances is None else disturbances)
+        if not self.in_weather and self.disturbances.brings_weather(disturbances):
+            self._start_weather()
+        lay = self._layout
         speed = self.disturbances.speed_mps[idx] if disturbances else self.scenario.speed_mps
         rows = self.plant.initial_state(geo.start_eta, speed)
-        self._s[idx, PACKED.plant], self._s[idx, PACKED.controller] = rows.x, rows.c
+        self._s[idx, lay.plant], self._s[idx, lay.controller] = rows.x, rows.c
         self.pole_ne[idx], self.goal_ne[idx] = geo.pole_ne, geo.goal_ne
         self._noise.seed(idx, [s.noise_seed for s in specs])
         # the freshly started filters: Navigator.reset's draws and numbers for these boats only
         nav = started_nav_rows(self._nav.cfg, rows.x[:, 0:3], rows.x[:, 3:6], self._rng_view(idx))
         self._noise.for_boats(None)
-        self._s[idx, PACKED.nav] = nav
+        self._s[idx, lay.nav] = nav
+        if self._navplant.weather is not None:  # after the filter's draws: calm streams unchanged
+            self._s[idx, lay.weather] = self.disturbances.start_weather(
+                self._navplant.weather, idx, rows.x[:, 0:3], rows.x[:, 3], self._noise.for_boats
+            )
+            self._noise.for_boats(None)
         self._est_pos[idx], self._est_psi[idx] = nav[:, 0:2], nav[:, 8]
         self._n_decisions[idx] = 0
         self._min_pole[idx] = [s.start_distance_m for s in specs]
@@ -356,7 +402,7 @@ class PoleAvoidanceBatch:
             self.scenario.pole_radius_m,
             self.radar,
             noise,
-            self._s[sl, PACKED.nav_vel]
+            self._s[sl, self._layout.nav_vel]
             if self.observation_kind in ("scene", "radar+nav")
             else None,
         )
@@ -385,19 +431,41 @@ class PoleAvoidanceBatch:
         speed, current, gnss = self.disturbances.inputs(
             (self._n_decisions * sc.decision_period_s).astype(np.float64), sc.dt_s, T
         )
+        w_in, w_normals = self._weather_inputs(T)  # None, None in a calm batch
         if speed is None:  # the study's call, unchanged
-            packed = self._navplant.run(self._s, psi_ref, sc.speed_mps, T, first, normals)
+            packed = self._navplant.run(
+                self._s, psi_ref, sc.speed_mps, T, first, normals,
+                weather_inputs=w_in, weather_normals=w_normals,
+            )  # fmt: skip
         else:
             layout = self._navplant.noise_steps(first, T, normals)
             fires = layout.factor[:, 1:5] > 0
             normals = self.disturbances.perturb_normals(normals, layout.index[:, 1:5][fires])
-            packed = self._navplant.run(self._s, psi_ref, speed, T, first, normals, current, gnss)
+            packed = self._navplant.run(
+                self._s, psi_ref, speed, T, first, normals, current, gnss, w_in, w_normals
+            )
         self._s = packed[:, -1].copy()
         self._plant_step += T
-        self._est_pos = self._s[:, PACKED.nav_pos].copy()
-        self._est_psi = self._s[:, PACKED.nav_psi].copy()
+        lay = self._layout
+        self._est_pos = self._s[:, lay.nav_pos].copy()
+        self._est_psi = self._s[:, lay.nav_psi].copy()
         self._n_decisions += 1
-        return packed[:, :, PACKED.closed_loop], dpsi
+        return packed[:, :, lay.closed_loop], dpsi
+
+    def _weather_inputs(self, n_steps: int) -> tuple[FloatArray | None, FloatArray | None]:
+        """The weather plant's per-boat inputs and innovations for ``n_steps`` steps: 3 n_steps
+        standard normals per boat drawn from its episode stream (after the filter's) for the
+        boats with weather only, zeros for the others (their streams untouched); None, None in a
+        calm batch."""
+        if self._navplant.weather is None:
+            return None, None
+        assert self.disturbances.weather_inputs is not None
+        normals = np.zeros((self.n_boats, 3 * n_steps))
+        windy = np.flatnonzero(self.disturbances.weather_active)
+        if windy.size:
+            normals[windy] = self._noise.for_boats(windy).standard_normal((windy.size, 3 * n_steps))
+            self._noise.for_boats(None)
+        return self.disturbances.weather_inputs, normals
 
     def step(self, actions: Any) -> BatchStep:
         """One decision step of every boat (see the module docstring)."""

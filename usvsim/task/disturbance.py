@@ -17,19 +17,31 @@ filter's own noise model stays the nominal one, as on a real boat whose receiver
 
 Outlier draws come from the episode's own stream (seeded by ``seed``), so a boat's draws do not
 depend on the batch around it.
+
+Weather (issue 38): ``weather`` (:class:`usvsim.task.weather_draw.Weather`) steps the boat in
+wind and waves (:mod:`usvsim.vessel.weather_plant`). :class:`BoatDisturbances` keeps each boat's
+per-episode weather inputs (N, 26) (:data:`usvsim.vessel.weather_plant.WEATHER_INPUTS` from
+``wind_mean``), filled on reset by :meth:`BoatDisturbances.start_weather` through
+:meth:`usvsim.vessel.weather_plant.WeatherPlant.initial_state`; the gust and wave motion start
+from their stationary distributions drawn from the episode's own noise stream (so a boat's
+weather does not depend on the batch around it either). A boat without weather gets the calm
+rows: every weather term is an exact zero.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import ndtri
 
 from usvsim.task.scenario import BoatNoise
+from usvsim.task.weather_draw import CALM, Weather, sea_conditions
+from usvsim.vessel.weather_plant import NWS, WeatherPlant
 
 __all__ = ["BoatDisturbances", "EpisodeDisturbance"]
 
@@ -49,6 +61,7 @@ class EpisodeDisturbance:
     gnss_dropout_start_s: float = math.inf  # s, episode time the outage starts
     gnss_dropout_duration_s: float = 0.0  # s
     seed: int = 0  # seeds the outlier draws
+    weather: Weather | None = None  # wind and waves (module docstring); None: calm, as today
 
     def __post_init__(self) -> None:
         if self.speed_mps is not None and not (
@@ -97,6 +110,11 @@ class BoatDisturbances:
         self.dropout = np.full((n_boats, 2), np.inf)  # [start, end) s
         self.active = np.zeros(n_boats, dtype=bool)
         self._noise = BoatNoise(n_boats)
+        # per-boat weather (module docstring): which boats have it, their episodes' weather and
+        # the weather plant's per-episode inputs (N, 26), allocated by the first start_weather
+        self.weather_active = np.zeros(n_boats, dtype=bool)
+        self._weather: list[Weather] = [CALM] * n_boats
+        self.weather_inputs: FloatArray | None = None
 
     def set(self, boats: NDArray[np.intp], items: Sequence[EpisodeDisturbance | None]) -> None:
         """Give ``boats`` their disturbances (``None``: the study's calm, clean setting)."""
@@ -119,9 +137,63 @@ class BoatDisturbances:
                 e.gnss_dropout_start_s + e.gnss_dropout_duration_s,
             )
             self.active[i] = d is not None
+            self.weather_active[i] = d is not None and d.weather is not None
+            self._weather[i] = CALM if d is None or d.weather is None else d.weather
         given = [k for k, d in enumerate(items) if d is not None]
         if given:
             self._noise.seed(boats[given], [items[k].seed for k in given])  # type: ignore[union-attr]
+
+    @staticmethod
+    def brings_weather(items: Sequence[EpisodeDisturbance | None] | None) -> bool:
+        """True when one of ``items`` has a weather (the batch then needs the weather plant)."""
+        return any(d is not None and d.weather is not None for d in items or ())
+
+    def start_calm_weather(
+        self, plant: WeatherPlant, eta: FloatArray, speed_mps: FloatArray
+    ) -> FloatArray:
+        """Every boat's calm weather input rows and states (N, 8) at ``eta`` (N, 3) and
+        ``speed_mps`` (N,): the batch's switch to the weather plant; no episode stream draws."""
+        n = self.speed_mps.size
+        calm = plant.initial_state(eta, sea_conditions([CALM] * n), speed_mps)
+        self.weather_inputs = calm.inputs.copy()
+        return calm.m
+
+    def start_weather(
+        self,
+        plant: WeatherPlant,
+        boats: NDArray[np.intp],
+        eta: FloatArray,
+        speed_mps: FloatArray,
+        episode_noise: Callable[[NDArray[np.intp]], Any],
+    ) -> FloatArray:
+        """The weather states (len(boats), 8) of ``boats`` starting at ``eta`` (len(boats), 3)
+        at ``speed_mps`` (len(boats),), and their weather input rows set (module docstring).
+
+        ``episode_noise(b)`` serves standard normals row by row from boats ``b``'s own streams
+        (the batch's :class:`usvsim.task.scenario.BoatNoise`): the stationary gust and wave
+        motion of the boats with weather are drawn from it; boats without draw nothing from
+        their streams (their draws, from the plant's generator, are multiplied by zero).
+        """
+        boats = np.asarray(boats, dtype=np.intp)
+        if self.weather_inputs is None:
+            raise RuntimeError("start_calm_weather first: the boats' weather rows are not set")
+        m = np.zeros((boats.size, NWS))
+        windy = self.weather_active[boats]
+        for sel in (np.flatnonzero(windy), np.flatnonzero(~windy)):
+            if sel.size == 0:
+                continue
+            own = plant.rng
+            if windy[sel[0]]:  # initial_state draws from plant.rng: lend it the episodes' streams
+                plant.rng = episode_noise(boats[sel])
+            try:
+                state = plant.initial_state(
+                    eta[sel], sea_conditions([self._weather[b] for b in boats[sel]]), speed_mps[sel]
+                )
+            finally:
+                plant.rng = own
+            m[sel] = state.m
+            self.weather_inputs[boats[sel]] = state.inputs
+        return m
 
     def inputs(
         self, episode_time_s: FloatArray, dt_s: float, n_steps: int

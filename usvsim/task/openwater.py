@@ -34,13 +34,19 @@ within R + half beam of a centre.
 Every draw of an episode comes from its own generator ``default_rng([seed, k])``, in a fixed
 order whatever the parameters, so an episode set is reproducible and a changed range moves only
 what it names.
+
+Weather (issue 38): with ``weather`` (:class:`usvsim.task.weather_draw.WeatherRanges`) episode k
+gets ``disturbance.weather`` = :func:`usvsim.task.weather_draw.draw_weather` of ``(seed, k)`` and
+its course χ (start → goal), drawn from the weather's own stream ``default_rng([seed, k,
+WEATHER_STREAM])``: no other draw of the episode moves. ``weather=None`` (the default) leaves
+the episodes as they were (calm: the batch keeps the calm plant).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,6 +54,7 @@ from numpy.typing import NDArray
 from usvsim.common.angles import ssa
 from usvsim.task.disturbance import EpisodeDisturbance
 from usvsim.task.scenario import EpisodeSpec, Scenario, episode_geometry
+from usvsim.task.weather_draw import WeatherRanges, draw_weather
 
 __all__ = [
     "ENCOUNTERS",
@@ -163,6 +170,7 @@ class OpenWaterScenario:
     radar_noise_range: Range = (0.0, 0.0)  # intensity units
     time_factor: float = 2.0  # -, time limit = max(150 s, factor × |S G| / U)
     area_margin_m: float = 150.0  # m, area radius = |A − mid(S, G)| + |S G| / 2 + margin
+    weather: WeatherRanges | None = None  # wind and waves per episode (module docstring); calm
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
@@ -350,8 +358,24 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
 
 
 def draw_open_water(sc: OpenWaterScenario, seed: int, n: int) -> tuple[OpenWaterEpisode, ...]:
-    """``n`` episodes of ``sc``; episode k from ``default_rng([seed, k])`` (module docstring)."""
-    return tuple(_draw_one(np.random.default_rng([seed, k]), sc) for k in range(n))
+    """``n`` episodes of ``sc``; episode k from ``default_rng([seed, k])``, its weather (if
+    ``sc.weather``) from its own stream (module docstring)."""
+    episodes = tuple(_draw_one(np.random.default_rng([seed, k]), sc) for k in range(n))
+    if sc.weather is None:
+        return episodes
+    return tuple(_with_weather(e, sc.weather, seed, k) for k, e in enumerate(episodes))
+
+
+def _with_weather(
+    episode: OpenWaterEpisode, ranges: WeatherRanges, seed: int, k: int
+) -> OpenWaterEpisode:
+    """``episode`` (k of the set of seed ``seed``) with its weather drawn relative to its course
+    χ = atan2 of goal − start (rad)."""
+    start = episode.start_ne
+    course = math.atan2(episode.goal_ne[1] - start[1], episode.goal_ne[0] - start[0])
+    disturbance = episode.disturbance or EpisodeDisturbance()
+    weather = draw_weather(ranges, seed, k, course)
+    return replace(episode, disturbance=replace(disturbance, weather=weather))
 
 
 def from_pole_episodes(

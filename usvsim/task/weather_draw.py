@@ -14,9 +14,11 @@ either side at random, as the family's current. The sea's T_p is Bales' (1983) m
 period of its H_s (:data:`usvsim.vessel.weather.waves.SEA_STATES`, interpolated); waves travel
 with the wind unless ``wave_spread_rad`` turns them.
 
-Not wired into the environments yet (they step the calm plant): :func:`sea_conditions` gives
-the :class:`usvsim.vessel.weather_plant.SeaConditions` a weather-aware batch would pass to
-:class:`usvsim.vessel.weather_plant.WeatherPlant`.
+:class:`usvsim.task.openwater.OpenWaterScenario` ``weather`` draws one per episode into its
+:class:`usvsim.task.disturbance.EpisodeDisturbance`; the batch then steps the boat in
+:class:`usvsim.vessel.weather_plant.WeatherPlant` (:func:`sea_conditions` gives its
+:class:`usvsim.vessel.weather_plant.SeaConditions`). The stress suite's weather sets
+(:mod:`usvsim.evaluation.stress`) use :data:`WEATHER_SETS`.
 """
 
 from __future__ import annotations
@@ -144,8 +146,8 @@ def sea_conditions(weathers: Sequence[Weather]) -> SeaConditions:
 
 
 DEG = math.pi / 180.0
-#: The weather of the proposed stress sets (issue 38), by name; ``moderate`` is what
-#: ``everything`` would gain (not applied: its published figures must stay valid).
+#: The weather of the stress sets (issue 38), by name; ``moderate`` is what ``everything``
+#: would gain (not applied: its published figures must stay valid).
 WEATHER_SETS: dict[str, WeatherRanges] = {
     # 8-12 m/s on the beam (blowing 80-100° off the course, either side), gusts 10 %
     "wind-beam": WeatherRanges(

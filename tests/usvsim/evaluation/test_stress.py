@@ -55,6 +55,18 @@ def _current_rel(e):
     return np.abs(ssa(e.disturbance.current_direction_rad - _course(e)))
 
 
+def _weather(e):
+    return e.disturbance.weather
+
+
+def _wind_rel(e):  # the wind's direction (towards) off the course, rad, in [0, π]
+    return np.abs(ssa(_weather(e).wind_dir_rad - _course(e)))
+
+
+def _waves_off_wind(e):
+    return np.abs(ssa(_weather(e).wave_dir_rad - _weather(e).wind_dir_rad))
+
+
 CHECKS = {
     "study": lambda eps: eps == from_pole_episodes(heldout_episodes(n=N)),
     "start-short": lambda eps: _all((e.start.start_distance_m for e in eps), 30, 50),
@@ -112,8 +124,30 @@ CHECKS = {
         np.array_equal(a.waypoints_ne, b.waypoints_ne) and np.array_equal(a.poles_ne, b.poles_ne)
         for a, b in zip(eps, heldout_courses(n=N), strict=True)
     ),
+    "wind-beam": lambda eps: (
+        _all((_weather(e).wind_speed_mps for e in eps), 8, 12)
+        and _all(map(_wind_rel, eps), math.radians(80), math.radians(100))
+        and all(_weather(e).hs_m == 0 for e in eps)
+    ),
+    "gusts": lambda eps: (
+        _all((_weather(e).wind_speed_mps for e in eps), 6, 10)
+        and _all((_weather(e).gust_intensity for e in eps), 0.2, 0.3)
+        and max(map(_wind_rel, eps)) > 2.5
+    ),
+    "sea-state-3": lambda eps: (
+        _all((_weather(e).hs_m for e in eps), 0.5, 1.25)
+        and _all((_weather(e).wind_speed_mps for e in eps), 5.5, 7.9)
+        and _all(map(_waves_off_wind, eps), 0, math.radians(30))
+    ),
+    "sea-state-4": lambda eps: (
+        _all((_weather(e).hs_m for e in eps), 1.25, 2.5)
+        and _all((_weather(e).wind_speed_mps for e in eps), 8.0, 10.7)
+        and _all(map(_waves_off_wind, eps), 0, math.radians(30))
+    ),
     "everything": lambda eps: (
-        any(e.vessels for e in eps)
+        # no weather: its published figures stay valid (issue 38)
+        all(e.disturbance.weather is None for e in eps)
+        and any(e.vessels for e in eps)
         and any(o[2] >= 8 for e in eps for o in e.obstacles)
         and any(e.disturbance.current_speed_mps > 0.3 for e in eps)
         and any(math.isfinite(e.disturbance.gnss_dropout_start_s) for e in eps)

@@ -128,3 +128,25 @@ def test_test_split_is_refused_in_selection_mode(name: str) -> None:
         with pytest.raises(TestSplitInSelectionError, match=f"stress {name}"):
             stress_episodes(stress_set, 4, "test")
     assert len(stress_episodes(stress_set, 4, "test")) == 4  # reporting: allowed
+
+
+WEATHER_SETS_NAMED = ("wind-beam", "gusts", "sea-state-3", "sea-state-4")
+
+
+@pytest.mark.parametrize("name", WEATHER_SETS_NAMED)
+def test_weather_sets_draw_weather_in_both_splits_and_different_weather(name: str) -> None:
+    (stress_set,) = select_sets([name])
+    validation = stress_episodes(stress_set, 20, "validation")
+    test = stress_episodes(stress_set, 20, "test")
+    for episodes in (validation, test):
+        assert all(e.disturbance.weather.wind_speed_mps > 0 for e in episodes)
+    assert not {e.disturbance.weather for e in validation} & {e.disturbance.weather for e in test}
+    with selection_mode("a validation"), pytest.raises(TestSplitInSelectionError):
+        stress_episodes(stress_set, 1, "test")
+
+
+def test_only_the_weather_sets_draw_weather() -> None:
+    for stress_set in STRESS_SETS:
+        if stress_set.scenario is not None:
+            windy = stress_set.scenario.weather is not None
+            assert windy == (stress_set.name in WEATHER_SETS_NAMED), stress_set.name
