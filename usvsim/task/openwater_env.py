@@ -58,6 +58,7 @@ from usvsim.task.options import EnvOptions, normalized_observation, normalized_p
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward, RewardFunction
 from usvsim.task.vector_env import boat_generators, episodes_option
+from usvsim.task.weather_draw import WEATHER_SETS, WeatherRanges
 from usvsim.vessel.plant import Plant
 
 __all__ = [
@@ -70,6 +71,7 @@ __all__ = [
     "draw_family_episode",
     "harsh_radar_family",
     "mix_families",
+    "weather_family",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -203,6 +205,17 @@ def harsh_radar_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioM
     return replace(family, members=members)
 
 
+def weather_family(
+    family: ScenarioMixture = OPEN_WATER_FAMILY, ranges: WeatherRanges | None = None
+) -> ScenarioMixture:
+    """``family`` with every member drawing wind and waves from ``ranges`` (default
+    ``WEATHER_SETS["moderate"]``: up to 8 m/s of wind and 1 m of H_s, calm included;
+    :mod:`usvsim.task.weather_draw`), e.g. ``gymnasium.make_vec("usvsim/OpenWater-v0",
+    num_envs=N, family=weather_family())``. The default family draws no weather."""
+    weather = WEATHER_SETS["moderate"] if ranges is None else ranges
+    return replace(family, members=tuple(replace(m, weather=weather) for m in family.members))
+
+
 def mix_families(
     base: ScenarioMixture, extra: ScenarioMixture, extra_share: float, prefix: str = "crowded-"
 ) -> ScenarioMixture:
@@ -286,8 +299,9 @@ class OpenWaterVectorEnv(VectorEnv):
     ## Arguments
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
-    ``plant``, ``radar``, ``backend``. ``render_mode`` must be ``None``: the top view draws one
-    pole (:mod:`usvsim.task.render`). ``info_observation`` (e.g. ``"scene"``): ``reset`` and
+    ``plant``, ``radar``, ``backend`` (wind and waves: ``family=weather_family()``; the default
+    family is calm). ``render_mode`` must be ``None``: the top view draws one pole
+    (:mod:`usvsim.task.render`). ``info_observation`` (e.g. ``"scene"``): ``reset`` and
     every ``step`` also return that form of the returned observation as
     ``info["observation_<kind>"]`` (N, ...) (after an autoreset the new episode's, as the
     observation; ``final_info`` does not carry it): privileged input for a learner that trains

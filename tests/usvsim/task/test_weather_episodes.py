@@ -8,10 +8,13 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import gymnasium
 import numpy as np
 
+from usvsim import OPEN_WATER_ENV_ID
 from usvsim.task.openwater import OpenWaterScenario, draw_open_water
 from usvsim.task.openwater_batch import OpenWaterBatch
+from usvsim.task.openwater_env import OPEN_WATER_FAMILY, draw_family, weather_family
 from usvsim.task.weather_draw import WEATHER_SETS, draw_weather
 
 DECISIONS = 15  # 30 s
@@ -87,3 +90,33 @@ def test_an_episode_does_not_depend_on_the_batch_around_it() -> None:
         # the weather boats: their own streams; the calm ones: the calm plant's numbers (every
         # weather term an exact zero; 0.0 here, the plant's stated tolerance 1e-9)
         np.testing.assert_allclose(together[i], alone[0], rtol=0, atol=1e-9)
+
+
+def test_open_water_v0_weather_family_draws_moderate_weather_the_default_none() -> None:
+    moderate = WEATHER_SETS["moderate"]
+    windy = draw_family(weather_family(), 5, 40)
+    assert all(e.disturbance.weather is None for e in draw_family(OPEN_WATER_FAMILY, 5, 40))
+    speeds = [e.disturbance.weather.wind_speed_mps for e in windy]
+    heights = [e.disturbance.weather.hs_m for e in windy]
+    assert moderate.wind_speed_range_mps[0] <= min(speeds) < max(speeds) <= 8.0
+    assert 0.0 <= min(heights) < max(heights) <= moderate.hs_range_m[1]
+    # the same episodes otherwise (the weather's own stream)
+    assert _calm(windy) == list(draw_family(OPEN_WATER_FAMILY, 5, 40))
+
+
+def test_open_water_v0_in_weather_same_seed_same_steps() -> None:
+    def rollout(seed: int) -> np.ndarray:
+        env = gymnasium.make_vec(
+            OPEN_WATER_ENV_ID, num_envs=4, observation="scene", family=weather_family()
+        )
+        obs, _ = env.reset(seed=seed)
+        actions = np.random.default_rng(0).uniform(-1, 1, (10, 4, 1))
+        out = [obs]
+        for a in actions:
+            out.append(env.step(a)[0])
+        assert env.unwrapped.sim.inner.in_weather
+        return np.stack(out)
+
+    a = rollout(2)
+    assert np.array_equal(a, rollout(2))
+    assert not np.allclose(a, rollout(3))
