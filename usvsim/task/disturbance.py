@@ -31,7 +31,8 @@ rows: every weather term is an exact zero.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -154,7 +155,8 @@ class BoatDisturbances:
         """Every boat's calm weather input rows and states (N, 8) at ``eta`` (N, 3) and
         ``speed_mps`` (N,): the batch's switch to the weather plant; no episode stream draws."""
         n = self.speed_mps.size
-        calm = plant.initial_state(eta, sea_conditions([CALM] * n), speed_mps)
+        with _lent(plant, wave_filter=None):  # no sea: the filter is off for these boats
+            calm = plant.initial_state(eta, sea_conditions([CALM] * n), speed_mps)
         self.weather_inputs = calm.inputs.copy()
         return calm.m
 
@@ -173,26 +175,27 @@ class BoatDisturbances:
         (the batch's :class:`usvsim.task.scenario.BoatNoise`): the stationary gust and wave
         motion of the boats with weather are drawn from it; boats without draw nothing from
         their streams (their draws, from the plant's generator, are multiplied by zero).
+        Boats in a calm sea (H_s = 0) skip the wave filter's Riccati solutions: their filter is
+        off and its gains zero either way (:func:`usvsim.vessel.weather_plant.weather_inputs`).
         """
         boats = np.asarray(boats, dtype=np.intp)
         if self.weather_inputs is None:
             raise RuntimeError("start_calm_weather first: the boats' weather rows are not set")
         m = np.zeros((boats.size, NWS))
         windy = self.weather_active[boats]
-        for sel in (np.flatnonzero(windy), np.flatnonzero(~windy)):
-            if sel.size == 0:
+        wavy = np.array([self._weather[b].hs_m > 0 for b in boats.tolist()], dtype=bool)
+        for sel in (windy & wavy, windy & ~wavy, ~windy):
+            rows = np.flatnonzero(sel)
+            if rows.size == 0:
                 continue
-            own = plant.rng
-            if windy[sel[0]]:  # initial_state draws from plant.rng: lend it the episodes' streams
-                plant.rng = episode_noise(boats[sel])
-            try:
-                state = plant.initial_state(
-                    eta[sel], sea_conditions([self._weather[b] for b in boats[sel]]), speed_mps[sel]
-                )
-            finally:
-                plant.rng = own
-            m[sel] = state.m
-            self.weather_inputs[boats[sel]] = state.inputs
+            lend: dict[str, Any] = {} if wavy[rows[0]] else {"wave_filter": None}
+            if windy[rows[0]]:  # initial_state draws from plant.rng: the episodes' own streams
+                lend["rng"] = episode_noise(boats[rows])
+            conditions = sea_conditions([self._weather[b] for b in boats[rows].tolist()])
+            with _lent(plant, **lend):
+                state = plant.initial_state(eta[rows], conditions, speed_mps[rows])
+            m[rows] = state.m
+            self.weather_inputs[boats[rows]] = state.inputs
         return m
 
     def inputs(
@@ -230,3 +233,18 @@ class BoatDisturbances:
             faulty[:, None], normals[:, gnss_index] * scale, normals[:, gnss_index]
         )
         return out
+
+
+@contextmanager
+def _lent(plant: WeatherPlant, **attributes: Any) -> Iterator[None]:
+    """``plant`` with ``attributes`` set for the ``with`` block, restored after it (its
+    ``initial_state`` draws from ``plant.rng`` and designs the wave filter of
+    ``plant.wave_filter``; it takes neither as an argument)."""
+    saved = {name: getattr(plant, name) for name in attributes}
+    for name, value in attributes.items():
+        setattr(plant, name, value)
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            setattr(plant, name, value)
