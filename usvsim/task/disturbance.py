@@ -31,8 +31,7 @@ rows: every weather term is an exact zero.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -155,8 +154,9 @@ class BoatDisturbances:
         """Every boat's calm weather input rows and states (N, 8) at ``eta`` (N, 3) and
         ``speed_mps`` (N,): the batch's switch to the weather plant; no episode stream draws."""
         n = self.speed_mps.size
-        with _lent(plant, wave_filter=None):  # no sea: the filter is off for these boats
-            calm = plant.initial_state(eta, sea_conditions([CALM] * n), speed_mps)
+        calm = plant.initial_state(  # no sea: the filter is off for these boats
+            eta, sea_conditions([CALM] * n), speed_mps, wave_filter=False
+        )
         self.weather_inputs = calm.inputs.copy()
         return calm.m
 
@@ -188,12 +188,16 @@ class BoatDisturbances:
             rows = np.flatnonzero(sel)
             if rows.size == 0:
                 continue
-            lend: dict[str, Any] = {} if wavy[rows[0]] else {"wave_filter": None}
-            if windy[rows[0]]:  # initial_state draws from plant.rng: the episodes' own streams
-                lend["rng"] = episode_noise(boats[rows])
+            # the episodes' own streams draw the gust and wave starts of boats with weather
+            rng = episode_noise(boats[rows]) if windy[rows[0]] else None
             conditions = sea_conditions([self._weather[b] for b in boats[rows].tolist()])
-            with _lent(plant, **lend):
-                state = plant.initial_state(eta[rows], conditions, speed_mps[rows])
+            state = plant.initial_state(
+                eta[rows],
+                conditions,
+                speed_mps[rows],
+                rng=rng,
+                wave_filter=None if wavy[rows[0]] else False,
+            )
             m[rows] = state.m
             self.weather_inputs[boats[rows]] = state.inputs
         return m
@@ -233,18 +237,3 @@ class BoatDisturbances:
             faulty[:, None], normals[:, gnss_index] * scale, normals[:, gnss_index]
         )
         return out
-
-
-@contextmanager
-def _lent(plant: WeatherPlant, **attributes: Any) -> Iterator[None]:
-    """``plant`` with ``attributes`` set for the ``with`` block, restored after it (its
-    ``initial_state`` draws from ``plant.rng`` and designs the wave filter of
-    ``plant.wave_filter``; it takes neither as an argument)."""
-    saved = {name: getattr(plant, name) for name in attributes}
-    for name, value in attributes.items():
-        setattr(plant, name, value)
-    try:
-        yield
-    finally:
-        for name, value in saved.items():
-            setattr(plant, name, value)

@@ -74,8 +74,7 @@ from usvsim.vessel.weather.waves import (
     SeaState,
     WaveResponse,
     drift_pressure,
-    encounter_frequency,
-    jonswap,
+    encounter_response,
     wave_motion_discrete,
     wave_motion_init,
 )
@@ -274,23 +273,6 @@ class WeatherPlantState:
         return PlantState(x=self.x, c=self.c)
 
 
-def _encounter_response(
-    cond: SeaConditions, speed: NDArray[np.float64], heading: NDArray[np.float64], dt_s: float
-) -> WaveResponse:
-    """Wave motion filter at each boat's encounter frequency, its variance kept at H_s²/16."""
-    calm = cond.hs_m <= 0
-    tp = np.where(calm, 10.0, cond.tp_s)
-    wp = 2.0 * math.pi / tp
-    we = encounter_frequency(wp, speed, cond.wave_dir_rad - heading)
-    we = np.clip(we, 0.1, 0.5 * math.pi / dt_s)  # rad/s; following seas can meet ω_e → 0
-    sigma2 = jonswap(wp, cond.hs_m, tp)  # peak value of S
-    m0 = cond.hs_m**2 / 16.0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        lam = np.where(calm, 0.1, m0 / (math.pi * wp * sigma2))
-        sig_e = np.where(calm, 0.0, np.sqrt(m0 / (math.pi * lam * we)))
-    return WaveResponse(we, lam, 2.0 * lam * we * sig_e)
-
-
 def weather_inputs(
     cond: SeaConditions,
     speed_mps: NDArray[np.float64],
@@ -305,7 +287,9 @@ def weather_inputs(
     wave response they were built from; ``wave_filter`` None: the filter off for every boat,
     else its tuning (calm boats keep it off: nothing to filter, and no estimator lag)."""
     n = cond.hs_m.size
-    resp = _encounter_response(cond, speed_mps, heading_rad, dt_s)
+    resp = encounter_response(
+        cond.hs_m, cond.tp_s, cond.wave_dir_rad - heading_rad, speed_mps, dt_s
+    )
     phi, chol = wave_motion_discrete(resp, dt_s)
     a = math.exp(-dt_s / gusts.time_constant_s)
     out = np.zeros((n, NWI - 4))
@@ -421,7 +405,8 @@ class WeatherPlant:
     ) -> None:
         self.plant = plant
         self.gusts = gusts or GustParams()
-        self.wave_filter = (observer or ObserverNoise()) if wave_filter else None
+        self.observer = observer or ObserverNoise()
+        self.wave_filter = self.observer if wave_filter else None
         self.yaw_model = (float(plant.design.nomoto.m), float(plant.design.nomoto.d))
         self.rng = np.random.default_rng(seed)
         self.innovations = innovations
@@ -436,26 +421,41 @@ class WeatherPlant:
         return self._stepper.kernel
 
     def initial_state(
-        self, eta: ArrayLike, conditions: SeaConditions, speed_mps: ArrayLike | None = None
+        self,
+        eta: ArrayLike,
+        conditions: SeaConditions,
+        speed_mps: ArrayLike | None = None,
+        *,
+        rng: np.random.Generator | None = None,
+        wave_filter: bool | None = None,
     ) -> WeatherPlantState:
         """Boats as :meth:`Plant.initial_state`, their weather from ``conditions``; gusts and wave
-        motion start in their stationary distributions (no transient)."""
+        motion start in their stationary distributions (no transient).
+
+        ``rng`` draws those starts (default the plant's generator; anything with NumPy's
+        ``standard_normal``, e.g. per-episode streams); ``wave_filter`` turns these boats' wave
+        filter on or off (default the plant's ``wave_filter``; on uses the plant's tuning)."""
         calm = self.plant.initial_state(eta, speed_mps)
         n = calm.n_boats
         conditions.check(n)
+        draw = self.rng if rng is None else rng
+        if wave_filter is None:
+            observer = self.wave_filter
+        else:
+            observer = self.observer if wave_filter else None
         inputs, resp = weather_inputs(
             conditions,
             calm.x[:, 3],
             calm.x[:, 2],
             self.plant.dt_s,
             self.gusts,
-            self.wave_filter,
+            observer,
             self.yaw_model,
         )
         m = np.zeros((n, NWS))
         sigma = conditions.gust_intensity * conditions.wind_speed_mps
-        m[:, 0] = sigma * self.rng.standard_normal(n)
-        m[:, 1:3] = wave_motion_init(self.rng, resp)
+        m[:, 0] = sigma * draw.standard_normal(n)
+        m[:, 1:3] = wave_motion_init(draw, resp)
         state = WeatherPlantState(calm.x, calm.c, m, inputs)
         obs = {k: 3 + i for i, k in enumerate(OBSERVER_STATES)}
         m[:, obs["psi"]] = calm.x[:, 2] + wave_offsets(state)[:, 2]  # starts on the compass

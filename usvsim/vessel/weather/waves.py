@@ -45,6 +45,7 @@ __all__ = [
     "drift_pressure",
     "drift_table",
     "encounter_frequency",
+    "encounter_response",
     "jonswap",
     "mean_drift_force",
     "reflection_squared",
@@ -190,6 +191,29 @@ def _chol2(p: NDArray[np.float64]) -> NDArray[np.float64]:
         l[:, 1, 0] = np.where(l[:, 0, 0] > 0, p[:, 1, 0] / l[:, 0, 0], 0.0)
     l[:, 1, 1] = np.sqrt(np.maximum(p[:, 1, 1] - l[:, 1, 0] ** 2, 0.0))
     return l
+
+
+def encounter_response(
+    hs_m: NDArray[np.float64],
+    tp_s: NDArray[np.float64],
+    relative_dir_rad: NDArray[np.float64],
+    speed_mps: NDArray[np.float64],
+    dt_s: float,
+) -> WaveResponse:
+    """Wave motion filters (N boats) at each boat's encounter frequency (waves towards
+    ``relative_dir_rad`` off the bow, boat at ``speed_mps``), variance kept at H_s²/16; a calm
+    sea (H_s = 0) gets a zero-gain filter. ω_e is clipped to [0.1, π/(2Δt)] rad/s: following
+    seas can meet ω_e → 0."""
+    calm = hs_m <= 0
+    tp = np.where(calm, 10.0, tp_s)
+    wp = 2.0 * math.pi / tp
+    we = np.clip(encounter_frequency(wp, speed_mps, relative_dir_rad), 0.1, 0.5 * math.pi / dt_s)
+    sigma2 = jonswap(wp, hs_m, tp)  # peak value of S
+    m0 = hs_m**2 / 16.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lam = np.where(calm, 0.1, m0 / (math.pi * wp * sigma2))
+        sig_e = np.where(calm, 0.0, np.sqrt(m0 / (math.pi * lam * we)))
+    return WaveResponse(we, lam, 2.0 * lam * we * sig_e)
 
 
 def wave_motion_init(rng: np.random.Generator, resp: WaveResponse) -> NDArray[np.float64]:
