@@ -273,7 +273,7 @@ def test_signed_endpoint_refuses_an_unsigned_bridge(tmp_path: Path) -> None:
     with sitl_running(signing_key=str(key)) as sitl:
         args = bridge_args(sitl, tmp_path, command_timeout_s=0.5)
         bridge = Bridge(args, mission, AvoidingHelmsman())
-        with pytest.raises(RuntimeError, match="refused GUIDED"):
+        with pytest.raises(RuntimeError, match="did not acknowledge GUIDED mode"):
             bridge.run(max_wall_s=10.0)
         assert sitl.link.rejected_unsigned > 0 and sitl.mode == RoverMode.MANUAL
     with sitl_running(signing_key=str(key)) as sitl:
