@@ -23,6 +23,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -289,6 +290,17 @@ def reflection_squared(omega: ArrayLike, draft_m: float) -> NDArray[np.float64]:
     return 1.0 / (1.0 + ratio**2)
 
 
+@functools.lru_cache(maxsize=8)
+def _reflection_grid(draft_m: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The frequency grid of :func:`drift_pressure` (rad/s; S ∝ ω⁻⁵ leaves < 1e-4 m₀ above
+    15 rad/s) and R² on it, read-only: computed once per draft, not at every episode start."""
+    omega = np.linspace(0.05, 15.0, 3000)
+    r2 = reflection_squared(omega, draft_m)
+    omega.flags.writeable = False
+    r2.flags.writeable = False
+    return omega, r2
+
+
 def drift_pressure(
     hs_m: ArrayLike,
     tp_s: ArrayLike,
@@ -299,9 +311,9 @@ def drift_pressure(
     met head-on (module docstring); 0 in a calm sea."""
     hs = np.atleast_1d(np.asarray(hs_m, dtype=float))[:, None]
     tp = np.atleast_1d(np.asarray(tp_s, dtype=float))[:, None]
-    omega = np.linspace(0.05, 15.0, 3000)  # rad/s; S ∝ ω⁻⁵ leaves < 1e-4 m0 above
+    omega, r2 = _reflection_grid(float(draft_m))
     s = jonswap(omega, hs, np.where(hs > 0, tp, 1.0), gamma)
-    m_r = np.trapezoid(s * reflection_squared(omega, draft_m), omega, axis=1)  # m²
+    m_r = np.trapezoid(s * r2, omega, axis=1)  # m²
     return np.asarray(RHO_WATER * G * m_r, dtype=float)
 
 
