@@ -92,7 +92,9 @@ class DiagGaussian(ActionDistribution):
         return (kl - 0.5).sum(-1)
 
     def sample(self, generator: torch.Generator | None = None) -> Tensor:
-        noise = torch.randn(self.mean.shape, generator=generator, dtype=self.mean.dtype)
+        noise = torch.randn(
+            self.mean.shape, generator=generator, dtype=self.mean.dtype, device=self.mean.device
+        )
         return self.mean + noise * torch.exp(self.log_std)
 
     def mode(self) -> Tensor:

@@ -69,6 +69,12 @@ checkpoints).
 ``DIR/<name of the output folder>`` (``tensorboard --logdir DIR`` shows runs side by side; tags
 and steps: :mod:`learning.experiments.run_log`; needs ``pip install "usvsim[tensorboard]"``).
 
+``--device {cpu,torch-cpu,cuda}`` (rl-gaussian-positional, rl-categorical-positional): ``cpu``
+(the default) steps the CPU env with NumPy arrays; ``torch-cpu`` and ``cuda`` train with the
+study task's torch env, rollouts, GAE and the TRPO step on that device
+(:mod:`learning.algorithms.device_loop`); validation, checkpoints and files are those of a
+``cpu`` run. Another setup, or ``cuda`` where torch sees no GPU: one line, exit 2.
+
 ``--harsh-radar-copies K`` (il-*-radar-ow only, a new run): every demonstration also enters the
 expert data K times with its radar at the family's harshest level, and K/(K+1) of the training
 episodes are drawn from that harsh-radar family
@@ -93,7 +99,7 @@ from learning.experiments.il_setups import IL_SETUPS, MAX_HARSH_RADAR_COPIES, ge
 from learning.experiments.run_log import check_tensorboard
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
-from learning.experiments.train_rl import first_policy, train_rl
+from learning.experiments.train_rl import DEVICES, device_env_maker, first_policy, train_rl
 from learning.experiments.validation import RunResult
 from learning.imitation.discriminator import DISC_OBSERVATIONS, DiscObservation
 from usvsim.common.errors import UserError
@@ -137,6 +143,7 @@ class TrainArgs:
         default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
     )
     tensorboard: str = ""  # also TensorBoard scalars in DIR/<out folder's name>; "": none
+    device: str = "cpu"  # rl-*-positional (TRPO): cpu (C kernel, NumPy), torch-cpu or cuda
 
     @classmethod
     def cli_epilog(cls) -> str:
@@ -152,6 +159,8 @@ class TrainArgs:
             )
         if self.tensorboard:
             check_tensorboard()
+        if self.device != "cpu":
+            self._check_device()
         if self.demos and not self.setup.startswith("il-"):
             raise UserError(f"--demos is for the il-* setups, not {self.setup!r}")
         if self.demos and not Path(self.demos).is_dir():
@@ -204,6 +213,24 @@ class TrainArgs:
                 raise UserError(
                     "--harsh-radar-copies starts a new run; --resume keeps the run's own"
                 )
+
+    def _check_device(self) -> None:
+        """``--device``: one of :data:`DEVICES`; other than cpu only for a setup that the
+        device loop trains, and cuda only where torch sees a GPU."""
+        if self.device not in DEVICES:
+            raise UserError(f"--device must be one of {', '.join(DEVICES)}, got {self.device!r}")
+        rl = SETUPS.get(self.setup)
+        if rl is None:
+            raise UserError(
+                f"--device {self.device} is for the TRPO positional setups "
+                f"(rl-gaussian-positional, rl-categorical-positional), not {self.setup!r}"
+            )
+        try:
+            device_env_maker(rl, self.device)
+        except ValueError as err:
+            raise UserError(str(err)) from None
+        if self.device == "cuda" and not torch.cuda.is_available():
+            raise UserError("--device cuda: torch sees no CUDA GPU here (use cpu or torch-cpu)")
 
 
 def setup_table() -> str:
@@ -441,6 +468,7 @@ def run(args: TrainArgs) -> int:
             command=command_of(args),
             init_policy=args.init_policy,
             tensorboard=_board(args, out),
+            device=args.device,
         ),
         setup.name,
         out,

@@ -51,11 +51,13 @@ from usvsim.common.splits import selection_mode
 __all__ = [
     "COMMON_FIELDS",
     "CROWDED_FIELDS",
+    "DEVICES",
     "FAMILY_FIELDS",
     "RADAR_FIELDS",
     "TIME_FIELDS",
     "VALIDATION_FIELDS",
     "csv_fields",
+    "device_env_maker",
     "first_policy",
     "open_water_fields",
     "train_rl",
@@ -72,6 +74,35 @@ FAMILY_FIELDS = (  # open-water setups: validation.family_summary
 )
 CROWDED_FIELDS = tuple(f.replace("_family_", "_crowded_") for f in FAMILY_FIELDS)
 RADAR_FIELDS = tuple(f.replace("_family_", "_radar_") for f in FAMILY_FIELDS)  # radar setups
+
+
+DEVICES = ("cpu", "torch-cpu", "cuda")  # where ``train_rl(device=...)`` steps the env and trains
+DEVICE_DTYPES = {"torch-cpu": "float64", "cuda": "float32"}  # the torch env's simulation type
+
+
+def device_env_maker(setup: RLSetup, device: str) -> Any:
+    """``make_env(num_envs)`` of the study task's torch env for ``setup`` on ``device``
+    (``"torch-cpu"`` or ``"cuda"``: :mod:`learning.algorithms.device_loop`); ``ValueError`` for
+    a setup that it cannot train (the open-water task, a radar observation, PPO)."""
+    if device not in DEVICE_DTYPES:
+        raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
+    if setup.task == "open-water" or setup.observation != "positional" or setup.algorithm != "trpo":
+        raise ValueError(
+            f"--device {device} is for the TRPO positional setups "
+            f"(rl-gaussian-positional, rl-categorical-positional), not {setup.name!r}"
+        )
+    from usvsim.task.torch_env import TorchPoleAvoidanceEnv
+
+    def make_env(num_envs: int) -> Any:
+        return TorchPoleAvoidanceEnv(
+            num_envs,
+            device=device,
+            dtype=DEVICE_DTYPES[device],
+            action=setup.action,
+            observation=setup.observation,
+        )
+
+    return make_env
 
 
 def open_water_fields(setup: Any) -> tuple[str, ...]:
@@ -235,8 +266,14 @@ def train_rl(
     command: str = "",
     init_policy: str | Path = "",
     tensorboard: str | Path = "",
+    device: str = "cpu",
 ) -> RunResult:
     """Train ``setup`` into ``out_dir`` (module docstring).
+
+    ``device`` (:data:`DEVICES`): ``"cpu"`` steps the CPU env with NumPy arrays (the
+    default); ``"torch-cpu"`` / ``"cuda"`` train a TRPO positional setup with the study task's
+    torch env, rollouts, GAE and the update on that device
+    (:func:`learning.algorithms.device_loop.train_on_device`); validation stays on the CPU env.
 
     A new run starts from the policy of ``init_policy`` (a checkpoint file; "": the setup's
     ``init_policy``, a shipped model's name; both empty: new networks), with its own critic.
@@ -277,6 +314,12 @@ def train_rl(
     if state is not None:
         config = dataclasses.replace(config, seed=int(state["config"]["seed"]))
     start = first_policy(setup, init_policy) if state is None else None
+    trainer: Any = train
+    make_env: Any = setup.make_vector_env
+    if device != "cpu":
+        from learning.algorithms.device_loop import train_on_device
+
+        trainer, make_env = train_on_device, device_env_maker(setup, device)
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # half-written files of a killed earlier run
     r = _Run(
@@ -301,9 +344,7 @@ def train_rl(
 
     t0 = time.perf_counter()
     try:
-        agent = train(
-            config, setup.make_vector_env, callback=callback, state=state, warm_start=start
-        )
+        agent = trainer(config, make_env, callback=callback, state=state, warm_start=start)
         iterations, env_steps = agent.iteration, agent.env_steps
     except (NonFiniteError, NonFiniteWeightsError) as err:
         r.log.write()

@@ -1,0 +1,199 @@
+"""TRPO trained on a torch device (issue 40): env, rollouts, GAE and the update stay there.
+
+The twin of :func:`learning.algorithms.loop.train` for an env on a torch device
+(:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv`, ``"torch-cpu"`` or ``"cuda"``: the same
+code). Per iteration:
+
+1. :class:`learning.algorithms.device_rollout.DeviceRolloutCollector` rolls out π_θold for T
+   steps on N boats with no host round trip per step;
+2. :func:`device_update`: V(s_t) and V(s'_t) by the critic, GAE (:func:`device_gae`),
+   advantages normalised, then the agent's own TRPO step
+   (:func:`learning.algorithms.trpo.trpo_step`: conjugate gradient and line search on the
+   device tensors) and critic fit (:func:`learning.algorithms.actor_critic.fit_critic`), then
+   the observation statistics merged from the batch's mean and variance computed on the device;
+3. one read-back: the iteration's episode count, return and length sums, for the callback.
+
+The agent's networks live on the device during rollouts and updates and on the CPU while the
+callback runs (validation on the CPU env, checkpoints readable anywhere). Only TRPO agents with
+vector observations (the positional setups) are supported.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import torch
+from gymnasium import spaces
+
+from learning.algorithms.actor_critic import fit_critic
+from learning.algorithms.base import Stopwatch
+from learning.algorithms.device_rollout import DeviceBatch, DeviceRolloutCollector, device_gae
+from learning.algorithms.device_rollout import normalize as normalize_rows
+from learning.algorithms.loop import IterationStats
+from learning.algorithms.normalization import RunningMeanStd
+from learning.algorithms.rollout import NonFiniteError
+from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats, trpo_step
+
+__all__ = ["device_update", "iterate_on_device", "merge_moments", "train_on_device"]
+
+
+def merge_moments(stats: RunningMeanStd, mean: np.ndarray, var: np.ndarray, n: float) -> None:
+    """Merge a batch's mean, population variance and count into ``stats`` (Chan, Golub and
+    LeVeque 1979: the merge of :meth:`RunningMeanStd.update`, given the moments instead of
+    the rows, so that only they leave the device)."""
+    if not (np.isfinite(mean).all() and np.isfinite(var).all()):
+        raise ValueError("non-finite observation: refusing to update the running statistics")
+    if n == 0:
+        return
+    if stats.count == 0:
+        stats.mean, stats.var, stats.count = mean.copy(), var.copy(), n
+        return
+    total = stats.count + n
+    delta = mean - stats.mean
+    m2 = stats.var * stats.count + var * n + delta**2 * stats.count * n / total
+    stats.mean = stats.mean + delta * n / total
+    stats.var = m2 / total
+    stats.count = total
+
+
+def _normaliser_tensors(
+    agent: TRPOAgent, device: torch.device
+) -> tuple[torch.Tensor | None, torch.Tensor | None]:
+    """The normaliser's μ and sqrt(σ² + ε) on ``device`` (None, None where it is disabled)."""
+    norm = agent.normalizer
+    if not norm.enabled:
+        return None, None
+    s = norm.stats[""]
+    mean = torch.as_tensor(s.mean, dtype=torch.float64, device=device)
+    std = torch.as_tensor(np.sqrt(s.var + norm.eps), dtype=torch.float64, device=device)
+    return mean, std
+
+
+def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
+    """:meth:`TRPOAgent.update` on a :class:`DeviceBatch` (module docstring, step 2)."""
+    cfg: TRPOConfig = agent.config
+    clock = Stopwatch()
+    T, N = batch.rewards.shape
+    mean, std = _normaliser_tensors(agent, batch.obs.device)
+    obs = normalize_rows(batch.obs.reshape(T * N, -1), mean, std, cfg.obs_clip)
+    next_obs = normalize_rows(batch.next_obs.reshape(T * N, -1), mean, std, cfg.obs_clip)
+    with torch.no_grad():
+        values = agent.critic(torch.cat([obs, next_obs])).reshape(2, T, N)
+    adv, ret = device_gae(
+        batch.rewards,
+        values[0],
+        values[1],
+        batch.terminated,
+        batch.episode_end,
+        cfg.gamma,
+        cfg.gae_lambda,
+    )
+    adv, ret = adv.reshape(-1), ret.reshape(-1)
+    actions = batch.actions.reshape(T * N, *batch.actions.shape[2:])
+    if not bool(torch.isfinite(obs.sum(dtype=torch.float64))):
+        raise NonFiniteError("non-finite observation in the batch: no update made")
+    if not (torch.isfinite(adv).all() and torch.isfinite(ret).all()):
+        raise NonFiniteError("non-finite advantages or returns: no update made")
+    if cfg.normalize_advantages and adv.numel() > 1:
+        adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+    clock.lap("batch_s")
+    step = trpo_step(agent.policy, obs, actions, adv, cfg, agent.generator)
+    clock.lap("policy_step_s")
+    value_loss = fit_critic(
+        agent.critic,
+        agent.critic_optimizer,
+        obs,
+        ret,
+        cfg.critic_epochs,
+        cfg.critic_minibatch,
+        agent.generator,
+    )
+    clock.lap("critic_s")
+    if agent.normalizer.enabled and not cfg.fixed_input_stats:
+        raw = batch.obs.reshape(T * N, -1).to(torch.float64)
+        moments = torch.stack([raw.mean(0), raw.var(0, unbiased=False)]).cpu().numpy()
+        merge_moments(agent.normalizer.stats[""], moments[0], moments[1], float(T * N))
+    agent.iteration += 1
+    agent.env_steps += T * N
+    clock.lap("batch_s")
+    return TRPOUpdateStats(step, value_loss, clock.times())
+
+
+def _place(agent: TRPOAgent, device: torch.device) -> None:
+    """Move the agent's networks and its critic optimiser's state to ``device``."""
+    agent.policy.to(device)
+    agent.critic.to(device)
+    for state in agent.critic_optimizer.state.values():
+        for key, value in state.items():
+            if isinstance(value, torch.Tensor) and key != "step":
+                state[key] = value.to(device)
+
+
+def iterate_on_device(
+    agent: TRPOAgent,
+    env: Any,
+    callback: Callable[[IterationStats, TRPOAgent], bool | None] | None = None,
+) -> TRPOAgent:
+    """:func:`learning.algorithms.loop.iterate` on a torch env (module docstring). The env
+    restarts with a reset seeded ``config.seed + agent.iteration``."""
+    cfg: TRPOConfig = agent.config
+    device = torch.device(env.device)
+    space = agent.action_space
+    bounds = None
+    if isinstance(space, spaces.Box):  # Gaussian actions: clipped on the way to the env
+        bounds = (float(np.min(space.low)), float(np.max(space.high)))
+    collector = DeviceRolloutCollector(env, cfg.gamma, cfg.seed + agent.iteration, bounds)
+    start = time.perf_counter()
+    while agent.iteration < cfg.iterations:
+        _place(agent, device)
+        t0 = time.perf_counter()
+        mean, std = _normaliser_tensors(agent, device)
+        agent.policy.eval()
+        batch = collector.collect(agent.policy, mean, std, cfg.obs_clip, cfg.steps_per_env)
+        t1 = time.perf_counter()
+        update = device_update(agent, batch)
+        n, ret_sum, len_sum = batch.episode_sums.tolist()  # the iteration's one read-back
+        t2 = time.perf_counter()
+        _place(agent, torch.device("cpu"))
+        stats = IterationStats(
+            iteration=agent.iteration,
+            env_steps=agent.env_steps,
+            episodes=int(n),
+            mean_return=ret_sum / n if n else float("nan"),
+            mean_length=len_sum / n if n else float("nan"),
+            update=update,
+            rollout_time_s=t1 - t0,
+            update_time_s=t2 - t1,
+            wall_time_s=t2 - start,
+        )
+        if callback is not None and callback(stats, agent):
+            break
+    _place(agent, torch.device("cpu"))
+    return agent
+
+
+def train_on_device(
+    config: TRPOConfig,
+    make_env: Callable[[int], Any],
+    *,
+    callback: Callable[[IterationStats, Any], bool | None] | None = None,
+    state: dict[str, Any] | None = None,
+    warm_start: dict[str, Any] | None = None,
+) -> TRPOAgent:
+    """:func:`learning.algorithms.loop.train` for TRPO on a torch env: ``make_env(num_envs)``
+    builds it (``single_observation_space``, ``single_action_space``, ``device``); ``state``
+    resumes a run, ``warm_start`` gives a new one its first policy and normaliser."""
+    if not isinstance(config, TRPOConfig):
+        raise ValueError(f"training on a torch device is for TRPO, not {type(config).__name__}")
+    env = make_env(config.num_envs)
+    agent = TRPOAgent(env.single_observation_space, env.single_action_space, config)
+    if agent.normalizer.fixed or (agent.normalizer.enabled and "" not in agent.normalizer.stats):
+        raise ValueError("training on a torch device takes running-normalised vector observations")
+    if state is not None:
+        agent.load_state_dict(state)
+    elif warm_start is not None:
+        agent.load_policy(warm_start)
+    return iterate_on_device(agent, env, callback)

@@ -1,0 +1,195 @@
+"""On-policy batches collected on a torch device: env, policy, buffers and GAE never leave it.
+
+The twin of :mod:`learning.algorithms.rollout` and :mod:`learning.algorithms.gae` for an env
+whose ``step`` takes and returns tensors on its device
+(:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv`: autoreset ``SAME_STEP``, the final
+observation of every boat in ``info["final_obs"]``). A step of
+:meth:`DeviceRolloutCollector.collect` normalises the observation with the normaliser's
+statistics (fixed within an iteration, copied to the device once), samples the policy with a
+generator on the device, steps the env, applies the study's fixed reward horizon
+(:func:`fixed_horizon`) and writes into preallocated tensors;
+nothing is read back to the host (tested: every way to read a tensor raises during a rollout).
+
+Shapes (T steps, N envs, F observation features):
+
+=================  ============  ============================================================
+field              shape         meaning
+=================  ============  ============================================================
+obs                (T, N, F)     raw s_t
+next_obs           (T, N, F)     raw s'_t: s_{t+1}, or the final observation where the
+                                 episode ended at t (so V(s'_t) needs no index lists)
+actions            (T, N[, A])   sampled actions (Box: before clipping)
+log_probs          (T, N)        log π_old(a_t | s_t)
+rewards            (T, N)        r_t after the fixed horizon (float32)
+terminated         (T, N)        absorbing end (goal, collision, left the area)
+truncated          (T, N)        time limit
+episode_sums       (3,)          episodes ended, their returns' sum, their lengths' sum
+=================  ============  ============================================================
+
+Every transition is valid (``SAME_STEP``: no reset-only steps).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import torch
+from torch import Tensor
+
+__all__ = ["DeviceBatch", "DeviceRolloutCollector", "device_gae", "fixed_horizon", "normalize"]
+
+
+def fixed_horizon(
+    gamma: float,
+    max_decisions: int,
+    decision_period_s: float,
+    reward: Tensor,
+    terminated: Tensor,
+    truncated: Tensor,
+    out_of_area: Tensor,
+    time_s: Tensor,
+) -> tuple[Tensor, Tensor, Tensor]:
+    """:func:`usvsim.task.horizon.apply_reward_horizon` with ``"fixed"``, on tensors (N,).
+
+    Leaving the area becomes a termination; a terminating step's reward r becomes
+    r · (1 + γ (1 − γ^m) / (1 − γ)), m the decisions left until the time limit. No branch on
+    a tensor's value (no host read)."""
+    left = out_of_area & truncated
+    terminated, truncated = terminated | left, truncated & ~left
+    decisions = torch.round(time_s / decision_period_s)
+    m = torch.clamp(max_decisions - decisions, min=0.0)
+    factor = 1.0 + gamma * (1.0 - torch.pow(gamma, m)) / (1.0 - gamma)
+    return torch.where(terminated, reward * factor, reward), terminated, truncated
+
+
+def normalize(x: Tensor, mean: Tensor | None, std: Tensor | None, clip: float) -> Tensor:
+    """:class:`learning.algorithms.normalization.ObservationNormalizer` of a vector part on
+    tensors: clip((x − μ) / sqrt(σ² + ε), ±clip) in float64, as float32; ``mean`` None: the
+    normaliser is disabled (x as float32)."""
+    if mean is None or std is None:
+        return x.to(torch.float32)
+    return torch.clamp((x.to(torch.float64) - mean) / std, -clip, clip).to(torch.float32)
+
+
+def device_gae(
+    rewards: Tensor,
+    values: Tensor,
+    next_values: Tensor,
+    terminated: Tensor,
+    episode_end: Tensor,
+    gamma: float,
+    lam: float,
+) -> tuple[Tensor, Tensor]:
+    """:func:`learning.algorithms.gae.gae` on tensors (T, N): advantages and λ-returns, float32,
+    float64 inside (Schulman et al. 2016, Eq. 16; terminated and truncated kept apart)."""
+    r, v, nv = (a.to(torch.float64) for a in (rewards, values, next_values))
+    delta = r + gamma * (~terminated).to(torch.float64) * nv - v
+    carry = gamma * lam * (~episode_end).to(torch.float64)
+    adv = torch.empty_like(delta)
+    running = torch.zeros_like(delta[0])
+    for t in range(delta.shape[0] - 1, -1, -1):  # over time, not over boats
+        running = delta[t] + carry[t] * running
+        adv[t] = running
+    return adv.to(torch.float32), (adv + v).to(torch.float32)
+
+
+@dataclass
+class DeviceBatch:
+    """T steps of N envs on the device (module table)."""
+
+    obs: Tensor
+    next_obs: Tensor
+    actions: Tensor
+    log_probs: Tensor
+    rewards: Tensor
+    terminated: Tensor
+    truncated: Tensor
+    episode_sums: Tensor
+
+    @property
+    def episode_end(self) -> Tensor:
+        return self.terminated | self.truncated
+
+
+class DeviceRolloutCollector:
+    """Steps a torch vector env with a policy on the same device; episodes run across batches.
+
+    ``env``: ``reset(seed=)`` and ``step(actions)`` on tensors (``SAME_STEP``, ``final_obs``,
+    ``out_of_area`` and ``time_s`` in ``info``), ``scenario`` (``max_decisions``,
+    ``decision_period_s``), ``device``, ``num_envs``. ``gamma``: the trainer's discount, for
+    the fixed horizon. ``action_bounds`` (low, high) clip Box actions on the way to the env.
+    """
+
+    def __init__(
+        self,
+        env: Any,
+        gamma: float,
+        seed: int,
+        action_bounds: tuple[float, float] | None = None,
+    ) -> None:
+        self.env, self.gamma, self.n = env, gamma, env.num_envs
+        self.device = torch.device(env.device)
+        self.bounds = action_bounds
+        self.generator = torch.Generator(device=self.device).manual_seed(seed + 2)
+        obs, _ = env.reset(seed=seed)
+        if isinstance(obs, dict):
+            raise ValueError("the device rollout takes vector observations (positional) only")
+        self.obs = obs
+        self._ep_return = torch.zeros(self.n, dtype=torch.float64, device=self.device)
+        self._ep_length = torch.zeros(self.n, dtype=torch.float64, device=self.device)
+
+    @torch.no_grad()
+    def collect(
+        self,
+        policy: torch.nn.Module,
+        mean: Tensor | None,
+        std: Tensor | None,
+        clip: float,
+        n_steps: int,
+    ) -> DeviceBatch:
+        """Run ``n_steps`` steps of all N envs with ``policy`` on observations normalised by
+        ``mean``/``std`` (:func:`normalize`; tensors on the device or None); T·N transitions."""
+        T, N, dev = n_steps, self.n, self.device
+        sc = self.env.scenario
+        obs_buf = torch.empty((T, *self.obs.shape), dtype=self.obs.dtype, device=dev)
+        next_buf = torch.empty_like(obs_buf)
+        log_probs = torch.empty((T, N), dtype=torch.float32, device=dev)
+        rewards = torch.empty((T, N), dtype=torch.float32, device=dev)
+        terminated = torch.empty((T, N), dtype=torch.bool, device=dev)
+        truncated = torch.empty((T, N), dtype=torch.bool, device=dev)
+        sums = torch.zeros(3, dtype=torch.float64, device=dev)
+        actions_buf: Tensor | None = None
+        for t in range(T):
+            obs_buf[t] = self.obs
+            dist = policy(normalize(self.obs, mean, std, clip))
+            actions = dist.sample(self.generator)
+            if actions_buf is None:
+                actions_buf = torch.empty((T, *actions.shape), dtype=actions.dtype, device=dev)
+            actions_buf[t], log_probs[t] = actions, dist.log_prob(actions)
+            env_actions = actions if self.bounds is None else actions.clamp(*self.bounds)
+            obs, reward, term, trunc, info = self.env.step(env_actions)
+            reward, term, trunc = fixed_horizon(
+                self.gamma,
+                sc.max_decisions,
+                sc.decision_period_s,
+                reward,
+                term,
+                trunc,
+                info["out_of_area"],
+                info["time_s"],
+            )
+            done = term | trunc
+            rewards[t], terminated[t], truncated[t] = reward, term, trunc
+            next_buf[t] = torch.where(done[:, None], info["final_obs"], obs)
+            self._ep_return += reward
+            self._ep_length += 1.0
+            d = done.to(torch.float64)
+            sums += torch.stack([d.sum(), (d * self._ep_return).sum(), (d * self._ep_length).sum()])
+            self._ep_return *= 1.0 - d
+            self._ep_length *= 1.0 - d
+            self.obs = obs
+        assert actions_buf is not None
+        return DeviceBatch(
+            obs_buf, next_buf, actions_buf, log_probs, rewards, terminated, truncated, sums
+        )

@@ -1,0 +1,74 @@
+"""``usvsim train --device``: torch-cpu trains a positional setup with the device loop and
+writes a cpu run's files; other setups and a missing GPU are one line, exit 2."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+import torch
+
+from learning.cli.train import TrainArgs, command_of, run
+from learning.experiments.checkpoint import load_checkpoint
+
+
+def _args(out: Path, **kw: object) -> TrainArgs:
+    base: dict[str, object] = dict(
+        setup="rl-categorical-positional",
+        iterations=2,
+        validate_every=1,
+        n_envs=8,
+        out=str(out),
+        quiet=True,
+        threads=1,
+        device="torch-cpu",
+    )
+    base.update(kw)
+    return TrainArgs(**base)  # type: ignore[arg-type]
+
+
+def test_torch_cpu_run_writes_the_files_of_a_cpu_run(tmp_path: Path) -> None:
+    assert run(_args(tmp_path)) == 0
+    with (tmp_path / "log.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["iteration"]) for r in rows] == [1, 2]
+    assert [int(r["env_steps"]) for r in rows] == [8 * 64, 2 * 8 * 64]
+    assert all(r["val_successes"] != "" for r in rows)  # CPU validation on the 15 episodes
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["iterations"] == 2 and "--device torch-cpu" in summary["command"]
+    ckpt = load_checkpoint(tmp_path / "best.pt")
+    weights = ckpt.agent["policy"]
+    assert all(t.device == torch.device("cpu") for t in weights.values())
+    # resumable: one more iteration from latest.pt
+    assert run(_args(tmp_path, iterations=3, resume=True)) == 0
+    assert load_checkpoint(tmp_path / "latest.pt").agent["iteration"] == 3
+
+
+@pytest.mark.parametrize(
+    ("setup", "device", "message"),
+    [
+        ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional setups"),
+        ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional setups"),
+        ("il-gaussian-positional", "torch-cpu", "is for the TRPO positional setups"),
+        ("rl-gaussian-positional", "gpu", "--device must be one of cpu, torch-cpu, cuda"),
+    ],
+)
+def test_a_device_it_cannot_use_is_one_line(
+    tmp_path: Path, setup: str, device: str, message: str
+) -> None:
+    with pytest.raises(SystemExit, match=message):
+        run(_args(tmp_path, setup=setup, device=device))
+    assert not (tmp_path / "log.csv").exists()
+
+
+@pytest.mark.skipif(torch.cuda.is_available(), reason="a GPU is here")
+def test_cuda_without_a_gpu_is_one_line(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match="torch sees no CUDA GPU"):
+        run(_args(tmp_path, device="cuda"))
+
+
+def test_the_default_device_is_cpu_and_not_in_the_command(tmp_path: Path) -> None:
+    args = _args(tmp_path, device="cpu")
+    assert "--device" not in command_of(args)
