@@ -18,12 +18,9 @@ boat (each boat its own weather, as per-boat inputs of the compiled kernel):
    the cost of evaluating them at every RK4 stage);
 5. the gust g (first-order Gauss–Markov, :mod:`usvsim.vessel.weather.wind`) and the wave motion
    state ξ (:func:`usvsim.vessel.weather.waves.wave_motion_discrete`) advanced exactly, driven by
-   three innovations per boat and step, √12 (U − ½) of uniforms U drawn from the plant's seeded
-   generator: zero mean and unit variance, so the processes' spectra and variances are those of
-   Gaussian driving noise exactly (they depend only on the second moments); their outputs
-   average over ≥ 100 innovations (T_g / Δt; 1 / (λ ω₀ Δt)), so they are Gaussian to the
-   central limit theorem. Uniforms cost a fifth of normals to draw (1.4 vs 6.4 ms for
-   1024 × 100 × 3 here), which the kernel's throughput needs.
+   three innovations per boat and step, √12 (U − ½) of seeded uniforms U: unit variance, so the
+   spectra are those of Gaussian noise exactly; the outputs average ≥ 100 innovations, so they
+   are Gaussian to the central limit theorem. Uniforms cost a fifth of normals to draw.
 
 No wind, a calm sea and the wave filter off give the plant and autopilot states of
 :class:`usvsim.vessel.plant.Plant` bit for bit (tested): every weather term enters as an exact
@@ -69,6 +66,7 @@ from usvsim.vessel.weather.observer import (
     observer_predict,
     wrap_difference,
 )
+from usvsim.vessel.weather.turning import steady_turn_damping
 from usvsim.vessel.weather.waves import (
     HS_MAX_M,
     SeaState,
@@ -138,11 +136,13 @@ def build_weather_step(
     yaw_model: tuple[float, float],
     hull: WeatherHull = USV105_HULL,
     innovations: Literal["uniform", "normal"] = "uniform",
+    turn_damping: float = 0.0,
 ) -> ca.Function:
     """``step(s[21], w[30], g[NG], e[3]) -> s_next[21]`` (module docstring); ``e`` three
     uniforms in [0, 1) (gust, wave motion ×2), or standard normals with ``innovations``
     "normal" (a caller whose per-boat streams draw normals); ``yaw_model`` (m kg m²,
-    d N m s/rad) the autopilot's design model, used by the observer."""
+    d N m s/rad) the autopilot's design model and ``turn_damping`` d₂ (N m s²/rad²) the
+    observer's (:func:`usvsim.vessel.weather.observer.observer_predict`)."""
     f = build_dynamics(vessel, weather=True)
     s = ca.SX.sym("s", NS + NWS)
     w = ca.SX.sym("w", NWI)
@@ -176,7 +176,7 @@ def build_weather_step(
     sat = saturate_command(act, a_cmd)
     applied = ca.vertcat(*(x[6 + i] if act.lag_s[i] > 0 else sat[i] for i in range(2)))
     tau_n = generalized_forces(act, applied, x[3])[2]
-    prior_next = observer_predict(z, tau_n, phi, m_yaw, d_yaw, dt_s)
+    prior_next = observer_predict(z, tau_n, phi, m_yaw, d_yaw, dt_s, turn_damping)
     # 4. vessel in current, wind and wave drift
     wind = ca.fmax(w[_I["wind_mean"]] + s[_S["gust"]], 0.0)
     tau_env = environment_loads(
@@ -391,6 +391,8 @@ class WeatherPlant:
     innovations : "uniform" or "normal"
         What drives the gusts and wave motion (module docstring): uniforms (cheap to draw) or
         standard normals (for callers whose per-boat streams draw normals).
+    turn_damping : float, optional
+        The observer's d₂ (N m s²/rad²); default fitted to the hull's steady turns.
     """
 
     def __init__(
@@ -402,6 +404,7 @@ class WeatherPlant:
         hull: WeatherHull = USV105_HULL,
         observer: ObserverNoise | None = None,
         innovations: Literal["uniform", "normal"] = "uniform",
+        turn_damping: float | None = None,
     ) -> None:
         self.plant = plant
         self.gusts = gusts or GustParams()
@@ -410,9 +413,11 @@ class WeatherPlant:
         self.yaw_model = (float(plant.design.nomoto.m), float(plant.design.nomoto.d))
         self.rng = np.random.default_rng(seed)
         self.innovations = innovations
-        self.step_function = build_weather_step(
-            plant.vessel, plant.kind, plant.dt_s, self.yaw_model, hull, innovations
+        self.turn_damping = (  # N m s²/rad², the observer's d₂
+            steady_turn_damping(plant) if turn_damping is None else float(turn_damping)
         )
+        step = (plant.vessel, plant.kind, plant.dt_s, self.yaw_model, hull, innovations)
+        self.step_function = build_weather_step(*step, self.turn_damping)
         self._stepper = BatchStepper(self.step_function, backend=plant.kernel)  # type: ignore[arg-type]
 
     @property
@@ -432,9 +437,8 @@ class WeatherPlant:
         """Boats as :meth:`Plant.initial_state`, their weather from ``conditions``; gusts and wave
         motion start in their stationary distributions (no transient).
 
-        ``rng`` draws those starts (default the plant's generator; anything with NumPy's
-        ``standard_normal``, e.g. per-episode streams); ``wave_filter`` turns these boats' wave
-        filter on or off (default the plant's ``wave_filter``; on uses the plant's tuning)."""
+        ``rng`` (anything with ``standard_normal``) draws them instead of the plant's generator;
+        ``wave_filter`` sets these boats' filter instead of the plant's setting."""
         calm = self.plant.initial_state(eta, speed_mps)
         n = calm.n_boats
         conditions.check(n)

@@ -1,6 +1,7 @@
-"""The wave filter's steady-state gains (usvsim.vessel.weather.observer, issue 38): the batched
-Riccati doubling equals scipy's Schur solution boat by boat, and WeatherPlant.initial_state
-takes the generator and the filter switch as arguments."""
+"""The wave filter's steady-state gains and yaw model (usvsim.vessel.weather.observer, issue 38):
+the batched Riccati doubling equals scipy's Schur solution boat by boat; WeatherPlant.initial_state
+takes the generator and the filter switch as arguments; the turn damping keeps the filter on the
+heading in turns."""
 
 from __future__ import annotations
 
@@ -9,12 +10,14 @@ import math
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
-from usvsim.vessel.plant import Plant
+from usvsim.vessel.plant import NS, Plant
 from usvsim.vessel.weather.observer import ObserverNoise, observer_gains, solve_filter_riccati
+from usvsim.vessel.weather.turning import steady_turn_damping
 from usvsim.vessel.weather.waves import sea_state_from_code, wave_motion_discrete
 from usvsim.vessel.weather.wind import GustParams
 from usvsim.vessel.weather_plant import (
     WEATHER_INPUTS,
+    WEATHER_STATES,
     SeaConditions,
     WeatherPlant,
     weather_inputs,
@@ -99,3 +102,33 @@ def test_initial_state_takes_the_generator_and_the_filter_switch() -> None:
     assert np.all(off.inputs[:, col:] == 0.0)  # the switch and the ten gains
     assert np.all(own.inputs[:, col] == 1.0) and np.all(own.inputs[:, col + 1 :] != 0.0)
     assert lent.wave_filter is not None
+
+
+def test_steady_turn_damping_of_usv105_fits_its_turns() -> None:
+    """usv105's steady turns (heading reference 0.5-20° ahead): d₂ = 2.0e5 N m s²/rad²
+    measured; asserted within the hand estimate from two steady turns, (τ_N − d r) / r|r| =
+    2.25e5 at 5.8 °/s and 2.0e5 at 14.6 °/s, ± 15 %."""
+    d2 = steady_turn_damping(Plant("default"))
+    assert 0.85 * 2.0e5 < d2 < 1.15 * 2.25e5
+
+
+def test_wave_filter_follows_turns_with_the_turn_damping() -> None:
+    """Sea state 4, 16 boats turning with the heading reference 3-20° ahead for 60 s: the
+    filter's low-frequency heading error RMS over the last 40 s, measured 0.79° with the
+    fitted d₂ against 8.56° with the linear model alone (which reads the turn as wave yaw:
+    estimated wave yaw RMS 8.6° against 1.2°). Asserted: below 1.5° and a fifth of it."""
+    errors = []
+    for d2 in (None, 0.0):
+        weather = WeatherPlant(Plant("default"), seed=5, turn_damping=d2)
+        cond = SeaConditions.uniform(16, sea=sea_state_from_code(4, 0.75 * math.pi))
+        state = weather.initial_state(np.zeros((16, 3)), cond)
+        ahead = np.radians(np.linspace(3.0, 20.0, 16))
+        err = []
+        for k in range(60):
+            state, traj = weather.step(state, state.x[:, 2] + ahead, n_steps=10)
+            if k >= 20:
+                psi_hat = traj[:, :, NS + WEATHER_STATES.index("obs_psi")]
+                err.append(np.angle(np.exp(1j * (psi_hat - traj[:, :, 2]))))
+        errors.append(math.degrees(float(np.sqrt(np.mean(np.concatenate(err) ** 2)))))
+    assert errors[0] < 1.5
+    assert errors[0] < 0.2 * errors[1]

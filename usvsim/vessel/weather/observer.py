@@ -7,9 +7,11 @@ Fossen (2021), *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd 
 * wave yaw ψ_w = p₁ with the wave motion model of :mod:`usvsim.vessel.weather.waves` scaled to
   heading (p = c ξ, c = c_ψ k₀ ω₀ sin 2(β − ψ₀) the yaw per unit ξ₀ at the boat's initial
   heading): p⁺ = Φ p, process noise c² Q_d;
-* low-frequency yaw, the design model of the autopilot m ṙ + d r = τ_N + b (Euler over Δt):
-  ψ⁺ = ψ + Δt r, r⁺ = r + Δt (τ_N + b − d r) / m, b⁺ = b (a bias absorbing wind, drift and model
-  error; a random walk);
+* low-frequency yaw, the design model of the autopilot m ṙ + d r = τ_N + b (Euler over Δt)
+  with Norrbin's quadratic term d₂ r|r| fitted to the hull's steady turns
+  (:mod:`usvsim.vessel.weather.turning`; without it the filter read turns as wave yaw):
+  ψ⁺ = ψ + Δt r, r⁺ = r + Δt (τ_N + b − d r − d₂ r|r|) / m, b⁺ = b (a bias absorbing wind,
+  drift and model error; a random walk);
 * measurements: the compass y_ψ = ψ + p₁ + v_ψ and the rate gyro y_r = r + p₂ + v_r (p₂ = ṗ₁
   is the wave yaw rate, as the plant's sensed rate).
 
@@ -30,6 +32,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
@@ -163,14 +166,24 @@ def observer_correct(
 
 
 def observer_predict(
-    z: list[Any], tau_n: Any, phi: list[Any], m: float, d: float, dt_s: float
+    z: list[Any],
+    tau_n: Any,
+    phi: list[Any],
+    m: float,
+    d: float,
+    dt_s: float,
+    turn_damping: float = 0.0,
 ) -> list[Any]:
     """The next prior (5) from the corrected state ``z`` with the yaw moment ``tau_n`` (N m)
-    applied over the step (CasADi); ``phi`` is Φ row-major (4)."""
+    applied over the step (CasADi); ``phi`` is Φ row-major (4). ``turn_damping`` d₂
+    (N m s²/rad²) adds Norrbin's d₂ r|r| to the yaw model
+    (:func:`usvsim.vessel.weather.turning.steady_turn_damping`): zero slope at r = 0, so the
+    gains designed about the straight course stay valid."""
+    damping = d * z[3] + turn_damping * z[3] * ca.fabs(z[3]) if turn_damping else d * z[3]
     return [
         phi[0] * z[0] + phi[1] * z[1],
         phi[2] * z[0] + phi[3] * z[1],
         wrap_difference(z[2] + dt_s * z[3]),
-        z[3] + dt_s / m * (tau_n + z[4] - d * z[3]),
+        z[3] + dt_s / m * (tau_n + z[4] - damping),
         z[4],
     ]
