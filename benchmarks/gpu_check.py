@@ -452,6 +452,29 @@ def _env_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
     return text
 
 
+def _train_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
+    """The ``train-bench`` stage's lines (benchmarks/gpu_check_train.py)."""
+    rows = grouped.get("train_bench", [])
+    if not rows:
+        return []
+    text = ["", "TRPO training on the device (rl-categorical-positional's network, 64 decisions):"]
+    for r in rows:
+        if "error" in r:
+            text.append(f"  N={r.get('n', '-')}: {r['error']}")
+            continue
+        text.append(
+            f"  N={r['n']:>8,} {r['dtype']}: {r['train_env_steps_per_s']:.3e} env steps/s "
+            f"training ({r['iteration_s']:.3g} s per iteration, update {r['update_share']:.0%}), "
+            f"rollout alone {r['rollout_env_steps_per_s']:.3e}"
+            + (
+                f"; host syncs in a rollout step: {r['rollout_syncs']}"
+                if r["rollout_syncs"]
+                else ""
+            )
+        )
+    return text
+
+
 def stage_report() -> None:
     """results.jsonl -> results.json (every line, grouped) and table.txt."""
     out = _out_dir()
@@ -497,9 +520,12 @@ def stage_report() -> None:
     for b in bench:
         if "error" in b:
             text.append(f"  {b['mode']} {b['dtype']} N={b['n']:,}: {b['error']}")
-    text += _env_table(grouped)
+    text += _env_table(grouped) + _train_table(grouped)
     best_env = max((b.get("env_steps_per_s", 0) for b in grouped.get("env_bench", [])), default=0)
     summary["best_env_steps_per_s"] = best_env
+    summary["best_train_env_steps_per_s"] = max(
+        (b.get("train_env_steps_per_s", 0) for b in grouped.get("train_bench", [])), default=0
+    )
     (out / "results.json").write_text(json.dumps({"summary": summary, **grouped}, indent=2))
     for s in grouped.get("stage_end", []):
         if s.get("status") != "ok":

@@ -39,6 +39,8 @@ from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats, trp
 
 __all__ = ["device_update", "iterate_on_device", "merge_moments", "train_on_device"]
 
+VALUE_CHUNK = 1 << 20  # rows per critic pass for V(s_t), V(s'_t)
+
 
 def merge_moments(stats: RunningMeanStd, mean: np.ndarray, var: np.ndarray, n: float) -> None:
     """Merge a batch's mean, population variance and count into ``stats`` (Chan, Golub and
@@ -80,8 +82,10 @@ def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
     mean, std = _normaliser_tensors(agent, batch.obs.device)
     obs = normalize_rows(batch.obs.reshape(T * N, -1), mean, std, cfg.obs_clip)
     next_obs = normalize_rows(batch.next_obs.reshape(T * N, -1), mean, std, cfg.obs_clip)
-    with torch.no_grad():
-        values = agent.critic(torch.cat([obs, next_obs])).reshape(2, T, N)
+    with torch.no_grad():  # in chunks: a GPU batch may hold millions of rows
+        both = torch.cat([obs, next_obs])
+        chunks = [agent.critic(both[i : i + VALUE_CHUNK]) for i in range(0, len(both), VALUE_CHUNK)]
+        values = torch.cat(chunks).reshape(2, T, N)
     adv, ret = device_gae(
         batch.rewards,
         values[0],

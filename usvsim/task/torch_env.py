@@ -221,10 +221,14 @@ class TorchPoleAvoidanceEnv:
 
     @property
     def single_action_space(self) -> Any:
-        """The CPU env's single-boat action space (a gymnasium space: needs gymnasium)."""
-        from usvsim.task.batch import action_space
+        """The CPU env's single-boat action space (a gymnasium space: needs gymnasium; built
+        here, not by ``usvsim.task.batch.action_space``, whose module needs CasADi; tested
+        equal)."""
+        from gymnasium import spaces
 
-        return action_space(self.action_kind)
+        if self.action_kind == "categorical":
+            return spaces.Discrete(N_CATEGORIES)
+        return spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
 
     @property
     def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:

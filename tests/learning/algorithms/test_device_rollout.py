@@ -3,6 +3,9 @@ never reads a tensor back to the host."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 import torch
@@ -119,3 +122,29 @@ def test_a_device_update_stays_in_the_trust_region(action: str) -> None:
     assert stats.line_search_accepted and 0.0 < stats.kl <= 0.01
     assert agent.iteration == 1 and agent.env_steps == 320
     assert agent.normalizer.stats[""].count == 320
+
+
+@pytest.mark.parametrize("action", ["categorical", "gaussian"])
+def test_the_torch_envs_action_space_is_the_cpu_envs(action: str) -> None:
+    from usvsim.task.batch import action_space
+
+    env = TorchPoleAvoidanceEnv(2, action=action)  # type: ignore[arg-type]
+    assert env.single_action_space == action_space(action)  # type: ignore[arg-type]
+
+
+def test_device_training_runs_without_casadi_scipy_or_filterpy() -> None:
+    """What a GPU machine has (gpu_check.sh's train-bench): torch, NumPy and gymnasium."""
+    code = (
+        "import sys\n"
+        "sys.modules.update(casadi=None, scipy=None, control=None, filterpy=None)\n"
+        "from learning.algorithms.device_loop import train_on_device\n"
+        "from learning.algorithms.trpo import TRPOConfig\n"
+        "from usvsim.task.torch_env import TorchPoleAvoidanceEnv\n"
+        "cfg = TRPOConfig(iterations=1, num_envs=4, steps_per_env=8)\n"
+        "agent = train_on_device(cfg, lambda n: TorchPoleAvoidanceEnv(n, action='categorical'))\n"
+        "print(agent.iteration, agent.env_steps)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    ).stdout.split()
+    assert out == ["1", "32"]
