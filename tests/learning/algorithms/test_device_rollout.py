@@ -148,3 +148,22 @@ def test_device_training_runs_without_casadi_scipy_or_filterpy() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     ).stdout.split()
     assert out == ["1", "32"]
+
+
+def test_same_seed_same_device_training_on_the_cpu() -> None:
+    from learning.algorithms.device_loop import train_on_device
+
+    def run(seed: int) -> tuple[list[tuple[float, float, float]], torch.Tensor]:
+        curve: list[tuple[float, float, float]] = []
+        cfg = TRPOConfig(seed=seed, iterations=2, num_envs=8, steps_per_env=16)
+        agent = train_on_device(
+            cfg,
+            lambda n: TorchPoleAvoidanceEnv(n, action="categorical"),
+            callback=lambda s, a: curve.append((s.mean_return, s.kl, s.update.value_loss)),
+        )
+        return curve, torch.cat([p.detach().flatten() for p in agent.policy.parameters()])
+
+    (curve_a, weights_a), (curve_b, weights_b) = run(0), run(0)
+    np.testing.assert_array_equal(np.array(curve_a), np.array(curve_b))  # NaN: no episode ended
+    assert torch.equal(weights_a, weights_b)
+    assert not torch.equal(run(1)[1], weights_a)
