@@ -33,32 +33,12 @@ from learning.algorithms.base import Stopwatch
 from learning.algorithms.device_rollout import DeviceBatch, DeviceRolloutCollector, device_gae
 from learning.algorithms.device_rollout import normalize as normalize_rows
 from learning.algorithms.loop import IterationStats
-from learning.algorithms.normalization import RunningMeanStd
 from learning.algorithms.rollout import NonFiniteError
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats, trpo_step
 
-__all__ = ["device_update", "iterate_on_device", "merge_moments", "train_on_device"]
+__all__ = ["device_update", "iterate_on_device", "train_on_device"]
 
 VALUE_CHUNK = 1 << 20  # rows per critic pass for V(s_t), V(s'_t)
-
-
-def merge_moments(stats: RunningMeanStd, mean: np.ndarray, var: np.ndarray, n: float) -> None:
-    """Merge a batch's mean, population variance and count into ``stats`` (Chan, Golub and
-    LeVeque 1979: the merge of :meth:`RunningMeanStd.update`, given the moments instead of
-    the rows, so that only they leave the device)."""
-    if not (np.isfinite(mean).all() and np.isfinite(var).all()):
-        raise ValueError("non-finite observation: refusing to update the running statistics")
-    if n == 0:
-        return
-    if stats.count == 0:
-        stats.mean, stats.var, stats.count = mean.copy(), var.copy(), n
-        return
-    total = stats.count + n
-    delta = mean - stats.mean
-    m2 = stats.var * stats.count + var * n + delta**2 * stats.count * n / total
-    stats.mean = stats.mean + delta * n / total
-    stats.var = m2 / total
-    stats.count = total
 
 
 def _normaliser_tensors(
@@ -119,7 +99,7 @@ def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
     if agent.normalizer.enabled and not cfg.fixed_input_stats:
         raw = batch.obs.reshape(T * N, -1).to(torch.float64)
         moments = torch.stack([raw.mean(0), raw.var(0, unbiased=False)]).cpu().numpy()
-        merge_moments(agent.normalizer.stats[""], moments[0], moments[1], float(T * N))
+        agent.normalizer.stats[""].merge(moments[0], moments[1], float(T * N))
     agent.iteration += 1
     agent.env_steps += T * N
     clock.lap("batch_s")

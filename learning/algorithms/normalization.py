@@ -67,13 +67,23 @@ class RunningMeanStd:
         n = float(x.shape[0])
         if n == 0:
             return
-        b_mean, b_var = x.mean(axis=0), x.var(axis=0)
+        self.merge(x.mean(axis=0), x.var(axis=0), n)
+
+    def merge(self, mean: NDArray[Any], var: NDArray[Any], n: float) -> None:
+        """Merge a batch given by its mean, population variance and count (Chan, Golub and
+        LeVeque 1979): what :meth:`update` does with the rows, for callers that hold only the
+        moments (a batch on a torch device: only they leave it)."""
+        mean, var = np.asarray(mean, dtype=np.float64), np.asarray(var, dtype=np.float64)
+        if not (np.isfinite(mean).all() and np.isfinite(var).all()):
+            raise ValueError("non-finite observation: refusing to update the running statistics")
+        if n == 0:
+            return
         if self.count == 0:
-            self.mean, self.var, self.count = b_mean, b_var, n
+            self.mean, self.var, self.count = mean.copy(), var.copy(), float(n)
             return
         total = self.count + n
-        delta = b_mean - self.mean
-        m2 = self.var * self.count + b_var * n + delta**2 * self.count * n / total
+        delta = mean - self.mean
+        m2 = self.var * self.count + var * n + delta**2 * self.count * n / total
         self.mean = self.mean + delta * n / total
         self.var = m2 / total
         self.count = total

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from learning.algorithms.device_loop import device_update, merge_moments
+from learning.algorithms.device_loop import device_update
 from learning.algorithms.device_rollout import (
     DeviceRolloutCollector,
     device_gae,
@@ -66,7 +66,7 @@ def test_merged_moments_equal_the_running_statistics() -> None:
     for size in (7, 300, 1):
         x = rng.normal(3.0, 2.0, (size, 4))
         a.update(x)
-        merge_moments(b, x.mean(0), x.var(0), float(size))
+        b.merge(x.mean(0), x.var(0), float(size))
     np.testing.assert_allclose(b.mean, a.mean, rtol=1e-13)
     np.testing.assert_allclose(b.var, a.var, rtol=1e-13)
     assert b.count == a.count == 308
