@@ -7,6 +7,10 @@ results to ``$OUT/results.jsonl`` as they come (one JSON object per line), so a 
 out of time keeps what it measured. ``report`` turns the lines into ``results.json`` and
 ``table.txt``.
 
+Why this module is long: it runs alone on a bare GPU machine (torch and NumPy, no install), so
+each stage's setup, its measurement and the report that reads every stage's lines live in one
+file that is copied and run as it is.
+
 Stages::
 
     python benchmarks/gpu_check.py env
