@@ -46,6 +46,12 @@ def provenance(name: str, data: dict[str, Any]) -> str:
         line += " The run was interrupted: the file holds what it finished."
     if data.get("skipped"):
         line += f" Skipped (unreadable): {_names(list(data['skipped']))}."
+    for run in data.get("merged", []):  # benchmarks/stress_merge.py: helmsmen added later
+        line += (
+            f" Added later from a run of {_names(run['run_helmsmen'])} "
+            f"({run['wall_s'] / 60:.0f} min, `benchmarks/stress_merge.py`): "
+            f"{_names(run['helmsmen'])}."
+        )
     if missing:
         line += f" Not in it: {_names(missing)} (the command above adds them)."
     return line
@@ -107,6 +113,46 @@ def stress_table(stress: dict[str, Any]) -> str:
                 cells.append(_pct(r) + (f" ({r['collisions']})" if r["collisions"] else ""))
         lines.append(f"| {s} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def seeds_section(stress: dict[str, Any], weather: dict[str, Any] | None = None) -> str:
+    """Per recommended setup with across-seed figures (``usvsim/models/seeds/``,
+    :mod:`usvsim.evaluation.seed_stats`): each set's IQM over seeds [95 % CI] and the seeds'
+    own figures beside the shipped file's (``stress`` and the weather sets' ``weather`` JSON);
+    empty where no setup has them."""
+    from usvsim.evaluation.model_cards import load_cards
+    from usvsim.evaluation.seed_stats import load_seed_tables
+
+    tables, cards = load_seed_tables(), load_cards()
+    rows = stress["rows"] + (weather["rows"] if weather else [])
+    parts = []
+    for setup, t in tables.items():
+        shipped = [n for n, c in cards.items() if c.setup == setup]
+        name = shipped[0] if shipped else None
+        own = {r["episode_set"]: r["success_rate"] for r in rows if r["helmsman"] == name}
+        seeds = " / ".join(str(s) for s in t.seeds)
+        lines = [
+            f"### `{setup}`",
+            "",
+            f"Shipped file `{name}`; {t.label} on the {t.split} split "
+            f"({t.episodes_per_set} episodes per set). Seed rule: {t.rule}; it picks seed "
+            f"{t.picked_seed}. Written by (the `--provenance` says how the seeds were trained):",
+            "",
+            f"```bash\n{t.command}\n```",
+            "",
+            f"| set | `{name}` (shipped) | {t.label} | seeds {seeds} |",
+            "|---|---|---|---|",
+        ]
+        for f in t.sets:
+            mine = f"{100 * own[f.name]:.0f}" if f.name in own else "–"
+            each = " / ".join(f"{100 * v:.0f}" for v in f.per_seed)
+            lines.append(f"| {f.name} | {mine} | {f.cell()} | {each} |")
+        original = [own[f.name] for f in t.sets if f.name in own and f.name in stress["sets"]]
+        mine = f"{100 * sum(original) / len(original):.1f}" if original else "–"
+        each = " / ".join(f"{100 * v:.1f}" for v in t.original.per_seed)
+        lines.append(f"| mean of the 22 original sets | {mine} | {t.original.cell()} | {each} |")
+        parts.append("\n".join(lines))
+    return "\n\n".join(parts)
 
 
 def bench_table(bench: dict[str, Any]) -> str:
@@ -175,6 +221,16 @@ Collisions in brackets where any.
 {stress_table(stress)}
 
 ![Stress-suite heat map and one episode](assets/readme-figure.png)
+
+### Across seeds
+
+Recommended setups trained with several seeds (issue 37): per set, the interquartile mean over
+seeds of each seed's `best.pt` with rliable's 95 % stratified-bootstrap interval, beside the
+shipped file's own figure (from `docs/data/stress.json` and `docs/data/stress-weather.json`).
+`usvsim bench --suite stress` and `usvsim models` show the same columns; setups not listed have
+one seed.
+
+{seeds_section(stress, load("stress-weather"))}
 """
 
 

@@ -32,7 +32,6 @@ from __future__ import annotations
 import itertools
 import json
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +45,7 @@ from learning.experiments.setups import SETUPS
 from learning.experiments.sweep import OBJECTIVE, SweepSpec, trial_metrics, validation_curve
 from usvsim.common.fileio import atomic_savefig, atomic_write_text, json_safe
 from usvsim.common.splits import selection_mode
+from usvsim.evaluation.seed_stats import bootstrap_intervals, iqm
 
 __all__ = [
     "TrialRecord",
@@ -60,8 +60,8 @@ __all__ = [
 ]
 
 # resamples of the stratified bootstrap: rliable's default is 50 000, but arch's bootstrap costs
-# ~1 ms per resample on a loaded 2-core machine (measured: a 4-setup report took 3.6 min)
-BOOTSTRAP_REPS = 10_000  # for the IQM and P(X > Y) intervals
+# ~1 ms per resample on a loaded 2-core machine (measured: a 4-setup report took 3.6 min); the
+# IQM and P(X > Y) intervals use usvsim.evaluation.seed_stats.BOOTSTRAP_REPS (10 000), seeded
 CURVE_REPS = 2_000  # per point of the sample-efficiency curves
 CURVE_POINTS = 60
 PROFILE_REPS = 2_000  # performance-profile intervals (rliable's default)
@@ -125,15 +125,6 @@ def load_trials(root: Path) -> list[TrialRecord]:
     return out
 
 
-def iqm(values: Sequence[float] | np.ndarray) -> float:
-    """Interquartile mean: the mean after cutting ``int(0.25 n)`` values from each end, as
-    rliable's ``aggregate_iqm`` (``scipy.stats.trim_mean(x, 0.25)``) without its per-call
-    overhead (the bootstrap calls it once per resample)."""
-    x = np.sort(np.asarray(values, dtype=float).ravel())
-    cut = int(0.25 * x.size)
-    return float(np.mean(x[cut : x.size - cut]))
-
-
 def probability_of_improvement(x: np.ndarray, y: np.ndarray) -> float:
     """P(X > Y) + ½ P(X = Y) over all pairs of runs, the Mann–Whitney U statistic over
     ``n_x n_y`` (Agarwal et al. 2021 §4.4); rliable's ``probability_of_improvement`` for one task
@@ -168,29 +159,6 @@ def choose_shipped(trials: Sequence[TrialRecord], rule: str) -> TrialRecord | No
         done, key=lambda t: (t.metrics["val_best_successes"], t.metrics[OBJECTIVE], t.seed)
     )
     return ranked[(len(ranked) - 1) // 2]
-
-
-def bootstrap_intervals(
-    score_dict: dict[str, Any], func: Any, reps: int = BOOTSTRAP_REPS
-) -> tuple[dict[str, Any], dict[str, Any]]:
-    """rliable's stratified-bootstrap point estimates and 95 % percentile intervals, seeded.
-
-    rliable's ``StratifiedBootstrap.update_indices`` draws from NumPy's *global* generator (its
-    ``random_state`` only reaches arch), so the global state is seeded here and put back after:
-    the same sweep gives the same intervals every time.
-    """
-    from rliable import library as rly
-
-    saved = np.random.get_state()  # noqa: NPY002 (rliable draws from the global generator)
-    np.random.seed(0)  # noqa: NPY002
-    try:
-        with warnings.catch_warnings():  # arch 7 deprecates the RandomState rliable passes
-            warnings.simplefilter("ignore", FutureWarning)
-            return rly.get_interval_estimates(
-                score_dict, func, reps=reps, random_state=np.random.RandomState(0)
-            )
-    finally:
-        np.random.set_state(saved)  # noqa: NPY002
 
 
 def _study(setup: str) -> dict[str, Any]:

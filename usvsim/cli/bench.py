@@ -47,15 +47,22 @@ def run_bench_command(args: BenchArgs) -> int:
 
 def _run_stress_command(args: BenchArgs) -> int:
     """``usvsim bench --suite stress`` (:mod:`usvsim.evaluation.stress`)."""
+    from usvsim.evaluation.seed_stats import seed_tables_for, with_seed_columns
     from usvsim.evaluation.stress import run_stress_args, stress_json, write_stress
 
     result = run_stress_args(args)
     files = write_stress(result, Path(args.out), plots=args.plots)
+    # the across-seed figures of the shipped models' setups (usvsim/models/seeds/), if any
+    seeds = {h: t for h, t in seed_tables_for(result.helmsmen).items() if t.split == result.split}
     if args.json:
-        print(stress_json(result, [str(f) for f in files]))
+        text = stress_json(result, [str(f) for f in files])
+        if seeds:  # under "seeds", by helmsman
+            payload = {**json.loads(text), "seeds": {h: t.to_json() for h, t in seeds.items()}}
+            text = json.dumps(payload, indent=2, allow_nan=False)
+        print(text)
     else:
         print(f"usvsim bench — stress suite, {result.episodes_per_set} episodes per set")
-        print(format_table(result.rows))
+        print(with_seed_columns(format_table(result.rows), result.rows, seeds, result.split))
         written = ", ".join(f.name for f in files)
         print(f"ran in {result.wall_s:.1f} s; results in {args.out}/ ({written})")
     if result.interrupted:

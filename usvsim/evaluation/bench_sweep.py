@@ -22,7 +22,14 @@ from typing import Any
 
 from usvsim.common.errors import UserError
 
-__all__ = ["SWEEP_HEADER", "SweepArm", "SweepColumns", "load_sweep", "with_sweep_columns"]
+__all__ = [
+    "SWEEP_HEADER",
+    "SweepArm",
+    "SweepColumns",
+    "append_columns",
+    "load_sweep",
+    "with_sweep_columns",
+]
 
 SWEEP_HEADER = ("sweep seeds", "sweep held-out IQM [95 % CI]")
 
@@ -120,25 +127,41 @@ def with_sweep_columns(table: str, rows: Sequence[Any], sweep: SweepColumns) -> 
     rule, one line per row) with :data:`SWEEP_HEADER` columns on the right, filled on the
     held-out row of each helmsman named after a setup of the sweep, and a line saying where
     the numbers come from."""
-    lines = table.splitlines()
-    if len(lines) != len(rows) + 2:
-        raise ValueError(f"a table of {len(rows)} rows has {len(lines)} lines, not {len(rows) + 2}")
-    cells = [SWEEP_HEADER, *(_row_cells(r, sweep) for r in rows)]
-    widths = [max(len(c[i]) for c in cells) for i in range(len(SWEEP_HEADER))]
-    left = max(len(line) for line in lines)
-    out = []
-    for k, line in enumerate(lines):  # header, rule, then row k - 2 (cells[k - 1])
-        if k == 1:
-            extra = ["-" * w for w in widths]
-        else:
-            extra = [c.ljust(w) for c, w in zip(cells[max(k - 1, 0)], widths, strict=True)]
-        out.append((line.ljust(left) + "  " + "  ".join(extra)).rstrip())
+    out = append_columns(table, SWEEP_HEADER, [_row_cells(r, sweep) for r in rows]).splitlines()
     shown = sorted({r.helmsman for r in rows} & set(sweep.arms))
     out.append(
         f"sweep {sweep.name} ({sweep.folder}/report.json): IQM over seeds of each seed's best.pt "
         f"on {sweep.heldout_episodes} held-out episodes; shown for "
         + (", ".join(shown) if shown else "no helmsman of this table (names are setups)")
     )
+    return "\n".join(out)
+
+
+def append_columns(table: str, header: Sequence[str], cells: Sequence[Sequence[str]]) -> str:
+    """``table`` (a fixed-width table: a header line, a rule, one line per row, as
+    :func:`usvsim.evaluation.bench.format_table` writes) with the columns ``header`` on the
+    right, row k's cells ``cells[k]`` (``""`` for none).
+
+    >>> print(append_columns("a  b\\n-  -\\n1  2", ["c"], [["x"]]))
+    a  b  c
+    -  -  -
+    1  2  x
+    """
+    lines = table.splitlines()
+    if len(lines) != len(cells) + 2:
+        raise ValueError(
+            f"a table of {len(cells)} rows has {len(lines)} lines, not {len(cells) + 2}"
+        )
+    grid = [tuple(header), *(tuple(c) for c in cells)]
+    widths = [max(len(c[i]) for c in grid) for i in range(len(header))]
+    left = max(len(line) for line in lines)
+    out = []
+    for k, line in enumerate(lines):  # header, rule, then row k - 2 (grid[k - 1])
+        if k == 1:
+            extra = ["-" * w for w in widths]
+        else:
+            extra = [c.ljust(w) for c, w in zip(grid[max(k - 1, 0)], widths, strict=True)]
+        out.append((line.ljust(left) + "  " + "  ".join(extra)).rstrip())
     return "\n".join(out)
 
 

@@ -56,6 +56,7 @@ from pathlib import Path
 from typing import Any
 
 from usvsim.common.errors import UserError
+from usvsim.evaluation.seed_stats import SeedTable
 
 __all__ = [
     "CARD_FIELDS",
@@ -379,14 +380,20 @@ def _pct(summary: Mapping[str, Any]) -> str:
     return f"{summary['mean_success_pct']:.1f} % ({summary['sets_at_95_pct']}/{summary['sets']})"
 
 
-def _rows(cards: Mapping[str, ModelCard]) -> list[tuple[str, ...]]:
+def _seed_cell(card: ModelCard, seeds: Mapping[str, SeedTable]) -> str:
+    """Its setup's test-split mean over the 22 original sets across seeds, or ``""``."""
+    t = seeds.get(card.setup)
+    return f"{t.original.cell()} ({len(t.seeds)} seeds)" if t else ""
+
+
+def _rows(cards: Mapping[str, ModelCard], seeds: Mapping[str, SeedTable]) -> list[tuple[str, ...]]:
     rows: list[tuple[str, ...]] = []
     for name, c in sorted(cards.items(), key=lambda kv: (kv[1].use, kv[1].family, kv[0])):
         train = "unknown" if c.training_s is None else f"{c.training_s:.0f}"
         rows.append((
             name, ", ".join(c.recommended) or "", c.use, c.family, c.observation, c.action,
-            _pct(c.validation.get("stress", {})), _pct(c.test.get("stress", {})), train,
-            c.proposed_name,
+            _pct(c.validation.get("stress", {})), _pct(c.test.get("stress", {})),
+            _seed_cell(c, seeds), train, c.proposed_name,
         ))  # fmt: skip
     return rows
 
@@ -394,31 +401,42 @@ def _rows(cards: Mapping[str, ModelCard]) -> list[tuple[str, ...]]:
 _HEADER = (
     "model", "recommended", "use", "family", "observation", "action",
     "stress validation: mean (sets >= 95 %)", "stress test: mean (sets >= 95 %)",
-    "training s", "proposed name",
+    "stress test: IQM over N seeds [95 % CI]", "training s", "proposed name",
 )  # fmt: skip
 
 
-def cards_table(cards: Mapping[str, ModelCard]) -> str:
-    """The cards as a fixed-width terminal table (``usvsim models``)."""
-    lines = [_HEADER, *_rows(cards)]
+def cards_table(
+    cards: Mapping[str, ModelCard], seeds: Mapping[str, SeedTable] | None = None
+) -> str:
+    """The cards as a fixed-width terminal table (``usvsim models``); ``seeds``: setup ->
+    across-seed figures (:func:`usvsim.evaluation.seed_stats.load_seed_tables`)."""
+    lines = [_HEADER, *_rows(cards, seeds or {})]
     widths = [max(len(line[i]) for line in lines) for i in range(len(_HEADER))]
     text = ["  ".join(c.ljust(w) for c, w in zip(line, widths, strict=True)) for line in lines]
     text.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(t.rstrip() for t in text)
 
 
-def cards_json(cards: Mapping[str, ModelCard]) -> str:
-    """``usvsim models --json``: the rule, the uses and every card by name."""
+def cards_json(cards: Mapping[str, ModelCard], seeds: Mapping[str, SeedTable] | None = None) -> str:
+    """``usvsim models --json``: the rule, the uses, every card by name and, under
+    ``across_seeds``, the across-seed figures of each model whose setup has them."""
+    seeds = seeds or {}
     payload = {
         "recommendation_rule": RECOMMENDATION_RULE,
         "uses": USES,
         "models": {name: card.to_json() for name, card in sorted(cards.items())},
+        "across_seeds": {
+            name: seeds[c.setup].to_json() for name, c in sorted(cards.items()) if c.setup in seeds
+        },
     }
     return json.dumps(payload, indent=2, allow_nan=False)
 
 
-def cards_markdown(cards: Mapping[str, ModelCard]) -> str:
+def cards_markdown(
+    cards: Mapping[str, ModelCard], seeds: Mapping[str, SeedTable] | None = None
+) -> str:
     """The cards as a Markdown page: the overview table, then one section per model."""
+    seeds = seeds or {}
     lines = [
         "# Shipped models",
         "",
@@ -429,7 +447,7 @@ def cards_markdown(cards: Mapping[str, ModelCard]) -> str:
         "",
         "| " + " | ".join(_HEADER) + " |",
         "|" + "---|" * len(_HEADER),
-        *("| " + " | ".join((f"`{r[0]}`", *r[1:])) + " |" for r in _rows(cards)),
+        *("| " + " | ".join((f"`{r[0]}`", *r[1:])) + " |" for r in _rows(cards, seeds)),
         "",
     ]
     for name, c in sorted(cards.items()):
@@ -486,11 +504,14 @@ class ModelsArgs:
 
 def models_report(args: ModelsArgs, models_dir: Path | None = None) -> str:
     """What ``usvsim models`` prints (the cards checked first: ``UserError`` on a problem)."""
+    from usvsim.evaluation.seed_stats import load_seed_tables
+
     cards = check_cards(models_dir)
+    seeds = load_seed_tables()
     if args.json:
-        return cards_json(cards)
+        return cards_json(cards, seeds)
     return (
-        cards_table(cards)
+        cards_table(cards, seeds)
         + f"\n\n{len(cards)} models; recommended marks: {RECOMMENDATION_RULE}\n"
         + "Uses: "
         + "; ".join(f"{k}: {v}" for k, v in USES.items())
