@@ -81,6 +81,7 @@ from usvsim.task.torch_observations import (
     select_rows,
     standardized_goal,
 )
+from usvsim.task.torch_scene import gaussian_reward_torch
 from usvsim.vessel.torch_plant import DTYPES, TorchPlant
 
 __all__ = [
@@ -88,6 +89,7 @@ __all__ = [
     "compiled_substep",
     "measure_env_steps",
     "plant_and_filter",
+    "torch_heading_change",
 ]
 
 Columns = tuple[torch.Tensor, ...]
@@ -290,22 +292,10 @@ class TorchPoleAvoidanceEnv:
     # ----------------------------------------------------------------------------- step
     def heading_change_rad(self, actions: Any) -> torch.Tensor:
         """Heading changes Δψ (N,) rad of batched actions (as the CPU env maps them)."""
-        a = torch.as_tensor(actions, device=self.device)
-        max_rad = self.scenario.max_heading_change_rad
-        if self.action_kind == "gaussian":
-            if tuple(a.shape) != (self.num_envs, 1) or not a.is_floating_point():
-                raise ValueError(
-                    f"gaussian actions must be floats of shape ({self.num_envs}, 1), got "
-                    f"{a.dtype} {tuple(a.shape)}"
-                )
-            return a[:, 0].to(self.dtype) * max_rad
-        if tuple(a.shape) != (self.num_envs,) or a.is_floating_point():
-            raise ValueError(
-                f"categorical actions must be integers of shape ({self.num_envs},), got "
-                f"{a.dtype} {tuple(a.shape)}"
-            )
-        centre = (N_CATEGORIES - 1) // 2
-        return (a.to(self.dtype) - centre) * (max_rad / centre)
+        return torch_heading_change(
+            self.action_kind, actions, self.num_envs, self.scenario.max_heading_change_rad,
+            self.device, self.dtype,
+        )  # fmt: skip
 
     def _shared(self, values: tuple[float, ...]) -> Columns:
         return tuple(torch.tensor(values, dtype=self.dtype, device=self.device).unbind(0))
@@ -378,10 +368,37 @@ class TorchPoleAvoidanceEnv:
     ) -> tuple[torch.Tensor, torch.Tensor]:
         """:class:`usvsim.task.reward.GaussianReward` on tensors, the same operations."""
         r = self.reward
-        q_pole, q_goal = d_pole_m / r.pole_sigma_m, d_goal_m / r.goal_sigma_m
-        pole = -r.pole_weight * torch.exp(-0.5 * (q_pole * q_pole))
-        goal = r.goal_weight * (torch.exp(-0.5 * (q_goal * q_goal)) - 1.0)
-        return pole, goal
+        return gaussian_reward_torch(
+            r.pole_weight, r.pole_sigma_m, r.goal_weight, r.goal_sigma_m, d_pole_m, d_goal_m
+        )
+
+
+def torch_heading_change(
+    kind: str,
+    actions: Any,
+    num_envs: int,
+    max_rad: float,
+    device: torch.device,
+    dtype: torch.dtype,
+) -> torch.Tensor:
+    """Heading changes Δψ (N,) rad of batched actions, as the CPU env maps them (gaussian (N, 1)
+    → ±``max_rad``, categorical (N,) 0..40); shapes and kinds checked, values not (a check
+    would wait for the device)."""
+    a = torch.as_tensor(actions, device=device)
+    if kind == "gaussian":
+        if tuple(a.shape) != (num_envs, 1) or not a.is_floating_point():
+            raise ValueError(
+                f"gaussian actions must be floats of shape ({num_envs}, 1), got "
+                f"{a.dtype} {tuple(a.shape)}"
+            )
+        return a[:, 0].to(dtype) * max_rad
+    if tuple(a.shape) != (num_envs,) or a.is_floating_point():
+        raise ValueError(
+            f"categorical actions must be integers of shape ({num_envs},), got "
+            f"{a.dtype} {tuple(a.shape)}"
+        )
+    centre = (N_CATEGORIES - 1) // 2
+    return (a.to(dtype) - centre) * (max_rad / centre)
 
 
 def plant_and_filter(

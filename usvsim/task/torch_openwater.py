@@ -1,0 +1,425 @@
+"""The open-water task (``usvsim/OpenWater-v0``) as batched tensor code on any torch device.
+
+:class:`TorchOpenWaterEnv` is :class:`usvsim.task.openwater_env.OpenWaterVectorEnv` (autoreset
+``SAME_STEP``, the ``scene`` observation) with everything of a step on the device: the plant in
+each episode's current at its cruise speed (:mod:`usvsim.vessel.torch_plant`, generated from the
+CasADi plant), the sensors and Kalman filter with the episode's GNSS faults (noise scale,
+outliers, dropout; :mod:`usvsim.nav.torch_nav`, generated from the CasADi filter), the moving
+vessels, the judge at every 0.1 s plant step against every disc, the reward, the horizon, the
+``scene`` observation (:mod:`usvsim.task.torch_scene`) and the restart of finished boats. No host
+round trip and no Python loop over boats, discs or vessels per step.
+
+Episodes are the CPU family's draws, packed on the host and copied to the device
+(:mod:`usvsim.task.torch_openwater_episodes`): with the same seed the same episodes as the CPU
+env (``per_boat`` per boat, then the table cycles). Weather episodes are refused (the torch
+plant has no wind or waves).
+
+One decision step of N boats (T = 20 plant steps of 0.1 s), as ``OpenWaterBatch.step``::
+
+    ψ_ref  = ssa(ψ̂ + Δψ)                          ψ̂: estimated heading
+    GNSS   : normals × scale (× outlier scale where z < Φ⁻¹(p)), fix flags × (not in dropout)
+    T × [ plant step (autopilot, RK4, current) ; sensors + Kalman filter ]
+    judge  : every disc (vessels where they are) at every plant step: collision, goal,
+             pole-equivalent distances |p − c| − R + 1 m
+    reward : GaussianReward at the period's end (or the first goal / collision step)
+    obs    : scene, from the estimate and the discs at the period's end
+    restart: boats whose episode ended take their next table row
+
+Noise: ``noise="device"`` draws the sensor normals and the outlier draws from seeded
+``torch.Generator`` s; ``noise="replay"`` (test mode) replays each episode's NumPy streams
+(its ``noise_seed`` and its disturbance's ``seed``) number for number as the CPU env draws them,
+reading the restarted boats back to the host every step.
+
+Returns of :meth:`~TorchOpenWaterEnv.step`, tensors on the device: obs (N, 52) (``scene``,
+``observation_dtype``), reward (N,), terminated (N,) bool, truncated (N,) bool, info (the CPU
+env's per-boat entries as (N,) tensors, and ``final_obs``: every boat's observation before the
+restarts).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any, Literal
+
+import numpy as np
+import torch
+
+from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_state, torch_ssa
+from usvsim.task.reward import GaussianReward
+from usvsim.task.scenario import BoatNoise, Scenario
+from usvsim.task.torch_env import plant_and_filter, torch_heading_change
+from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
+from usvsim.task.torch_openwater_episodes import OpenWaterTable, family_table
+from usvsim.task.torch_scene import (
+    TorchDiscs,
+    gaussian_reward_torch,
+    judge_period_torch,
+    nearest_and_hits_torch,
+    scene_observation_torch,
+)
+from usvsim.vessel.torch_plant import DTYPES, TorchPlant
+
+__all__ = ["TORCH_OPENWATER_OBSERVATIONS", "TorchOpenWaterEnv"]
+
+#: The observation kinds the torch open-water env builds.
+TORCH_OPENWATER_OBSERVATIONS = ("scene",)
+_HORIZON_REF_S = 20_000.0  # s, OpenWaterVectorEnv's reference horizon K_ref · 2 s
+Columns = tuple[torch.Tensor, ...]
+
+
+class TorchOpenWaterEnv:
+    """``num_envs`` boats on open-water episodes, stepped on a torch device (module docstring).
+
+    Parameters
+    ----------
+    num_envs : int
+    family : ScenarioMixture | OpenWaterScenario, optional
+        Drawn at every ``reset(seed=...)`` as the CPU env draws (default ``OPEN_WATER_FAMILY``;
+        needs the CPU family's modules, i.e. CasADi). Not with ``table``.
+    table : OpenWaterTable, optional
+        Fixed episodes (e.g. :func:`usvsim.task.torch_openwater_episodes.load_table`): boat i's
+        k-th episode is row ``(i · per_boat + k) mod E``.
+    per_boat : int
+        Episodes per boat drawn at reset (``family``), or the row stride of ``table``.
+    device : "torch-cpu" | "cuda" | "cuda:K"
+    dtype : "float64" | "float32"
+    action : "gaussian" | "categorical"
+    observation : "scene"
+    observation_dtype : "float32" | "float64"
+        float32 as the CPU env; float64 keeps the simulation's numbers (tests).
+    reward_horizon : "episode" | "fixed"
+        As ``OpenWaterVectorEnv`` (``"fixed"``: each episode's own time limit against K_ref).
+    gamma : float
+    noise : "device" | "replay"
+    scenario : Scenario, optional
+        Decision period, plant step, goal radius, safety distance (default the study's).
+    reward : GaussianReward, optional
+    """
+
+    def __init__(
+        self,
+        num_envs: int,
+        *,
+        family: Any = None,
+        table: OpenWaterTable | None = None,
+        per_boat: int = 8,
+        device: str = "torch-cpu",
+        dtype: str = "float64",
+        action: Literal["gaussian", "categorical"] = "gaussian",
+        observation: str = "scene",
+        observation_dtype: str = "float32",
+        reward_horizon: Literal["episode", "fixed"] = "episode",
+        gamma: float = 0.99,
+        noise: Literal["device", "replay"] = "device",
+        scenario: Scenario | None = None,
+        reward: GaussianReward | None = None,
+    ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if observation not in TORCH_OPENWATER_OBSERVATIONS:
+            raise ValueError(
+                f"observation must be one of {TORCH_OPENWATER_OBSERVATIONS} on the torch "
+                f"open-water env, got {observation!r}"
+            )
+        if action not in ("gaussian", "categorical"):
+            raise ValueError(f"action must be 'gaussian' or 'categorical', got {action!r}")
+        if observation_dtype not in DTYPES:
+            raise ValueError(f"observation_dtype must be one of {list(DTYPES)}")
+        if reward_horizon not in ("episode", "fixed"):
+            raise ValueError(f"reward_horizon must be 'episode' or 'fixed', got {reward_horizon!r}")
+        if noise not in ("device", "replay"):
+            raise ValueError(f"noise must be 'device' or 'replay', got {noise!r}")
+        if family is not None and table is not None:
+            raise ValueError("give family or table, not both")
+        if per_boat < 1:
+            raise ValueError(f"per_boat must be >= 1, got {per_boat}")
+        self.reward = reward or GaussianReward()
+        if not isinstance(self.reward, GaussianReward):
+            raise ValueError("the torch open-water env computes the GaussianReward only")
+        self.num_envs = n = num_envs
+        self.action_kind, self.observation_kind = action, observation
+        self.reward_horizon, self.gamma = reward_horizon, float(gamma)
+        self.family, self._fixed_table, self.per_boat = family, table, per_boat
+        self.scenario = sc = replace(scenario or Scenario(), area_radius_m=1e9)
+        self.plant = TorchPlant("default", dt_s=sc.dt_s, device=device, dtype=dtype)
+        self.device, self.dtype = self.plant.device, self.plant.dtype
+        self.observation_dtype = DTYPES[observation_dtype]
+        self.nav = load_nav_kernel(None)
+        if abs(self.nav.dt_s - sc.dt_s) > 1e-12:
+            raise ValueError(f"NavConfig.dt_s {self.nav.dt_s} != Scenario.dt_s {sc.dt_s}")
+        self.T = sc.steps_per_decision
+        if self.T % self.nav.cycle_steps:
+            raise ValueError("a decision must span whole sensor cycles (GNSS and compass)")
+        self.layout = noise_layout(self.nav, 1, self.T)
+        # the GNSS columns of a decision's normals, step by step (the CPU batch's gnss_index)
+        self._gnss_slots = [
+            (j, e) for j, cols in enumerate(self.layout.index) for e in range(1, 5) if cols[e] >= 0
+        ]
+        self._replay = noise == "replay"
+        self.noise: NoiseSource = (ReplayNoise if self._replay else DeviceNoise)(
+            n, self.device, self.dtype
+        )
+        self._outlier_gen = torch.Generator(device=self.device)
+        self._outlier_noise = BoatNoise(n) if self._replay else None
+        self._outlier_boats = np.zeros(n, dtype=bool)  # replay: boats drawing outliers (host)
+        self._half_beam = self.plant.vessel.half_beam_m
+        self._ref_decisions = replace(sc, time_limit_s=_HORIZON_REF_S).max_decisions
+        self._steps = torch.arange(1, self.T + 1, device=self.device)
+        self._rows = torch.arange(n, device=self.device)
+        gains = torch.tensor(self.plant.kernel.gains, dtype=self.dtype, device=self.device)
+        self._gains = tuple(gains.unbind(0))  # shared by all boats: 0-d tensors, built once
+        self._ready = False
+
+    # ----------------------------------------------------------------------------- tables
+    def _upload(self, table: OpenWaterTable) -> None:
+        """The table's arrays on the device, and each row's start state (plant, controller)."""
+
+        def put(a: np.ndarray) -> torch.Tensor:
+            if a.dtype == np.bool_ or a.dtype == np.int64:
+                return torch.as_tensor(a, device=self.device)
+            return torch.as_tensor(a, dtype=self.dtype, device=self.device)
+
+        self._table = {name: put(getattr(table, name)) for name in vars(table)}
+        self._table_np = table
+        start = self.plant.initial_state(table.start_eta, table.speed_mps)
+        self._table["x0"], self._table["c0"] = start.x, start.c
+        self._n_rows = table.n_episodes
+
+    # ----------------------------------------------------------------------------- reset
+    @torch.no_grad()
+    def reset(self, *, seed: int | None = None) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """Start every boat's first episode; ``seed`` seeds the episode draw (boat i from
+        ``seed + i``, as the CPU env) and the device noise."""
+        if seed is None:
+            seed = int(np.random.SeedSequence().generate_state(1)[0])
+        if self._fixed_table is not None:
+            if not self._ready:
+                self._upload(self._fixed_table)
+        else:
+            from usvsim.task.openwater_env import OPEN_WATER_FAMILY
+
+            family = OPEN_WATER_FAMILY if self.family is None else self.family
+            self._upload(family_table(family, seed, self.num_envs, self.per_boat))
+        self.noise.seed(seed)
+        self._outlier_gen.manual_seed(int(seed) % 2**63 + 2)  # not the episodes' or sensors'
+        n, dev, dt = self.num_envs, self.device, self.dtype
+        self._s = torch.zeros((self.plant.kernel.ns, n), dtype=dt, device=dev)
+        self._n = torch.zeros((15, n), dtype=dt, device=dev)
+        self._row = torch.zeros(n, dtype=torch.int64, device=dev)
+        self._started = torch.zeros(n, dtype=torch.int64, device=dev)
+        self._n_dec = torch.zeros(n, dtype=torch.int64, device=dev)
+        self._min_d = torch.zeros(n, dtype=dt, device=dev)
+        self._t_goal = torch.zeros(n, dtype=dt, device=dev)
+        self.discs = self._discs_of(self._row)
+        everyone = torch.ones(n, dtype=torch.bool, device=dev)
+        obs = self._restart(everyone, self._observe())
+        self._ready = True
+        return obs, {"goal_ne": self._take("goal_ne").clone()}
+
+    def _take(self, name: str) -> torch.Tensor:
+        """Table field ``name`` at every boat's current row."""
+        return self._table[name][self._row]
+
+    def _discs_of(self, rows: torch.Tensor) -> TorchDiscs:
+        t = self._table
+        st, ve = t["statics"][rows], t["vessels"][rows]
+        return TorchDiscs(
+            st[..., 0:2], st[..., 2], t["statics_ok"][rows],
+            ve[..., 0:2], ve[..., 2], ve[..., 3], ve[..., 4], ve[..., 5], t["vessels_ok"][rows],
+        )  # fmt: skip
+
+    def _restart(self, boats: torch.Tensor, obs: torch.Tensor) -> torch.Tensor:
+        """Start the next episode of ``boats`` (N,) bool; returns ``obs`` with those boats'
+        rows their first observation."""
+        t = self._table
+        row = (self._rows * self.per_boat + self._started) % self._n_rows
+        self._started += boats
+        self._row = torch.where(boats, row, self._row)
+        x0, c0 = t["x0"][row].T, t["c0"][row].T
+        nav = started_nav_state(self.nav, x0, self.noise.fix_normals(boats, t["noise_seed"][row]))
+        if self._replay:
+            self._seed_outlier_streams(boats, row)
+        self._s = torch.where(boats[None, :], torch.cat([x0, c0]), self._s)
+        self._n = torch.where(boats[None, :], nav, self._n)
+        self.discs = self.discs.where(boats, self._discs_of(row))
+        zero_t = torch.zeros((self.num_envs, 1), dtype=self.dtype, device=self.device)
+        d0, _ = nearest_and_hits_torch(x0[0][:, None], x0[1][:, None], zero_t, self.discs, 1.0,
+                                       self._half_beam)  # fmt: skip
+        self._min_d = torch.where(boats, d0[:, 0], self._min_d)
+        self._t_goal = torch.where(boats, math.inf, self._t_goal)
+        self._n_dec = torch.where(boats, 0, self._n_dec)
+        fresh = self._observe()
+        return torch.where(boats[:, None], fresh, obs)
+
+    def _seed_outlier_streams(self, boats: torch.Tensor, row: torch.Tensor) -> None:
+        """Replay: seed the restarting boats' outlier streams as the CPU batch does (host)."""
+        assert self._outlier_noise is not None
+        idx = np.flatnonzero(boats.cpu().numpy())
+        if idx.size == 0:
+            return
+        rows = row.cpu().numpy()[idx]
+        self._outlier_noise.seed(idx, [int(s) for s in self._table_np.outlier_seed[rows]])
+        self._outlier_boats[idx] = self._table_np.gnss[rows, 5] > 0
+
+    # ----------------------------------------------------------------------------- observe
+    def _observe(self) -> torch.Tensor:
+        """Every boat's ``scene`` observation from its estimate and the discs now."""
+        t_s = self._n_dec.to(self.dtype) * self.scenario.decision_period_s
+        centres, velocity = self.discs.at(t_s)
+        obs = scene_observation_torch(
+            self._n[0:2].T, self._n[8], self._n[2:4].T, self._take("goal_ne"), centres,
+            self.discs.radii_all, velocity, self.discs.ok_all,
+        )  # fmt: skip
+        return obs.to(self.observation_dtype)
+
+    # ----------------------------------------------------------------------------- step
+    def _outlier_normals(self) -> torch.Tensor:
+        """(N, G) standard normals of this decision's outlier draws (G GNSS errors)."""
+        g = len(self._gnss_slots)
+        if self._outlier_noise is None:
+            return torch.randn(
+                (self.num_envs, g), generator=self._outlier_gen, dtype=self.dtype,
+                device=self.device,
+            )  # fmt: skip
+        z = np.zeros((self.num_envs, g))
+        drawing = np.flatnonzero(self._outlier_boats)
+        if drawing.size:
+            z[drawing] = self._outlier_noise.for_boats(drawing).standard_normal((drawing.size, g))
+            self._outlier_noise.for_boats(None)
+        return torch.as_tensor(z, dtype=self.dtype, device=self.device)
+
+    def _sensor_inputs(self, normals: torch.Tensor) -> list[tuple[Any, ...]]:
+        """The filter's per-step inputs with the episodes' GNSS faults
+        (``BoatDisturbances.perturb_normals`` and the dropout mask)."""
+        gnss = self._take("gnss")
+        scale, threshold, outlier_scale = gnss[:, 0:1], gnss[:, 1:2], gnss[:, 2:3]
+        jump = self._outlier_normals() < threshold
+        factor = torch.where(jump, scale * outlier_scale, scale)  # (N, G)
+        t = (self._n_dec.to(self.dtype) * self.scenario.decision_period_s)[:, None] + (
+            self.scenario.dt_s * self._steps.to(self.dtype)
+        )  # (N, T) episode time at each plant step
+        available = ~((t >= gnss[:, 3:4]) & (t < gnss[:, 4:5]))
+        es = [list(e) for e in self.layout.step_inputs(normals)]
+        for g, (j, k) in enumerate(self._gnss_slots):  # the GNSS entries of a decision
+            es[j][k] = normals[:, self.layout.index[j][k]] * factor[:, g]
+        for j in range(self.T):
+            if self.layout.gps[j]:
+                es[j][6] = es[j][6] * available[:, j].to(self.dtype)
+        return [tuple(e) for e in es]
+
+    @torch.no_grad()
+    def step(
+        self, actions: Any
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, dict[str, Any]]:
+        """One decision step of every boat, finished boats restarted (module docstring)."""
+        if not self._ready:
+            raise RuntimeError("call reset() before step()")
+        sc, T = self.scenario, self.T
+        dpsi = torch_heading_change(
+            self.action_kind, actions, self.num_envs, sc.max_heading_change_rad, self.device,
+            self.dtype,
+        )  # fmt: skip
+        current = self._take("current")
+        w = (torch_ssa(self._n[8] + dpsi), self._take("speed_mps"), current[:, 0], current[:, 1])
+        es = self._sensor_inputs(self.noise.decision_normals(self.layout.draws))
+        s, n = tuple(self._s.unbind(0)), tuple(self._n.unbind(0))
+        xs, ys = [], []
+        for j in range(T):  # the plant steps of one decision
+            s, n = plant_and_filter(
+                self.plant.kernel.step,
+                self.nav.step,
+                self.plant.kernel.nx,
+                s,
+                n,
+                w,
+                self._gains,
+                es[j],
+            )
+            xs.append(s[0])
+            ys.append(s[1])
+        self._s, self._n = torch.stack(s), torch.stack(n)
+        x_n, y_e = torch.stack(xs, 1), torch.stack(ys, 1)
+        t_s = (self._n_dec[:, None] * T + self._steps[None, :]).to(self.dtype) * sc.dt_s
+        goal = self._take("goal_ne")
+        judged = judge_period_torch(x_n, y_e, t_s, self.discs, goal, 1.0, self._half_beam,
+                                    sc.goal_radius_m)  # fmt: skip
+        reached, collision = judged.reached_goal, judged.collision
+        terminated = reached | collision
+        self._min_d = torch.minimum(self._min_d, judged.nearest_m)
+        first = (self._n_dec * T + judged.first_goal_step + 1).to(self.dtype) * sc.dt_s
+        self._t_goal = torch.where(reached & torch.isinf(self._t_goal), first, self._t_goal)
+        self._n_dec += 1
+        end = judged.end_step[:, None]
+        area = self._take("area")
+        out_of_area = (
+            torch.hypot(
+                x_n.gather(1, end)[:, 0] - area[:, 0], y_e.gather(1, end)[:, 0] - area[:, 1]
+            )
+            > area[:, 2]
+        )
+        limit = self._take("time_limit_s")
+        time_s = self._n_dec.to(self.dtype) * sc.decision_period_s
+        time_limit = time_s >= limit - 1e-9
+        truncated = (time_limit | out_of_area) & ~terminated
+        r = self.reward
+        pole, goal_term = gaussian_reward_torch(
+            r.pole_weight, r.pole_sigma_m, r.goal_weight, r.goal_sigma_m,
+            judged.distance_to_obstacle_m, judged.distance_to_goal_m,
+        )  # fmt: skip
+        reward, terminated, truncated = self._horizon(
+            pole + goal_term, terminated, truncated, out_of_area, time_s, limit
+        )
+        obs = self._observe()
+        info = {
+            "final_obs": obs,
+            "reward_pole": pole,
+            "reward_goal": goal_term,
+            "heading_change_rad": dpsi,
+            "distance_to_obstacle_m": judged.distance_to_obstacle_m,
+            "distance_to_goal_m": judged.distance_to_goal_m,
+            "min_distance_m": self._min_d.clone(),
+            "reached_goal": reached,
+            "collision": collision,
+            "out_of_area": out_of_area,
+            "time_limit": time_limit,
+            "is_success": reached & ~collision & (self._min_d >= sc.safety_distance_m),
+            "time_s": time_s,
+            "time_to_goal_s": self._t_goal.clone(),
+        }
+        obs = self._restart(terminated | truncated, obs)
+        return obs, reward, terminated, truncated, info
+
+    def _horizon(
+        self,
+        reward: torch.Tensor,
+        terminated: torch.Tensor,
+        truncated: torch.Tensor,
+        out_of_area: torch.Tensor,
+        time_s: torch.Tensor,
+        limit_s: torch.Tensor,
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """:func:`usvsim.task.horizon.apply_reward_horizon` with each episode's own number of
+        decisions K_i against K_ref (``OpenWaterVectorEnv``): a terminating step adds the
+        discounted reward of staying until K_ref, the clock advanced by K_ref − K_i."""
+        if self.reward_horizon == "episode":
+            return reward, terminated, truncated
+        dp, g = self.scenario.decision_period_s, self.gamma
+        k_i = torch.ceil(limit_s / dp - 1e-9)
+        shifted = time_s + (self._ref_decisions - k_i) * dp
+        left = out_of_area & truncated
+        terminated, truncated = terminated | left, truncated & ~left
+        m = torch.clamp(self._ref_decisions - torch.round(shifted / dp), min=0.0)
+        factor = 1.0 + g * (1.0 - g**m) / (1.0 - g)
+        return torch.where(terminated, reward * factor, reward), terminated, truncated
+
+    # ----------------------------------------------------------------------------- state
+    @property
+    def state(self) -> torch.Tensor:
+        """True plant state [x, c] of all boats (N, 13) (never for observations)."""
+        return self._s.T.clone()
+
+    @property
+    def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:
+        """Navigation estimate now: position (N, 2) m and heading (N,) rad."""
+        return self._n[0:2].T.clone(), self._n[8].clone()
