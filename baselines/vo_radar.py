@@ -1,100 +1,38 @@
 """The ``vo-radar`` helmsman: ``vo`` (:mod:`baselines.velocity_obstacle`) fed by a radar tracker.
 
-The classical pipeline radar → detections → tracks → collision avoidance: every decision the
-radar image of the ``radar+nav`` observation (:mod:`usvsim.task.observations`) goes through
-:class:`usvsim.nav.tracker.RadarTracker` (detections placed in NED with the own navigation
-estimate, one constant-velocity Kalman filter per track, M-of-N confirmation), and the confirmed
-tracks become the obstacle list of a ``scene`` observation
-(:func:`usvsim.task.observations.scene_observation`: the k = 8 nearest by edge distance) that the
-unchanged :class:`baselines.velocity_obstacle.VOHelmsman` reads. ``vo`` reads the true scene
-(every obstacle, everywhere, exact); ``vo-radar`` only what its radar has seen: ±120° and
-200 m, quantised to 4 m × 2°, degraded as the episode's radar is, with the tracker's lags.
-
-One choice of the conversion: a track's velocity is passed on only where it is significant,
-``vᵀ P_vv⁻¹ v > moving_chi2`` (χ²₂, 99 %): a pole's track jitters by a few tenths of a m/s,
-which ``vo`` would read as a moving vessel (its threshold 0.3 m/s), with the vessel margin and a
-predicted motion; an insignificant velocity is reported as 0 (a static obstacle).
-
-The goal comes from the observation's standardised goal (range, bearing; inverted exactly up to
-float32) and the navigation estimate, as ``vo`` gets it.
+Every decision the radar image of the ``radar+nav`` observation goes through the tracker of
+:class:`baselines.radar_scene.RadarScene` (:mod:`usvsim.nav.tracker`), and the confirmed tracks
+become the ``scene`` observation that the unchanged :class:`baselines.velocity_obstacle.VOHelmsman`
+reads. ``vo`` reads the true scene (every obstacle, everywhere, exact); ``vo-radar`` only what its
+radar has seen (:mod:`baselines.radar_scene`: range, sector, quantisation, the episode's radar
+degradation, the tracker's lags, velocities passed on only where significant).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from baselines.radar_scene import TrackedSceneHelmsman, targets_to_scene
 from baselines.velocity_obstacle import VOConfig, VOHelmsman
-from usvsim.nav.tracker import RadarTracker, TrackerConfig, TrackTargets, inv2
-from usvsim.task.batch import ActionKind
-from usvsim.task.observations import GOAL_STANDARDIZATION, ObservationKind, scene_observation
-from usvsim.task.radar import RadarConfig
 
 __all__ = ["VORadarHelmsman", "targets_to_scene"]
 
-FloatArray = NDArray[np.float64]
-
-
-def targets_to_scene(
-    targets: TrackTargets,
-    nav: NDArray[np.floating],
-    goal_standardized: NDArray[np.floating],
-    moving_chi2: float,
-) -> NDArray[np.float32]:
-    """The ``scene`` observation (N, 52) of the tracks ``targets`` as seen from the navigation
-    estimate ``nav`` (N, 5) = [x_N, y_E, ψ, v_N, v_E] with the goal ``goal_standardized`` (N, 2)
-    (module docstring)."""
-    nav64: FloatArray = np.asarray(nav, dtype=np.float64)
-    pos, psi, vel = nav64[:, 0:2], nav64[:, 2], nav64[:, 3:5]
-    g = np.asarray(goal_standardized, dtype=np.float64)
-    mean, std = np.asarray(GOAL_STANDARDIZATION.mean), np.asarray(GOAL_STANDARDIZATION.std)
-    r_g, b_g = (g * std + mean).T
-    goal_ne = pos + r_g[:, None] * np.stack([np.cos(psi + b_g), np.sin(psi + b_g)], axis=-1)
-    v = targets.velocity_ne
-    p_vv = targets.covariance[..., 2:, 2:]
-    significance = np.einsum("...i,...ij,...j->...", v, inv2(p_vv), v)
-    v_reported = np.where((significance > moving_chi2)[..., None], v, 0.0)
-    return scene_observation(
-        pos, psi, vel, goal_ne, targets.position_ne, targets.radius_m, v_reported, targets.valid
-    )
-
 
 @dataclass
-class VORadarHelmsman:
-    """``vo`` on tracked radar returns (module docstring), ``radar+nav`` input.
-
-    ``tracker`` holds the tracks after each decision (for inspection and the tracker benchmark);
-    ``last_scene`` the ``scene`` observation ``vo`` was given.
-    """
+class VORadarHelmsman(TrackedSceneHelmsman):
+    """``vo`` on tracked radar returns (module docstring), ``radar+nav`` input; the tracker and
+    its settings as :class:`baselines.radar_scene.TrackedSceneHelmsman`."""
 
     config: VOConfig = field(default_factory=VOConfig)
-    tracker_config: TrackerConfig = field(default_factory=TrackerConfig)
-    radar: RadarConfig = field(default_factory=RadarConfig)
-    moving_chi2: float = 9.21  # χ²₂ at 99 %: a velocity significantly different from 0
-    observation: ObservationKind = field(default="radar+nav", init=False)
-    action: ActionKind = field(default="gaussian", init=False)
 
-    def __post_init__(self) -> None:
-        self.tracker = RadarTracker(self.radar, self.tracker_config)
-        self._vo = VOHelmsman(self.config)
-        self.last_scene: NDArray[np.float32] | None = None
+    def make_scene_helmsman(self) -> VOHelmsman:
+        return VOHelmsman(self.config)
 
     @property
     def last_avoiding(self) -> NDArray[np.bool_] | None:
         """Boats whose course to the goal was blocked at the last decision (as ``vo``'s)."""
-        return self._vo.last_avoiding
-
-    def reset(self, n_boats: int) -> None:
-        self.tracker.reset(n_boats)
-        self._vo.reset(n_boats)
-
-    def act(self, observation: dict[str, Any]) -> NDArray[np.float32]:
-        """Gaussian actions (N, 1) from ``radar+nav`` observations (dict of N-row arrays)."""
-        nav = np.asarray(observation["nav"], dtype=np.float64)
-        targets = self.tracker.update(observation["radar"], nav[:, 0:2], nav[:, 2])
-        scene = targets_to_scene(targets, nav, observation["goal"], self.moving_chi2)
-        self.last_scene = scene
-        return self._vo.act(scene)
+        avoiding: NDArray[np.bool_] | None = self.scene_helmsman.last_avoiding
+        return avoiding

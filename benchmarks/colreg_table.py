@@ -11,6 +11,15 @@ sets), then the overtaking Imazu problems per helmsman. Run from the repository 
 ``<!-- colreg-table:end -->`` (and ``colreg-overtaking:...``) of that file, atomically. Given
 the JSON of ``usvsim bench --suite stress --sets moving-vessels,everything --json``, it makes
 the stress suite's COLREG table instead (markers ``colreg-stress``).
+
+``--merge`` adds the helmsmen of a later run to the tables already in the file without
+running the others again: a helmsman the tables lack gets its row (column in the overtaking
+table) after the helmsman before it in the registry's order, and a note under the table says
+which run it came from; a helmsman the tables already hold is left as it is, and its row from
+the new run must equal the table's (the same episodes; otherwise the merge stops, exit 1)::
+
+    usvsim bench --suite colreg --helmsmen sb-mpc,sb-mpc-radar --colreg-episodes 20 --json >new.json
+    python benchmarks/colreg_table.py new.json --merge docs/guide/colreg-suite.md
 """
 
 from __future__ import annotations
@@ -23,7 +32,7 @@ from typing import Any
 
 # Imazu problems with an overtaking target (own ship faster, same course; usvsim.evaluation.imazu)
 OVERTAKING_PROBLEMS = (3, 7, 15, 17, 20, 22)
-BASELINES = ("los", "los-avoid", "vo", "vo-radar", "sb-mpc")
+BASELINES = ("los", "los-avoid", "vo", "vo-radar", "sb-mpc", "sb-mpc-radar")
 
 
 def _pct(successes: int, n: int, low: float | None, high: float | None) -> str:
@@ -147,6 +156,68 @@ def stress_table(payload: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _cells(line: str) -> list[str]:
+    return [c.strip() for c in line.strip().strip("|").split("|")]
+
+
+def _line(cells: list[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def _anchor(name: str, present: list[str], order: list[str]) -> str | None:
+    """The helmsman of ``present`` that comes last before ``name`` in ``order``."""
+    before = order[: order.index(name)] if name in order else order
+    return next((h for h in reversed(before) if h in present), None)
+
+
+def merge_block(old: str, new: str, note: str, order: list[str], columns: bool = False) -> str:
+    """``old`` (a generated block: text, one Markdown table, text) with the helmsmen of ``new``
+    (the same kind of block from another run) merged in (module docstring): rows keyed by their
+    first cell, or with ``columns`` columns keyed by their header cell, each placed after the
+    helmsman before it in ``order``. ``SystemExit`` where a helmsman in both differs."""
+    old_lines = old.splitlines()
+    table = [i for i, ln in enumerate(old_lines) if ln.startswith("|")]
+    rows = [_cells(old_lines[i]) for i in table]
+    new_rows = [_cells(ln) for ln in new.splitlines() if ln.startswith("|")]
+    if columns:  # transpose: one entry per column, its header first
+        rows, new_rows = (
+            [list(c) for c in zip(*rows, strict=True)],
+            [list(c) for c in zip(*new_rows, strict=True)],
+        )
+    keys = [r[0].strip("`") for r in rows]
+    added = []
+    for r in new_rows[1:]:  # the first: the table's header row (or its first column)
+        key = r[0].strip("`")
+        if set(key) <= {"-"}:  # the separator row
+            continue
+        if key in keys:
+            if rows[keys.index(key)] != r:
+                raise SystemExit(f"colreg_table: {key}: the new run's row differs from the file's")
+            continue
+        anchor = _anchor(key, keys, order)
+        at = keys.index(anchor) + 1 if anchor else len(rows)
+        rows.insert(at, r)
+        keys.insert(at, key)
+        added.append(f"`{key}`")
+    if not added:
+        return old
+    if columns:
+        rows = [list(c) for c in zip(*rows, strict=True)]
+    body = [_line(r) if set(r) != {"---"} else "|---" * len(r) + "|" for r in rows]
+    end = table[-1] + 1
+    out = [*old_lines[: table[0]], *body, "", note.format(", ".join(added)), *old_lines[end:]]
+    return "\n".join(out) + "\n"
+
+
+def _note(payload: dict[str, Any]) -> str:
+    helmsmen = ", ".join(f"`{h}`" for h in payload["helmsmen"])
+    return (
+        "{} merged in (`benchmarks/colreg_table.py --merge`) from a later run of "
+        f"{helmsmen}, {payload['episodes_per_set']} episodes per set, {payload['split']} split, "
+        f"run time {payload['wall_s']:.0f} s; the rows of a helmsman in both runs are equal."
+    )
+
+
 def _replace(text: str, marker: str, body: str) -> str:
     pattern = re.compile(rf"(<!-- {marker}:begin -->\n).*?(<!-- {marker}:end -->)", flags=re.DOTALL)
     if not pattern.search(text):
@@ -154,9 +225,19 @@ def _replace(text: str, marker: str, body: str) -> str:
     return pattern.sub(lambda m: m.group(1) + body + m.group(2), text)
 
 
+def _block(text: str, marker: str) -> str:
+    found = re.search(rf"<!-- {marker}:begin -->\n(.*?)<!-- {marker}:end -->", text, re.DOTALL)
+    if not found:
+        raise SystemExit(f"colreg_table: no <!-- {marker}:begin/end --> markers in the file")
+    return found.group(1)
+
+
 def main(argv: list[str]) -> int:
-    if len(argv) not in (1, 3) or (len(argv) == 3 and argv[1] != "--write"):
-        print("usage: python benchmarks/colreg_table.py COLREG_JSON [--write DOC]", file=sys.stderr)
+    if len(argv) not in (1, 3) or (len(argv) == 3 and argv[1] not in ("--write", "--merge")):
+        print(
+            "usage: python benchmarks/colreg_table.py COLREG_JSON [--write DOC | --merge DOC]",
+            file=sys.stderr,
+        )
         return 2
     payload = json.loads(Path(argv[0]).read_text())
     if payload.get("suite") == "stress":
@@ -169,9 +250,15 @@ def main(argv: list[str]) -> int:
     if len(argv) == 1:
         print("\n".join(tables.values()), end="")
         return 0
+    from usvsim.helm.registry import available_helmsmen
+
     doc = Path(argv[2])
     text = doc.read_text()
     for marker, body in tables.items():
+        if argv[1] == "--merge":
+            columns = marker == "colreg-overtaking"
+            order = list(BASELINES) if columns else list(available_helmsmen())
+            body = merge_block(_block(text, marker), body, _note(payload), order, columns)
         text = _replace(text, marker, body)
     from usvsim.common.fileio import atomic_write_text
 

@@ -66,7 +66,8 @@ __all__ = [
 
 Split = Literal["validation", "test"]
 TRAFFIC_BLIND = ("los",)  # helmsmen that never look at traffic: left out by default
-BASELINES = ("los", "los-avoid", "vo", "sb-mpc", "vo-radar")  # usvsim.helm.registry's classical
+# usvsim.helm.registry's classical helmsmen
+BASELINES = ("los", "los-avoid", "vo", "sb-mpc", "vo-radar", "sb-mpc-radar")
 TRAFFICGEN_DIR = Path(__file__).resolve().parent / "data" / "trafficgen"
 
 

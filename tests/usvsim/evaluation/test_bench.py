@@ -24,13 +24,15 @@ from usvsim.helm.registry import available_helmsmen, make_helmsman, select_helms
 
 def test_registry_lists_the_baselines(tmp_path: Path) -> None:
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "vo", "sb-mpc", "vo-radar"]
+    assert list(helmsmen) == ["los", "los-avoid", "vo", "sb-mpc", "vo-radar", "sb-mpc-radar"]
     h = helmsmen["los-avoid"]()
     assert (h.observation, h.action) == ("positional", "gaussian")  # type: ignore[attr-defined]
     vo = helmsmen["vo"]()
     assert (vo.observation, vo.action) == ("scene", "gaussian")  # type: ignore[attr-defined]
     vo_radar = helmsmen["vo-radar"]()
     assert vo_radar.observation == "radar+nav"  # type: ignore[attr-defined]
+    sbmpc_radar = helmsmen["sb-mpc-radar"]()
+    assert sbmpc_radar.observation == "radar+nav"  # type: ignore[attr-defined]
 
 
 def test_make_helmsman_knows_every_kind_of_name(tmp_path: Path) -> None:
@@ -60,7 +62,8 @@ def test_registry_loads_models_with_the_checkpoint_module(
     fake.CheckpointError = ValueError  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "learning.experiments.checkpoint", fake)
     helmsmen = available_helmsmen(tmp_path)
-    assert list(helmsmen) == ["los", "los-avoid", "vo", "sb-mpc", "vo-radar", "trpo-positional"]
+    baselines = ["los", "los-avoid", "vo", "sb-mpc", "vo-radar", "sb-mpc-radar"]
+    assert list(helmsmen) == [*baselines, "trpo-positional"]
     assert helmsmen["trpo-positional"]() == "helmsman" and loaded == [
         tmp_path / "trpo-positional.pt"
     ]

@@ -14,7 +14,7 @@ from usvsim.evaluation.bench import BenchArgs, run_bench, to_json, write_results
 from usvsim.helm import registry
 from usvsim.helm.registry import MODELS_DIR, select_helmsmen
 
-MODEL = MODELS_DIR / "rl-gaussian-positional.pt"
+MODEL = MODELS_DIR / "positional-gaussian-trpo-study.pt"
 
 
 def test_names_and_paths_alike_duplicates_once(tmp_path: Path) -> None:
@@ -43,8 +43,10 @@ def test_a_corrupt_shipped_model_is_skipped_not_fatal(tmp_path, monkeypatch, cap
     (tmp_path / "broken.pt").write_bytes(b"\x00" * 100)
     monkeypatch.setattr(registry, "MODELS_DIR", tmp_path)
     result = run_bench(BenchArgs(heldout=3, likeness=False), progress=False)
-    assert {r.helmsman for r in result.rows} == {"los", "los-avoid", "vo", "sb-mpc", "vo-radar"}
-    assert {r.helmsman: r.perceives for r in result.rows}["vo-radar"] == "radar tracks"
+    baselines = {"los", "los-avoid", "vo", "sb-mpc", "vo-radar", "sb-mpc-radar"}
+    assert {r.helmsman for r in result.rows} == baselines
+    perceives = {r.helmsman: r.perceives for r in result.rows}
+    assert perceives["vo-radar"] == perceives["sb-mpc-radar"] == "radar tracks"
     assert len(result.skipped) == 1 and result.skipped[0].startswith("broken: ")
     assert "usvsim bench: skipping broken:" in capsys.readouterr().err
     with pytest.raises(UserError, match="--helmsmen broken"):  # named: an error

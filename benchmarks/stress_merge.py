@@ -1,0 +1,84 @@
+"""Add the helmsmen of a later stress run to a committed ``usvsim bench --suite stress --json``
+file without running the others again. Run from the repository root::
+
+    usvsim bench --suite stress --helmsmen sb-mpc,sb-mpc-radar --json > new.json
+    python benchmarks/stress_merge.py docs/data/stress.json new.json
+
+Both files must hold the same split and episodes per set, and the new run every set of the file
+(its other sets are left out: one run serves ``docs/data/stress.json`` and the weather sets'
+``docs/data/stress-weather.json``). A helmsman the file lacks gets
+its rows (each set's row after the helmsman before it in the registry's order; the ``helmsmen``
+list likewise); a helmsman in both is left as it is, and its rows in the new run must equal the
+file's in every count and distance (the same episodes; timing fields aside), otherwise nothing is
+written and the exit status is 1. The file records each merge under ``merged`` (helmsmen added,
+the run's helmsmen and wall-clock) and is written atomically.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+TIMING = ("wall_s", "colreg_s")  # fields that depend on the machine, not on the episodes
+
+
+def _same(a: dict[str, Any], b: dict[str, Any]) -> bool:
+    keys = (set(a) | set(b)) - set(TIMING)
+    return all(a.get(k) == b.get(k) for k in keys)
+
+
+def merge(base: dict[str, Any], new: dict[str, Any], order: list[str]) -> list[str]:
+    """Merge ``new``'s helmsmen into ``base`` in place (module docstring); the helmsmen added.
+    ``order``: the registry's order of helmsmen. ``SystemExit`` where the runs disagree."""
+    if not set(base["sets"]) <= set(new["sets"]):
+        raise SystemExit(
+            f"stress_merge: the new run lacks sets {set(base['sets']) - set(new['sets'])}"
+        )
+    for key in ("suite", "split", "episodes_per_set"):
+        if base.get(key) != new.get(key):
+            raise SystemExit(
+                f"stress_merge: the runs differ in {key} ({base.get(key)!r}, {new.get(key)!r})"
+            )
+    by = {(r["episode_set"], r["helmsman"]): r for r in base["rows"]}
+    sets = {s: i for i, s in enumerate(base["sets"])}
+    new_rows = [r for r in new["rows"] if r["episode_set"] in sets]
+    added = [h for h in new["helmsmen"] if h not in base["helmsmen"]]
+    for r in new_rows:
+        old = by.get((r["episode_set"], r["helmsman"]))
+        if r["helmsman"] not in added and (old is None or not _same(old, r)):
+            raise SystemExit(f"stress_merge: {r['helmsman']} on {r['episode_set']} differs")
+    helmsmen = list(base["helmsmen"])
+    for h in added:
+        before = order[: order.index(h)] if h in order else order
+        anchor = next((a for a in reversed(before) if a in helmsmen), None)
+        helmsmen.insert(helmsmen.index(anchor) + 1 if anchor else len(helmsmen), h)
+    rank = {h: i for i, h in enumerate(helmsmen)}
+    rows = base["rows"] + [r for r in new_rows if r["helmsman"] in added]
+    base["rows"] = sorted(rows, key=lambda r: (sets[r["episode_set"]], rank[r["helmsman"]]))
+    base["helmsmen"] = helmsmen
+    if added:
+        merged = {"helmsmen": added, "run_helmsmen": new["helmsmen"], "wall_s": new["wall_s"]}
+        base["merged"] = [*base.get("merged", []), merged]
+    return added
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 2:
+        print("usage: python benchmarks/stress_merge.py STRESS_JSON NEW_JSON", file=sys.stderr)
+        return 2
+    from usvsim.common.fileio import atomic_write_text
+    from usvsim.helm.registry import available_helmsmen
+
+    path = Path(argv[0])
+    base, new = json.loads(path.read_text()), json.loads(Path(argv[1]).read_text())
+    added = merge(base, new, list(available_helmsmen()))
+    if added:
+        atomic_write_text(path, json.dumps(base, indent=2) + "\n")
+    print(f"added {', '.join(added) or 'nothing'} to {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
