@@ -223,6 +223,9 @@ def run_perf(args: PerfArgs) -> int:
         from usvsim.task.torch_env import torch_env_rates
 
         result["torch_env"] = torch_env_rates(args.device, seconds=args.seconds)
+        from usvsim.task.torch_openwater import torch_openwater_rates
+
+        result["torch_openwater"] = torch_openwater_rates(args.device, seconds=args.seconds)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -265,6 +268,21 @@ def run_perf(args: PerfArgs) -> int:
                     for k, v in row.items()
                 )
                 for n, row in torch_env["env_steps_per_s"].items()
+            )
+        )
+    torch_ow = result.get("torch_openwater")
+    if torch_ow:
+        over = torch_ow["over_C_path"]
+        print(
+            f"torch env, open water scene ({torch_ow['device']}, same run, load "
+            f"{torch_ow['load_average_1min']}): decision steps/s "
+            + "; ".join(
+                f"{n} "
+                + ", ".join(
+                    f"{k}: {v:,}" + (f" ({over[n][k]}x C)" if k in over[n] else "")
+                    for k, v in row.items()
+                )
+                for n, row in torch_ow["decision_steps_per_s"].items()
             )
         )
     env = result.get("env", {})
