@@ -30,7 +30,7 @@ def main(out: str = "usvsim-results/heldout_likeness.json") -> int:
     for setup in SETUPS:
         for kind in ("il", "rl"):
             name = f"{kind}-{setup}"
-            helmsman = make_helmsman(f"usvsim/models/{name}.pt")
+            helmsman = make_helmsman(name)  # the setup's name: the model's former name
             obs, act = helmsman_kinds(helmsman)
             lk = helmsman_likeness(helmsman, observation=obs, action=act, reference=reference)
             results[name] = {

@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 STRESS_JSON = ROOT / "docs" / "data" / "stress.json"
 OUT = ROOT / "docs" / "assets" / "readme-figure.png"
 # the episode shown: the best learned helmsman on an episode of the hardest set
-EPISODE_SET, EPISODE_INDEX, HELMSMAN = "everything", 4, "rl-gaussian-scene-ow-ft"
+EPISODE_SET, EPISODE_INDEX, HELMSMAN = "everything", 4, "scene-gaussian-gail-trpo-openwater"
 
 
 def heatmap(ax: Axes, stress: dict[str, Any]) -> Any:

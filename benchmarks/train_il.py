@@ -37,6 +37,7 @@ from train_rl import (  # this folder
     MODELS_DIR,
     evaluate_checkpoint,
     merge_models_json,
+    model_path,
     replace_readme_section,
     run_options,
     split_cell,
@@ -148,8 +149,9 @@ def main(argv: list[str] | None = None) -> int:
         best = run_dir / "best.pt"
         if args.ship:
             radar = IL_SETUPS[name].observation.startswith("radar")
-            save_checkpoint(slim_copy(load_checkpoint(best), half=radar), MODELS_DIR / f"{name}.pt")
-            best = MODELS_DIR / f"{name}.pt"
+            target = model_path(name)  # the setup's shipped file, by its former name
+            save_checkpoint(slim_copy(load_checkpoint(best), half=radar), target)
+            best = target
         results.append(
             {
                 "setup": name,

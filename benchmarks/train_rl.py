@@ -51,6 +51,13 @@ from usvsim.evaluation.episodes import evaluate, heldout_episodes, validation_ep
 MODELS_DIR = Path(__file__).resolve().parent.parent / "usvsim" / "models"
 
 
+def model_path(setup: str) -> Path:
+    """The shipped file of ``setup`` (found by its former name), in :data:`MODELS_DIR`."""
+    from usvsim.helm.registry import model_path as shipped
+
+    return shipped(setup, MODELS_DIR)
+
+
 def train_one(
     name: str,
     seed: int,
@@ -197,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
         source = run_dir / "best.pt"
         if args.ship:
             ckpt = slim_copy(load_checkpoint(source), half=setup.observation.startswith("radar"))
-            target = MODELS_DIR / f"{name}.pt"
+            target = model_path(name)  # the setup's shipped file, by its former name
             save_checkpoint(ckpt, target)
             source = target
         evaluation = evaluate_checkpoint(source)
@@ -248,9 +255,10 @@ def merge_models_json(results: list[dict[str, Any]], machine: dict[str, Any]) ->
     path = MODELS_DIR / "models.json"
     models: dict[str, Any] = json.loads(path.read_text())["models"] if path.is_file() else {}
     for r in results:
-        card = models.get(r["setup"], {}).get("card")
-        models[r["setup"]] = {**r, "checkpoint": f"usvsim/models/{r['setup']}.pt",
-                              "machine": machine, **({"card": card} if card else {})}  # fmt: skip
+        name = model_path(r["setup"]).stem  # the model's name (its setup's name if new)
+        card = models.get(name, {}).get("card")
+        models[name] = {**r, "checkpoint": f"usvsim/models/{name}.pt",
+                        "machine": machine, **({"card": card} if card else {})}  # fmt: skip
     return {"models": dict(sorted(models.items()))}
 
 

@@ -85,14 +85,14 @@ def _spaces(env_id: str) -> tuple[str, str]:
 
 
 def pole_episode_png() -> bytes:
-    """Last frame of ``rl-gaussian-positional`` on seed 3 of ``usvsim/PoleAvoidance-v0``."""
+    """Last frame of ``positional-gaussian-trpo-study`` on seed 3 of ``usvsim/PoleAvoidance-v0``."""
     import gymnasium
     import matplotlib.pyplot as plt
     import numpy as np
 
     from usvsim.helm.registry import make_helmsman
 
-    helmsman = make_helmsman("rl-gaussian-positional")
+    helmsman = make_helmsman("positional-gaussian-trpo-study")
     helmsman.reset(1)
     env = gymnasium.make("usvsim/PoleAvoidance-v0", render_mode="rgb_array")
     obs, _ = env.reset(seed=3)
@@ -109,7 +109,7 @@ def pole_episode_png() -> bytes:
 
 
 POLE_CAPTION = (
-    "The last frame of one episode: `rl-gaussian-positional` on `env.reset(seed=3)`, "
+    "The last frame of one episode: `positional-gaussian-trpo-study` on `env.reset(seed=3)`, "
     '`render_mode="rgb_array"` (`render()` after the last step; `docs/hooks/gen_envs.py`).'
 )
 

@@ -52,12 +52,6 @@ def provenance(name: str, data: dict[str, Any]) -> str:
             f"({run['wall_s'] / 60:.0f} min, `benchmarks/stress_merge.py`): "
             f"{_names(run['helmsmen'])}."
         )
-    for run in data.get("merged", []):  # benchmarks/stress_merge.py: helmsmen added later
-        line += (
-            f" Added later from a run of {_names(run['run_helmsmen'])} "
-            f"({run['wall_s'] / 60:.0f} min, `benchmarks/stress_merge.py`): "
-            f"{_names(run['helmsmen'])}."
-        )
     if missing:
         line += f" Not in it: {_names(missing)} (the command above adds them)."
     return line
@@ -241,17 +235,23 @@ one seed.
 
 
 def model_zoo() -> str:
-    """The shipped models (``usvsim/models/models.json``): how each was trained and scored."""
+    """The shipped models (``usvsim/models/models.json`` and their cards): how each was trained
+    and scored, under its name and the name it was published under before."""
+    from usvsim.evaluation.model_cards import load_cards
+
     root = Path(__file__).resolve().parents[2]
     models = json.loads((root / "usvsim" / "models" / "models.json").read_text())["models"]
+    cards = load_cards()
     lines = [
-        "| model | trained by | observation | action | held-out success | training run | command |",
-        "|---|---|---|---|---|---|---|",
+        "| model | former name | trained by | observation | action | held-out success "
+        "| training run | command |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for name in sorted(models):
-        m = models[name]
-        parts = name.split("-")
-        algo = "TRPO (RL)" if parts[0] == "rl" else "GAIL (IL)"
+        m, card = models[name], cards[name]
+        algo = "GAIL (IL)" if card.family == "IL" else "TRPO (RL)"
+        if "gail-trpo" in name:
+            algo = "GAIL, then TRPO"
         heldout = m.get("evaluation", {}).get("held-out", {})
         ok = f"{heldout['successes']}/{heldout['episodes']}" if heldout else "–"
         summary = m.get("summary", {})
@@ -261,8 +261,10 @@ def model_zoo() -> str:
             else "–"
         )
         command = m.get("command", "–")
+        former = ", ".join(f"`{n}`" for n in card.former_names)
         lines.append(
-            f"| `{name}` | {algo} | {parts[2]} | {parts[1]} | {ok} | {run} | `{command}` |"
+            f"| `{name}` | {former} | {algo} | {card.observation} | {card.action} | {ok} | {run} "
+            f"| `{command}` |"
         )
     return "\n".join(lines)
 
@@ -276,7 +278,7 @@ def training_times() -> str:
         "| setup | first 15/15: iteration, wall-clock | whole run: iterations, wall-clock |",
         "|---|---|---|",
     ]
-    for name in sorted(models):
+    for name in sorted(models, key=lambda n: models[n]["setup"]):
         summary = models[name].get("summary", {})
         first = summary.get("first_15_of_15") or {}
         first_text = (
@@ -289,5 +291,5 @@ def training_times() -> str:
             if "iterations" in summary and "wall_time_s" in summary
             else "–"
         )
-        lines.append(f"| `{name}` | {first_text} | {whole} |")
+        lines.append(f"| `{models[name]['setup']}` | {first_text} | {whole} |")
     return "\n".join(lines)

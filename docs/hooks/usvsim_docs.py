@@ -117,8 +117,8 @@ def _env_pages(files: Files, config: Any) -> None:
         "usvsim/OpenWater-v0": (
             "../assets/generated/env-openwater.png",
             "One episode of the family's hardest stress set (`everything`) steered by "
-            "`rl-gaussian-scene-ow-ft`: this env has no `render()` (its top view would draw one "
-            "pole), so the page shows the evaluation's path plot "
+            "`scene-gaussian-gail-trpo-openwater`: this env has no `render()` (its top view "
+            "would draw one pole), so the page shows the evaluation's path plot "
             "(`benchmarks/readme_figures.py`, `open_water_episode_figure`).",
         ),
     }

@@ -157,11 +157,12 @@ def _video_episodes(text: str, n: int) -> list[int]:
 
 
 def checkpoint_path(model: str) -> str:
-    """The checkpoint file of ``model``: a shipped model's name (as ``usvsim bench`` takes it,
-    ``usvsim/models/<name>.pt``) or a path; :class:`UserError` naming both kinds otherwise."""
-    from usvsim.helm.registry import MODELS_DIR
+    """The checkpoint file of ``model``: a shipped model's name or former name (as ``usvsim
+    bench`` takes it, ``usvsim/models/<name>.pt``) or a path; :class:`UserError` naming both
+    kinds otherwise."""
+    from usvsim.helm.registry import MODELS_DIR, model_path
 
-    shipped = MODELS_DIR / f"{model}.pt"
+    shipped = model_path(model)
     if "/" not in model and shipped.is_file():
         return str(shipped)
     if Path(model).exists() or model.endswith(".pt"):

@@ -237,17 +237,17 @@ def setup_table() -> str:
     """Every registered setup (:data:`learning.experiments.setups.SETUPS`, then
     :data:`learning.experiments.il_setups.IL_SETUPS`), one line each: algorithm, task,
     observation, action, and ``*`` where a trained model of it ships in ``usvsim/models``."""
-    from usvsim.helm.registry import MODELS_DIR
+    from usvsim.helm.registry import model_path
 
     setups: list[Any] = [*SETUPS.values(), *IL_SETUPS.values()]
     width = max(len(s.name) for s in setups) + 2
     lines = [
-        f"setups ({len(setups)}; * = a trained model ships in usvsim/models under that name):",
+        f"setups ({len(setups)}; * = a trained model of the setup ships in usvsim/models):",
         f"  {'setup':<{width}}{'algorithm':<11}{'task':<12}{'observation':<13}action",
     ]
     for s in setups:
         algorithm = f"{s.algorithm}+gail" if s.name.startswith("il-") else s.algorithm
-        mark = "*" if (MODELS_DIR / f"{s.name}.pt").is_file() else " "
+        mark = "*" if model_path(s.name).is_file() else " "
         lines.append(
             f"{mark} {s.name:<{width}}{algorithm:<11}{s.task:<12}{s.observation:<13}{s.action}"
         )

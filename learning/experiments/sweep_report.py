@@ -174,9 +174,9 @@ def _study(setup: str) -> dict[str, Any]:
 def _shipped_model(setup: str, n: int) -> float:
     """Held-out success of the model usvsim ships for ``setup`` (NaN if none)."""
     from usvsim.evaluation.episodes import evaluate, heldout_episodes
-    from usvsim.helm.registry import MODELS_DIR, helmsman_kinds, make_helmsman
+    from usvsim.helm.registry import helmsman_kinds, make_helmsman, model_path
 
-    if not (MODELS_DIR / f"{setup}.pt").is_file():
+    if not model_path(setup).is_file():  # found by the setup's name (a former name)
         return math.nan
     helmsman = make_helmsman(setup)
     observation, action = helmsman_kinds(helmsman)

@@ -241,12 +241,12 @@ class _Run:
 def first_policy(setup: RLSetup, init_policy: str | Path = "") -> dict[str, Any] | None:
     """The agent state a new run of ``setup`` starts from (:func:`train_rl`), or None; raises
     :class:`CheckpointError` where that file cannot start it."""
-    from usvsim.helm.registry import MODELS_DIR
+    from usvsim.helm.registry import model_path
 
     if init_policy:
         return starting_policy(init_policy, setup)
-    if setup.init_policy:
-        return starting_policy(MODELS_DIR / f"{setup.init_policy}.pt", setup)
+    if setup.init_policy:  # a shipped model, by its setup's name (a former name)
+        return starting_policy(model_path(setup.init_policy), setup)
     return None
 
 

@@ -3,8 +3,8 @@
 A sweep (``usvsim sweep``, :mod:`learning.experiments.sweep_report`) leaves ``report.json`` in
 its folder; per arm it holds the held-out success of every seed's ``best.pt``, their
 interquartile mean (IQM) and its 95 % stratified-bootstrap interval (Agarwal et al. 2021). The
-bench's table shows, on the held-out row of each helmsman named after a setup of the sweep (a
-shipped model is named after the setup it was trained with), two more columns: ``sweep seeds``
+bench's table shows, on the held-out row of each shipped model trained with a setup of the
+sweep (its model card's ``setup``), two more columns: ``sweep seeds``
 (finished seeds, crashed ones noted) and ``sweep held-out IQM [95 % CI]``. Only arms without
 hyperparameter overrides are shown: the shipped models were trained with the setups' own
 values. The file is read as plain JSON (no import of ``learning``); the sweep's held-out
@@ -125,14 +125,19 @@ def _arm(row: Mapping[str, Any]) -> SweepArm:
 def with_sweep_columns(table: str, rows: Sequence[Any], sweep: SweepColumns) -> str:
     """``table`` (:func:`usvsim.evaluation.bench.format_table` of ``rows``: a header line, a
     rule, one line per row) with :data:`SWEEP_HEADER` columns on the right, filled on the
-    held-out row of each helmsman named after a setup of the sweep, and a line saying where
-    the numbers come from."""
-    out = append_columns(table, SWEEP_HEADER, [_row_cells(r, sweep) for r in rows]).splitlines()
-    shown = sorted({r.helmsman for r in rows} & set(sweep.arms))
+    held-out row of each shipped model trained with a setup of the sweep (its card's
+    ``setup``; a checkpoint named after a setup counts too), and a line saying where the numbers
+    come from."""
+    from usvsim.evaluation.model_cards import shipped_setups
+
+    setups = shipped_setups(sorted({r.helmsman for r in rows}))
+    cells = [_row_cells(r, sweep, setups.get(r.helmsman, r.helmsman)) for r in rows]
+    out = append_columns(table, SWEEP_HEADER, cells).splitlines()
+    shown = sorted(h for h in {r.helmsman for r in rows} if setups.get(h, h) in sweep.arms)
     out.append(
         f"sweep {sweep.name} ({sweep.folder}/report.json): IQM over seeds of each seed's best.pt "
         f"on {sweep.heldout_episodes} held-out episodes; shown for "
-        + (", ".join(shown) if shown else "no helmsman of this table (names are setups)")
+        + (", ".join(shown) if shown else "no helmsman of this table (none of its setups)")
     )
     return "\n".join(out)
 
@@ -165,8 +170,8 @@ def append_columns(table: str, header: Sequence[str], cells: Sequence[Sequence[s
     return "\n".join(out)
 
 
-def _row_cells(row: Any, sweep: SweepColumns) -> tuple[str, str]:
-    arm = sweep.arms.get(row.helmsman)
+def _row_cells(row: Any, sweep: SweepColumns, setup: str) -> tuple[str, str]:
+    arm = sweep.arms.get(setup)
     if arm is None or row.episode_set != "held-out":
         return "", ""
     return arm.cells()

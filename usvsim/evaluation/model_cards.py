@@ -2,13 +2,18 @@
 pick for a use (issue 37). ``usvsim models`` lists them; the docs render
 :func:`cards_markdown`.
 
-Every ``usvsim/models/<name>.pt`` has a card under ``"card"`` in its ``models.json`` entry:
+Every ``usvsim/models/<name>.pt`` has a card under ``"card"`` in its ``models.json`` entry. A
+model's name says what it is: ``observation-action-algorithm-task``, with ``gail-trpo`` for
+GAIL followed by TRPO fine-tuning and ``-continued`` for more TRPO from another model (e.g.
+``scene-categorical-gail-trpo-openwater``); the names the file was published under before are
+its ``former_names``, still loadable (:func:`usvsim.helm.registry.model_aliases`).
 
 =====================  ===========================================================================
 field                  meaning
 =====================  ===========================================================================
-``proposed_name``      observation-action-algorithm-task: what the model is (a later rename;
-                       today's file names record a run's history)
+``former_names``       the names the file was published under before (the setup's name,
+                       e.g. ``il-categorical-scene-ow``); published results and the notes use
+                       them, and ``usvsim bench --helmsmen`` still loads the file by them
 ``observation``        what the policy sees (``positional``, ``radar+goal``, ``scene``)
 ``action``             what it outputs (``gaussian``: continuous heading change;
                        ``categorical``: one of a few heading changes)
@@ -50,7 +55,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -74,6 +79,7 @@ __all__ = [
     "models_report",
     "recommend",
     "recommendation_mismatches",
+    "shipped_setups",
     "stress_summary",
     "with_recommendations",
     "with_stress_figures",
@@ -101,7 +107,7 @@ RECOMMENDATION_RULE = (
     "split, then by name. Test-split figures play no part."
 )
 CARD_FIELDS = (
-    "proposed_name", "observation", "action", "algorithm", "method", "family", "task", "use",
+    "former_names", "observation", "action", "algorithm", "method", "family", "task", "use",
     "setup", "seed", "code_commit", "date", "best_iteration", "runs", "validation", "test",
     "recommended", "notes",
 )  # fmt: skip
@@ -125,7 +131,7 @@ class ModelCard:
     """A model's card (module table)."""
 
     name: str
-    proposed_name: str
+    former_names: tuple[str, ...]
     observation: str
     action: str
     algorithm: str
@@ -158,8 +164,10 @@ class ModelCard:
                 f"model card {name}: field 'use' is {card['use']!r}; allowed: {', '.join(USES)}"
             )
         runs = tuple(TrainingRun(**r) for r in card["runs"])
-        values = {k: card[k] for k in CARD_FIELDS if k not in ("runs", "recommended")}
-        return cls(name=name, runs=runs, recommended=tuple(card["recommended"]), **values)
+        lists = ("runs", "recommended", "former_names")
+        values = {k: card[k] for k in CARD_FIELDS if k not in lists}
+        return cls(name=name, runs=runs, recommended=tuple(card["recommended"]),
+                   former_names=tuple(card["former_names"]), **values)  # fmt: skip
 
     def to_json(self) -> dict[str, Any]:
         """The card as the JSON object of ``models.json`` (fields in :data:`CARD_FIELDS` order)."""
@@ -168,7 +176,7 @@ class ModelCard:
             value = getattr(self, k)
             if k == "runs":
                 value = [vars(r).copy() for r in value]
-            elif k == "recommended":
+            elif k in ("recommended", "former_names"):
                 value = list(value)
             elif k in ("validation", "test"):
                 value = dict(value)
@@ -213,7 +221,7 @@ def check_cards(models_dir: Path | None = None) -> dict[str, ModelCard]:
     UserError
         One line for the first problem: a file without a card, a card without a file, a card
         field that disagrees with the checkpoint, two recommended models for one use and
-        family, or two cards with one proposed name.
+        family, or a former name that is another model's name or former name.
     """
     from usvsim.helm.registry import checkpoint_facts
 
@@ -233,14 +241,15 @@ def check_cards(models_dir: Path | None = None) -> dict[str, ModelCard]:
                     f"the file says {facts[key]!r}"
                 )
     _check_recommended(cards)
-    seen: dict[str, str] = {}
+    seen: dict[str, str] = {name: name for name in cards}
     for name, card in cards.items():
-        if card.proposed_name in seen:
-            raise UserError(
-                f"model card {name}: field 'proposed_name' {card.proposed_name!r} is also "
-                f"{seen[card.proposed_name]}'s"
-            )
-        seen[card.proposed_name] = name
+        for former in card.former_names:
+            if former in seen:
+                raise UserError(
+                    f"model card {name}: field 'former_names' holds {former!r}, "
+                    f"which is also {seen[former]}'s name"
+                )
+            seen[former] = name
     return cards
 
 
@@ -327,6 +336,17 @@ def write_cards(cards: Mapping[str, ModelCard], models_dir: Path | None = None) 
     atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 
+def shipped_setups(labels: Sequence[str], models_dir: Path | None = None) -> dict[str, str]:
+    """Label -> training setup (the card's ``setup``) of each label that names a shipped model,
+    by its name or a former name (:func:`usvsim.helm.registry.model_aliases`)."""
+    from usvsim.helm.registry import model_aliases
+
+    cards = load_cards(models_dir)
+    aliases = model_aliases(models_dir)
+    found = {label: cards.get(aliases.get(label, label)) for label in labels}
+    return {label: card.setup for label, card in found.items() if card is not None}
+
+
 def default_helmsmen(models_dir: Path | None = None) -> list[str]:
     """The helmsmen ``usvsim bench`` compares when none are named: every classical baseline and
     the recommended models, in the registry's order; ``[]`` (every available helmsman, as
@@ -393,7 +413,7 @@ def _rows(cards: Mapping[str, ModelCard], seeds: Mapping[str, SeedTable]) -> lis
         rows.append((
             name, ", ".join(c.recommended) or "", c.use, c.family, c.observation, c.action,
             _pct(c.validation.get("stress", {})), _pct(c.test.get("stress", {})),
-            _seed_cell(c, seeds), train, c.proposed_name,
+            _seed_cell(c, seeds), train, ", ".join(c.former_names),
         ))  # fmt: skip
     return rows
 
@@ -401,7 +421,7 @@ def _rows(cards: Mapping[str, ModelCard], seeds: Mapping[str, SeedTable]) -> lis
 _HEADER = (
     "model", "recommended", "use", "family", "observation", "action",
     "stress validation: mean (sets >= 95 %)", "stress test: mean (sets >= 95 %)",
-    "stress test: IQM over N seeds [95 % CI]", "training s", "proposed name",
+    "stress test: IQM over N seeds [95 % CI]", "training s", "former name",
 )  # fmt: skip
 
 
@@ -463,7 +483,9 @@ def _card_section(name: str, c: ModelCard) -> list[str]:
         f"## `{name}`{mark}",
         "",
         f"- What: {c.method}; observation `{c.observation}`, action `{c.action}`, task "
-        f"`{c.task}` ({USES[c.use]}). Proposed name `{c.proposed_name}`.",
+        f"`{c.task}` ({USES[c.use]}). Former name "
+        + ", ".join(f"`{n}`" for n in c.former_names)
+        + " (still loadable).",
         f"- Setup `{c.setup}`, seed {c.seed}, code commit `{c.code_commit}`, written {c.date}, "
         f"`best.pt` at iteration {c.best_iteration}.",
         "- Training runs:",

@@ -360,17 +360,10 @@ def seed_tables_for(
     tables = load_seed_tables(folder)
     if not tables:
         return {}
-    from usvsim.evaluation.model_cards import load_cards
-    from usvsim.helm.registry import model_aliases
+    from usvsim.evaluation.model_cards import shipped_setups
 
-    cards = load_cards(models_dir)
-    aliases = model_aliases(models_dir)
-    out: dict[str, SeedTable] = {}
-    for label in helmsmen:
-        card = cards.get(aliases.get(label, label))
-        if card is not None and card.setup in tables:
-            out[label] = tables[card.setup]
-    return out
+    setups = shipped_setups(helmsmen, models_dir)
+    return {label: tables[s] for label, s in setups.items() if s in tables}
 
 
 def seed_header(tables: Mapping[str, SeedTable]) -> str:

@@ -16,10 +16,11 @@ name                         helmsman
                              its radar (:mod:`usvsim.nav.tracker`), ``radar+nav`` observation
 ``sb-mpc-radar``             :class:`baselines.sbmpc_radar.SBMPCRadarHelmsman`: ``sb-mpc`` on the
                              same tracks, ``radar+nav`` observation
-``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``, also
-                             by the name its model card proposes (``usvsim models``:
-                             observation-action-algorithm-task, e.g.
-                             ``scene-categorical-gail-openwater``; :func:`model_aliases`)
+``<model>``                  each trained policy shipped as ``usvsim/models/<model>.pt``, named
+                             observation-action-algorithm-task (``usvsim models``, e.g.
+                             ``scene-categorical-gail-openwater``), also by the names it was
+                             published under (its card's ``former_names``, e.g.
+                             ``il-categorical-scene-ow``; :func:`model_aliases`)
 a path to a ``.pt`` file     a checkpoint written by ``usvsim train``
 ===========================  ===================================================================
 
@@ -58,6 +59,7 @@ __all__ = [
     "load_checkpoint_helmsman",
     "make_helmsman",
     "model_aliases",
+    "model_path",
     "select_helmsmen",
 ]
 
@@ -161,8 +163,10 @@ def available_helmsmen(models_dir: Path | None = None) -> dict[str, HelmsmanFact
 
 
 def model_aliases(models_dir: Path | None = None) -> dict[str, str]:
-    """Proposed name → file stem of each shipped model whose card (``models.json``, entry
-    ``card.proposed_name``) names it; a name that is already a helmsman's is not an alias.
+    """Former name → file stem of each shipped model whose card (``models.json``, entry
+    ``card.former_names``) lists it: the names published results and the notes use (the
+    training setup's name, e.g. ``il-categorical-scene-ow``); a name that is already a
+    helmsman's is not an alias.
 
     Read here from the JSON (not through :mod:`usvsim.evaluation.model_cards`, which checks the
     cards) so that the registry stays below the evaluation block.
@@ -181,10 +185,22 @@ def model_aliases(models_dir: Path | None = None) -> dict[str, str]:
     taken |= {"vo-radar", "sb-mpc-radar", *SANITY_HELMSMEN, ALL}
     aliases: dict[str, str] = {}
     for stem, entry in entries.items():
-        proposed = (entry.get("card") or {}).get("proposed_name")
-        if proposed and proposed not in taken and (folder / f"{stem}.pt").is_file():
-            aliases[proposed] = stem
+        for former in (entry.get("card") or {}).get("former_names", []):
+            if former not in taken and (folder / f"{stem}.pt").is_file():
+                aliases[former] = stem
     return aliases
+
+
+def model_path(name: str, models_dir: Path | None = None) -> Path:
+    """The shipped file of model ``name`` (its file stem or a former name, :func:`model_aliases`);
+    ``usvsim/models/<name>.pt`` (which may not exist) for any other name.
+
+    A training setup's shipped model is found by the setup's name this way: every former name
+    is the setup's.
+    """
+    folder = MODELS_DIR if models_dir is None else models_dir
+    stem = name if (folder / f"{name}.pt").is_file() else model_aliases(folder).get(name, name)
+    return folder / f"{stem}.pt"
 
 
 def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
@@ -216,7 +232,7 @@ def make_helmsman(name: str, action: ActionKind = "gaussian") -> Helmsman:
 def _unknown(name: str, registry: dict[str, HelmsmanFactory]) -> str:
     return (
         f"unknown helmsman {name!r}; choose {', '.join((*SANITY_HELMSMEN, *registry))}, "
-        "a model's proposed name (usvsim models) or a checkpoint file (.pt)"
+        "a model's former name (usvsim models) or a checkpoint file (.pt)"
     )
 
 

@@ -9,7 +9,8 @@ from PIL import Image
 
 from learning.cli.evaluate import EvaluateArgs, run
 
-MODEL = str(Path(__file__).resolve().parents[3] / "usvsim" / "models" / "rl-gaussian-positional.pt")
+MODELS = Path(__file__).resolve().parents[3] / "usvsim" / "models"
+MODEL = str(MODELS / "positional-gaussian-trpo-study.pt")
 
 
 def test_video_holds_the_chosen_episodes(

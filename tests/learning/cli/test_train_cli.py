@@ -196,7 +196,7 @@ def test_nan_weights_after_an_update_are_never_saved(
 
 def test_a_run_can_start_from_another_runs_policy(tmp_path: Path) -> None:
     # an IL model (GAIL's TRPO policy) starts an RL run: the first validation is that policy's
-    source = Path("usvsim/models/il-categorical-positional.pt")
+    source = Path("usvsim/models/positional-categorical-gail-study.pt")
     assert run(_args(tmp_path, iterations=1, init_policy=str(source))) == 0
     ckpt = load_checkpoint(tmp_path / "latest.pt")
     assert ckpt.train_args["init_policy"] == str(source)
@@ -209,7 +209,7 @@ def test_a_run_can_start_from_another_runs_policy(tmp_path: Path) -> None:
 
 
 def test_a_start_policy_of_other_kinds_or_with_resume_is_refused(tmp_path: Path) -> None:
-    radar = "usvsim/models/il-categorical-radar.pt"
+    radar = "usvsim/models/radar-categorical-gail-study.pt"
     with pytest.raises(SystemExit, match=r"cannot start from that policy.*radar\+goal/categorical"):
         run(_args(tmp_path / "a", init_policy=radar))
     assert not (tmp_path / "a" / "latest.pt").exists()

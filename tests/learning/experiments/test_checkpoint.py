@@ -192,11 +192,12 @@ def test_shipped_model_reproduces_its_recorded_validation(path: Path) -> None:
 
     from usvsim.evaluation.episodes import evaluate, validation_episodes
 
-    rl = path.stem.startswith("rl-")  # expected_setup knows the RL setups only
-    ckpt = load_checkpoint(path, expected_setup=path.stem if rl else None)
-    assert ckpt.setup == path.stem
-    assert ckpt.slim and path.stat().st_size < 3_500_000
     recorded = json.loads((MODELS / "models.json").read_text())["models"][path.stem]
+    setup = recorded["setup"]  # the model's name says what it is; its setup how it was trained
+    rl = setup.startswith("rl-")  # expected_setup knows the RL setups only
+    ckpt = load_checkpoint(path, expected_setup=setup if rl else None)
+    assert ckpt.setup == setup and recorded["card"]["former_names"] == [setup]
+    assert ckpt.slim and path.stat().st_size < 3_500_000
     helmsman = load_helmsman(path)
     records = evaluate(
         helmsman, validation_episodes(), observation=ckpt.observation, action=ckpt.action
@@ -244,7 +245,9 @@ def test_flat_setup_params_of_older_checkpoints_read_as_the_composed_setup(name:
     assert "algorithm_config" not in params
     base = {**SETUPS, **IL_SETUPS}[name]
     assert setup_from_params(base, params) == base
-    ckpt = load_checkpoint(Path("usvsim/models") / f"{name}.pt")
+    from usvsim.helm.registry import model_path
+
+    ckpt = load_checkpoint(model_path(name))  # the setup's shipped model, by its former name
     assert ckpt.algorithm == "trpo"
     assert setup_from_params(base, ckpt.setup_params) == base
     assert setup_from_params(base, setup_params(base)) == base

@@ -20,7 +20,7 @@ from learning.experiments.checkpoint import (
 )
 from usvsim.helm.registry import MODELS_DIR
 
-SOURCE = MODELS_DIR / "rl-gaussian-positional.pt"
+SOURCE = MODELS_DIR / "positional-gaussian-trpo-study.pt"
 RAW = SOURCE.read_bytes()
 CONTENT = torch.load(SOURCE, map_location="cpu", weights_only=True)
 SETTINGS = settings(

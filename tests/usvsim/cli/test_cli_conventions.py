@@ -19,7 +19,8 @@ from usvsim.cli.main import COMMANDS, command_spec
 from usvsim.helm.registry import MODELS_DIR
 
 ROOT = Path(__file__).resolve().parents[3]
-MODEL = "rl-gaussian-positional"  # a shipped model (usvsim/models/rl-gaussian-positional.pt)
+MODEL = "positional-gaussian-trpo-study"  # a shipped model (usvsim/models/MODEL.pt)
+SETUP = "rl-gaussian-positional"  # its setup and former name
 
 
 def test_version_prints_the_package_version(capsys: pytest.CaptureFixture[str]) -> None:
@@ -51,7 +52,9 @@ def test_train_help_lists_every_setup(capsys: pytest.CaptureFixture[str]) -> Non
     listed = re.findall(r"^[* ] ((?:rl|il)-[a-z0-9-]+) ", out, flags=re.MULTILINE)
     assert listed == [*SETUPS, *IL_SETUPS]
     assert len(listed) == len(SETUPS) + len(IL_SETUPS) >= 25
-    shipped = {p.stem for p in MODELS_DIR.glob("*.pt")}
+    from usvsim.evaluation.model_cards import load_cards
+
+    shipped = {card.setup for card in load_cards().values()}
     marked = set(re.findall(r"^\* ((?:rl|il)-[a-z0-9-]+) ", out, flags=re.MULTILINE))
     assert marked == shipped & set(listed)
 
@@ -61,9 +64,12 @@ def test_evaluate_takes_a_model_name_and_prints_json(capsys: pytest.CaptureFixtu
     captured = capsys.readouterr()
     payload = json.loads(captured.out)  # stdout holds the JSON and nothing else
     assert payload["checkpoint"] == str(MODELS_DIR / f"{MODEL}.pt")
-    assert payload["setup"] == MODEL
+    assert payload["setup"] == SETUP
     assert [(r["set"], r["episodes"]) for r in payload["rows"]] == [("validation", 15)]
     assert payload["rows"][0]["successes"] == 15  # the shipped model passes its validation
+    assert main(["evaluate", SETUP, "--heldout", "0", "--json"]) == 0  # its former name
+    again = capsys.readouterr()
+    assert json.loads(again.out)["checkpoint"] == payload["checkpoint"] and not again.err
 
 
 def test_evaluate_deprecated_json_path_still_writes_the_file(

@@ -17,7 +17,7 @@ import pytest
 from usvsim.cli import main
 from usvsim.helm.registry import MODELS_DIR
 
-MODEL = MODELS_DIR / "rl-gaussian-positional.pt"  # a shipped checkpoint (positional, gaussian)
+MODEL = MODELS_DIR / "positional-gaussian-trpo-study.pt"  # a shipped checkpoint (positional)
 
 
 def _mission(path: Path, goal_lat: float) -> str:

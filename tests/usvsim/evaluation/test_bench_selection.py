@@ -14,7 +14,7 @@ from usvsim.evaluation.bench import BenchArgs, run_bench, to_json, write_results
 from usvsim.helm import registry
 from usvsim.helm.registry import MODELS_DIR, select_helmsmen
 
-MODEL = MODELS_DIR / "rl-gaussian-positional.pt"
+MODEL = MODELS_DIR / "positional-gaussian-trpo-study.pt"
 
 
 def test_names_and_paths_alike_duplicates_once(tmp_path: Path) -> None:

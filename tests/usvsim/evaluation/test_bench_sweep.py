@@ -15,7 +15,8 @@ from usvsim.cli.main import main
 from usvsim.common.errors import UserError
 from usvsim.evaluation.bench_sweep import SWEEP_HEADER, load_sweep
 
-MODEL = "rl-categorical-positional"  # a shipped model, named after its setup
+MODEL = "rl-categorical-positional"  # a setup of the sweep
+SHIPPED = "positional-categorical-trpo-study"  # the shipped model of that setup (card "setup")
 
 
 def _arm(setup: str, overrides: dict[str, Any], seeds: list[int], iqm: Any, ci: list[float]) -> Any:
@@ -87,7 +88,7 @@ def test_bench_refuses_a_non_sweep_before_it_runs(tmp_path: Path, capsys: Any) -
 def test_bench_shows_the_sweep_beside_the_shipped_model(
     sweep_dir: Path, tmp_path: Path, capsys: Any
 ) -> None:
-    argv = ["bench", "--helmsmen", f"straight,{MODEL}", "--heldout", "5", "--no-likeness"]
+    argv = ["bench", "--helmsmen", f"straight,{SHIPPED}", "--heldout", "5", "--no-likeness"]
     argv += ["--no-plots", "--out", str(tmp_path / "bench"), "--sweep", str(sweep_dir)]
     assert main(argv) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -96,10 +97,10 @@ def test_bench_shows_the_sweep_beside_the_shipped_model(
     splits = ("validation", "held-out")  # a row: helmsman, what it perceives (words), split, ...
     rows = {(line.split()[0], next(w for w in line.split() if w in splits)): line
             for line in lines if set(line.split()) & set(splits)}  # fmt: skip
-    assert rows[(MODEL, "held-out")].endswith("4 (1 crashed)  98.8 % [96.0, 100.0]")
-    for key in ((MODEL, "validation"), ("straight", "validation"), ("straight", "held-out")):
+    assert rows[(SHIPPED, "held-out")].endswith("4 (1 crashed)  98.8 % [96.0, 100.0]")
+    for key in ((SHIPPED, "validation"), ("straight", "validation"), ("straight", "held-out")):
         assert "crashed" not in rows[key] and "98.8" not in rows[key], key
-    assert f"shown for {MODEL}" in lines[-2]
+    assert f"shown for {SHIPPED}" in lines[-2]
 
     assert main([*argv, "--json"]) == 0
     payload = json.loads(capsys.readouterr().out)

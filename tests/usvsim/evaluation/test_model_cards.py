@@ -32,7 +32,8 @@ from usvsim.helm import registry
 from usvsim.helm.registry import MODELS_DIR
 
 SHIPPED = sorted(p.stem for p in MODELS_DIR.glob("*.pt"))
-SMALL = "rl-gaussian-positional"  # a small file for the bad-input tests
+SMALL = "positional-gaussian-trpo-study"  # a small file for the bad-input tests
+SMALL_SETUP = "rl-gaussian-positional"  # its setup, the name it was published under
 
 
 def test_every_shipped_file_has_a_card_that_agrees_with_it() -> None:
@@ -101,7 +102,7 @@ def test_a_missing_card_or_file_is_named(tmp_path: Path, monkeypatch) -> None:
     with pytest.raises(UserError, match=f"model {SMALL}: no card .* \\(field 'card'\\)"):
         check_cards()
     data["models"][SMALL]["card"] = card
-    data["models"]["ghost"] = {"card": {**card, "proposed_name": "ghost"}}
+    data["models"]["ghost"] = {"card": {**card, "former_names": []}}
     (folder / "models.json").write_text(json.dumps(data))
     with pytest.raises(UserError, match=r"model card ghost: no file .*ghost\.pt"):
         check_cards()
@@ -115,7 +116,7 @@ def _card(name: str, use: str, family: str, val: dict[str, float], test: float) 
     stress_val = {"success_pct": val, "mean_success_pct": sum(val.values()) / len(val)}
     stress_test = {"success_pct": dict.fromkeys(val, test)}
     return ModelCard(
-        name=name, proposed_name=name, observation="scene", action="gaussian", algorithm="trpo",
+        name=name, former_names=(), observation="scene", action="gaussian", algorithm="trpo",
         method="RL", family=family, task="open-water", use=use, setup=name, seed=0,
         code_commit="unknown", date="2026-12-04", best_iteration=1, runs=(),
         validation={"stress": stress_val}, test={"stress": stress_test},
@@ -207,31 +208,59 @@ def test_default_helmsmen_are_the_baselines_and_the_recommended_models(
     from usvsim.helm.registry import available_helmsmen, select_helmsmen
 
     folder = _one_model_dir(tmp_path, monkeypatch)
-    shutil.copy(MODELS_DIR / "il-gaussian-positional.pt", folder / "il-gaussian-positional.pt")
+    shutil.copy(
+        MODELS_DIR / "positional-gaussian-gail-study.pt",
+        folder / "positional-gaussian-gail-study.pt",
+    )
     _edit_card(folder, recommended=[])
     assert default_helmsmen() == []  # no model recommended: every available one
     _edit_card(folder, recommended=["study-positional"])
     names = default_helmsmen()
-    assert SMALL in names and "il-gaussian-positional" not in names
+    assert SMALL in names and "positional-gaussian-gail-study" not in names
     assert {"los", "los-avoid", "vo"} <= set(names)
     assert list(select_helmsmen(["all"])) == list(available_helmsmen())
-    assert "il-gaussian-positional" in select_helmsmen(["all"])
+    assert "positional-gaussian-gail-study" in select_helmsmen(["all"])
 
 
-def test_every_model_is_also_named_by_its_card(tmp_path: Path) -> None:
-    """``usvsim bench --helmsmen scene-categorical-gail-openwater`` loads the file its card
-    describes; the proposed name labels the row; an index without cards gives no aliases."""
+def test_names_say_what_a_model_is_and_need_no_quoting() -> None:
+    """observation-action-algorithm-task (``usvsim models``): lower-case words and hyphens only,
+    so a name survives ``--helmsmen a,b``, a file name, a URL and a docs heading anchor."""
+    import re
+
+    for name, card in load_cards().items():
+        assert re.fullmatch(r"[a-z0-9]+(-[a-z0-9]+)*", name), name
+        observation, action = name.split("-")[:2]
+        assert observation == card.observation.split("+")[0] and action == card.action
+        assert ("-study" in name) == (card.task == "study") and card.former_names == (card.setup,)
+
+
+def test_every_model_is_also_named_by_its_former_name(tmp_path: Path, capsys) -> None:
+    """``usvsim bench --helmsmen rl-gaussian-positional`` (a published name) loads the file that
+    is now ``positional-gaussian-trpo-study``, labels the row by the name given and prints
+    nothing; an index without cards gives no aliases."""
     aliases = registry.model_aliases()
     cards = load_cards()
-    assert aliases == {c.proposed_name: name for name, c in cards.items()}
-    proposed = cards[SMALL].proposed_name
-    chosen = registry.select_helmsmen([proposed])
-    assert list(chosen) == [proposed]
-    by_alias, by_file = chosen[proposed](), registry.make_helmsman(SMALL)
-    assert type(by_alias) is type(registry.make_helmsman(proposed)) is type(by_file)
-    assert registry.checkpoint_facts(MODELS_DIR / f"{SMALL}.pt")["setup"] == SMALL
+    assert aliases == {f: name for name, c in cards.items() for f in c.former_names}
+    assert len(aliases) == len(cards) >= 20
+    chosen = registry.select_helmsmen([SMALL_SETUP])
+    assert list(chosen) == [SMALL_SETUP]
+    by_alias, by_file = chosen[SMALL_SETUP](), registry.make_helmsman(SMALL)
+    assert type(by_alias) is type(registry.make_helmsman(SMALL_SETUP)) is type(by_file)
+    assert capsys.readouterr() == ("", "")  # an old name is no warning
+    assert (
+        registry.model_path(SMALL_SETUP) == registry.model_path(SMALL) == MODELS_DIR / f"{SMALL}.pt"
+    )
+    assert registry.model_path("no-such") == MODELS_DIR / "no-such.pt"
+    assert registry.checkpoint_facts(MODELS_DIR / f"{SMALL}.pt")["setup"] == SMALL_SETUP
     shutil.copy(MODELS_DIR / f"{SMALL}.pt", tmp_path / f"{SMALL}.pt")
     assert registry.model_aliases(tmp_path) == {}  # no models.json there
     (tmp_path / "models.json").write_text("{")
     with pytest.raises(UserError, match="unreadable model index"):
         registry.model_aliases(tmp_path)
+
+
+def test_a_former_name_that_is_a_models_name_is_refused(tmp_path: Path, monkeypatch) -> None:
+    folder = _one_model_dir(tmp_path, monkeypatch)
+    _edit_card(folder, former_names=[SMALL])
+    with pytest.raises(UserError, match=f"model card {SMALL}: field 'former_names' holds"):
+        check_cards()
