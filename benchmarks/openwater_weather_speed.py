@@ -1,8 +1,8 @@
 """What weather costs ``usvsim/OpenWater-v0`` (issue 38): decision steps per second of the env on
 its calm training family beside the same family in weather, measured in the same run.
 
-Three envs at N boats (``--sizes``, default 256), scene observation, random Gaussian actions,
-autoresets drawing new family episodes included:
+Three envs at N boats (``--sizes``, default 256) per observation (``--observations``, default
+``scene`` and ``radar+goal``), random actions, autoresets drawing new family episodes included:
 
 * ``calm``: the default family (:data:`usvsim.task.openwater_env.OPEN_WATER_FAMILY`), the calm
   plant fused with the navigation filter;
@@ -20,6 +20,7 @@ share of the calm one (the issue's bar: >= 0.8)::
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import subprocess
@@ -46,6 +47,7 @@ def decision_rate(env: OpenWaterVectorEnv, seconds: float, rng: np.random.Genera
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[256])
+    parser.add_argument("--observations", nargs="+", default=["scene", "radar+goal"])
     parser.add_argument("--seconds", type=float, default=12.0, help="per env and size")
     parser.add_argument("--rounds", type=int, default=6)
     parser.add_argument("--json", action="store_true")
@@ -59,9 +61,10 @@ def main() -> None:
     }
     rows = []
     uptime_before = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
-    for n in args.sizes:
+    for n, observation in itertools.product(args.sizes, args.observations):
         envs = {
-            k: OpenWaterVectorEnv(n, observation="scene", family=f) for k, f in families.items()
+            k: OpenWaterVectorEnv(n, observation=observation, family=f)  # type: ignore[arg-type]
+            for k, f in families.items()
         }
         rng = np.random.default_rng(0)
         turns: dict[str, list[float]] = {k: [] for k in envs}
@@ -75,6 +78,7 @@ def main() -> None:
         rows.append(
             {
                 "n_boats": n,
+                "observation": observation,
                 "decision_steps_per_s": {k: round(v) for k, v in rates.items()},
                 "over_calm": {k: round(v / rates["calm"], 3) for k, v in rates.items()},
                 "in_weather": {k: bool(e.sim.inner.in_weather) for k, e in envs.items()},

@@ -372,7 +372,12 @@ class PoleAvoidanceBatch:
         self._s[idx, lay.nav] = nav
         if self._navplant.weather is not None:  # after the filter's draws: calm streams unchanged
             self._s[idx, lay.weather] = self.disturbances.start_weather(
-                self._navplant.weather, idx, rows.x[:, 0:3], rows.x[:, 3], self._noise.for_boats
+                self._navplant.weather,
+                idx,
+                rows.x[:, 0:3],
+                rows.x[:, 3],
+                self._noise.for_boats,
+                calm=rows,
             )
             self._noise.for_boats(None)
         self._est_pos[idx], self._est_psi[idx] = nav[:, 0:2], nav[:, 8]

@@ -20,7 +20,7 @@ depend on the batch around it.
 
 Weather (issue 38): ``weather`` (:class:`usvsim.task.weather_draw.Weather`) steps the boat in
 wind and waves (:mod:`usvsim.vessel.weather_plant`). :class:`BoatDisturbances` keeps each boat's
-per-episode weather inputs (N, 26) (:data:`usvsim.vessel.weather_plant.WEATHER_INPUTS` from
+per-episode weather inputs (N, 30) (:data:`usvsim.vessel.weather_plant.WEATHER_INPUTS` from
 ``wind_mean``), filled on reset by :meth:`BoatDisturbances.start_weather` through
 :meth:`usvsim.vessel.weather_plant.WeatherPlant.initial_state`; the gust and wave motion start
 from their stationary distributions drawn from the episode's own noise stream (so a boat's
@@ -41,6 +41,7 @@ from scipy.special import ndtri
 
 from usvsim.task.scenario import BoatNoise
 from usvsim.task.weather_draw import CALM, Weather, sea_conditions
+from usvsim.vessel.plant import PlantState
 from usvsim.vessel.weather_plant import NWS, WeatherPlant
 
 __all__ = ["BoatDisturbances", "EpisodeDisturbance"]
@@ -111,7 +112,7 @@ class BoatDisturbances:
         self.active = np.zeros(n_boats, dtype=bool)
         self._noise = BoatNoise(n_boats)
         # per-boat weather (module docstring): which boats have it, their episodes' weather and
-        # the weather plant's per-episode inputs (N, 26), allocated by the first start_weather
+        # the weather plant's per-episode inputs (N, 30), allocated by the first start_weather
         self.weather_active = np.zeros(n_boats, dtype=bool)
         self._weather: list[Weather] = [CALM] * n_boats
         self.weather_inputs: FloatArray | None = None
@@ -167,6 +168,7 @@ class BoatDisturbances:
         eta: FloatArray,
         speed_mps: FloatArray,
         episode_noise: Callable[[NDArray[np.intp]], Any],
+        calm: PlantState | None = None,
     ) -> FloatArray:
         """The weather states (len(boats), 8) of ``boats`` starting at ``eta`` (len(boats), 3)
         at ``speed_mps`` (len(boats),), and their weather input rows set (module docstring).
@@ -177,6 +179,7 @@ class BoatDisturbances:
         their streams (their draws, from the plant's generator, are multiplied by zero).
         Boats in a calm sea (H_s = 0) skip the wave filter's Riccati solutions: their filter is
         off and its gains zero either way (:func:`usvsim.vessel.weather_plant.weather_inputs`).
+        ``calm``: the boats' ``Plant.initial_state(eta, speed_mps)`` where the caller has it.
         """
         boats = np.asarray(boats, dtype=np.intp)
         if self.weather_inputs is None:
@@ -197,6 +200,7 @@ class BoatDisturbances:
                 speed_mps[rows],
                 rng=rng,
                 wave_filter=None if wavy[rows[0]] else False,
+                calm=None if calm is None else PlantState(x=calm.x[rows], c=calm.c[rows]),
             )
             m[rows] = state.m
             self.weather_inputs[boats[rows]] = state.inputs

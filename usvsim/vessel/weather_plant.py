@@ -32,6 +32,10 @@ it, as an encounter-frequency estimator would).
 Shapes (N boats, T steps): state ``s = [x (8), c (5), m (8)]`` per boat with ``m`` the weather
 states :data:`WEATHER_STATES`; per-boat inputs ``w = [ψ_ref, U_ref, V_c, β_c, ...]`` of
 :data:`WEATHER_INPUTS`; trajectory (N, T, 21).
+
+Why this module is long: the step's input layout (:data:`WEATHER_INPUTS`), the function that
+fills it and those that read it (the kernel, the sensed offsets, the filter's design line) change
+together; split, one layout would be spread over several modules.
 """
 
 from __future__ import annotations
@@ -57,7 +61,13 @@ from usvsim.vessel.model import (
 )
 from usvsim.vessel.plant import NS, Plant, PlantState
 from usvsim.vessel.vessels import VesselParams
-from usvsim.vessel.weather.loads import USV105_HULL, WeatherHull, environment_loads
+from usvsim.vessel.weather.loads import (
+    USV105_HULL,
+    WeatherHull,
+    relative_drift_loads,
+    relative_trig,
+    relative_wind_loads,
+)
 from usvsim.vessel.weather.observer import (
     OBSERVER_STATES,
     ObserverNoise,
@@ -104,6 +114,12 @@ WEATHER_INPUTS = (
     "drift_pressure",  # N/m, p_d
     "wave_dir",  # rad, towards
     "wave_omega",  # rad/s, ω₀ of the wave motion (encounter frequency)
+    # cos and sin of wind_dir and wave_dir, once per episode: with cos ψ and sin ψ of the
+    # vessel's kinematics they give the relative directions without a trigonometric call
+    "wind_cos",
+    "wind_sin",
+    "wave_cos",
+    "wave_sin",
     "phi00",  # Φ, exact transition of the wave motion filter
     "phi01",
     "phi10",
@@ -179,8 +195,11 @@ def build_weather_step(
     prior_next = observer_predict(z, tau_n, phi, m_yaw, d_yaw, dt_s, turn_damping)
     # 4. vessel in current, wind and wave drift
     wind = ca.fmax(w[_I["wind_mean"]] + s[_S["gust"]], 0.0)
-    tau_env = environment_loads(
-        hull, x[3:6], psi, wind, w[_I["wind_dir"]], w[_I["drift_pressure"]], w[_I["wave_dir"]]
+    cos_psi, sin_psi = ca.cos(psi), ca.sin(psi)  # shared with RK4's first stage
+    wind_rel = relative_trig(w[_I["wind_cos"]], w[_I["wind_sin"]], cos_psi, sin_psi)
+    wave_rel = relative_trig(w[_I["wave_cos"]], w[_I["wave_sin"]], cos_psi, sin_psi)
+    tau_env = relative_wind_loads(hull, x[3:6], wind, *wind_rel) + relative_drift_loads(
+        hull, w[_I["drift_pressure"]], *wave_rel
     )
     p = ca.vertcat(w[2], w[3], tau_env)
     x_next = rk4_expr(f, x, a_cmd, p, dt_s)
@@ -261,7 +280,7 @@ class SeaConditions:
 @dataclass(frozen=True)
 class WeatherPlantState:
     """N boats: plant ``x`` (N, 8), autopilot ``c`` (N, 5), weather states ``m`` (N, 8) and
-    the per-episode weather inputs ``inputs`` (N, 26) (:data:`WEATHER_INPUTS` from wind_mean)."""
+    the per-episode weather inputs ``inputs`` (N, 30) (:data:`WEATHER_INPUTS` from wind_mean)."""
 
     x: NDArray[np.float64]
     c: NDArray[np.float64]
@@ -283,7 +302,7 @@ def weather_inputs(
     yaw_model: tuple[float, float],
     yaw_gain: float = 1.0,
 ) -> tuple[NDArray[np.float64], WaveResponse]:
-    """Per-boat weather inputs (N, 26) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
+    """Per-boat weather inputs (N, 30) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
     wave response they were built from; ``wave_filter`` None: the filter off for every boat,
     else its tuning (calm boats keep it off: nothing to filter, and no estimator lag)."""
     n = cond.hs_m.size
@@ -301,15 +320,12 @@ def weather_inputs(
     out[:, col["drift_pressure"]] = np.where(cond.hs_m > 0, drift_pressure(cond.hs_m, cond.tp_s), 0)
     out[:, col["wave_dir"]] = cond.wave_dir_rad
     out[:, col["wave_omega"]] = resp.omega0
-    for name, (i, j) in {
-        "phi00": (0, 0),
-        "phi01": (0, 1),
-        "phi10": (1, 0),
-        "phi11": (1, 1),
-    }.items():
-        out[:, col[name]] = phi[:, i, j]
-    for name, (i, j) in {"l00": (0, 0), "l10": (1, 0), "l11": (1, 1)}.items():
-        out[:, col[name]] = chol[:, i, j]
+    for name, angle in (("wind", cond.wind_dir_rad), ("wave", cond.wave_dir_rad)):
+        out[:, col[f"{name}_cos"]], out[:, col[f"{name}_sin"]] = np.cos(angle), np.sin(angle)
+    for name in ("phi00", "phi01", "phi10", "phi11"):  # Φ[i, j] as phi<i><j>
+        out[:, col[name]] = phi[:, int(name[3]), int(name[4])]
+    for name in ("l00", "l10", "l11"):
+        out[:, col[name]] = chol[:, int(name[1]), int(name[2])]
     out[:, col["yaw_gain"]] = yaw_gain
     if wave_filter is not None:
         wavy = cond.hs_m > 0
@@ -327,17 +343,20 @@ def sensed_offsets_expr(s: ca.SX, w: ca.SX) -> ca.SX:
     of the first-order wave motion, from a weather step's state ``s`` and inputs ``w``
     (:func:`usvsim.vessel.weather.waves.wave_displacement`; Δr its rate, ψ̇ in the sine
     neglected). The GNSS velocity is not displaced (the orbital velocity is left out)."""
-    omega, beta = w[_I["wave_omega"]], w[_I["wave_dir"]]
-    shape = w[_I["yaw_gain"]] * omega**2 / G * ca.sin(2.0 * (beta - s[2]))
+    omega, cos_beta, sin_beta = w[_I["wave_omega"]], w[_I["wave_cos"]], w[_I["wave_sin"]]
+    # sin 2(β − ψ) = 2 sin(β − ψ) cos(β − ψ), from the episode's cos β, sin β and the
+    # kinematics' cos ψ, sin ψ (no trigonometric call: relative_trig)
+    cos_rel, sin_rel = relative_trig(cos_beta, sin_beta, ca.cos(s[2]), ca.sin(s[2]))
+    shape = w[_I["yaw_gain"]] * omega**2 / G * (2.0 * sin_rel * cos_rel)
     d = omega * s[_S["xi0"]]
-    return ca.vertcat(d * ca.cos(beta), d * ca.sin(beta), shape * d, shape * (omega * s[_S["xi1"]]))
+    return ca.vertcat(d * cos_beta, d * sin_beta, shape * d, shape * (omega * s[_S["xi1"]]))
 
 
 def sensed_offsets(
     x: NDArray[np.float64], m: NDArray[np.float64], inputs: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """:func:`sensed_offsets_expr` in NumPy: plant states ``x`` (..., 8), weather states ``m``
-    (..., 8), weather inputs ``inputs`` (..., 26) → (..., 4)."""
+    (..., 8), weather inputs ``inputs`` (..., 30) → (..., 4)."""
     col = {name: i - 4 for name, i in _I.items()}
     omega, beta = inputs[..., col["wave_omega"]], inputs[..., col["wave_dir"]]
     shape = inputs[..., col["yaw_gain"]] * omega**2 / G * np.sin(2.0 * (beta - x[..., 2]))
@@ -433,13 +452,16 @@ class WeatherPlant:
         *,
         rng: np.random.Generator | None = None,
         wave_filter: bool | None = None,
+        calm: PlantState | None = None,
     ) -> WeatherPlantState:
         """Boats as :meth:`Plant.initial_state`, their weather from ``conditions``; gusts and wave
         motion start in their stationary distributions (no transient).
 
         ``rng`` (anything with ``standard_normal``) draws them instead of the plant's generator;
-        ``wave_filter`` sets these boats' filter instead of the plant's setting."""
-        calm = self.plant.initial_state(eta, speed_mps)
+        ``wave_filter`` sets these boats' filter instead of the plant's setting; ``calm`` is
+        ``Plant.initial_state(eta, speed_mps)`` where the caller has it already (not recomputed:
+        its trim is a CasADi call)."""
+        calm = self.plant.initial_state(eta, speed_mps) if calm is None else calm
         n = calm.n_boats
         conditions.check(n)
         draw = self.rng if rng is None else rng

@@ -161,7 +161,9 @@ def test_weather_fused_step_equals_weather_plant_then_navigator_on_sensed_motion
     weather.rng = _Replay(wx.reshape(n, T, 3))
     _, traj = weather.step(start, psi_ref, 3.0, n_steps=T)
     x, m = traj[:, :, 0:8], traj[:, :, 13:21]
-    d = sensed_offsets(x, m, np.broadcast_to(start.inputs[:, None, :], (n, T, 26)))
+    d = sensed_offsets(
+        x, m, np.broadcast_to(start.inputs[:, None, :], (n, T, start.inputs.shape[1]))
+    )
     eta = x[:, :, 0:3] + d[:, :, 0:3]
     nu = np.concatenate([x[:, :, 3:5], x[:, :, 5:6] + d[:, :, 3:4]], axis=2)
     est = nav.run(eta, nu, RecordingRng(normals), 1)

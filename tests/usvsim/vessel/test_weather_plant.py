@@ -199,7 +199,7 @@ def test_weather_step_has_a_torch_twin_equal_to_the_c_kernel() -> None:
     exec(torch_function_source(weather.step_function, "wx_step", "weather step"), namespace)
     step = namespace["wx_step"]
     s = [torch.tensor(c) for c in np.concatenate([start.x, start.c, start.m], axis=1).T]
-    w = np.zeros((n, 30))
+    w = np.zeros((n, 4 + start.inputs.shape[1]))
     w[:, 0], w[:, 1], w[:, 4:] = ref, plant.cruise_speed_mps, start.inputs
     w_cols = [torch.tensor(c) for c in w.T]
     g_cols = [torch.tensor(float(v), dtype=torch.float64) for v in plant.gains]

@@ -32,7 +32,16 @@ import numpy as np
 from usvsim.vessel.weather.waves import USV105_WATERLINE, WaterlinePolygon
 from usvsim.vessel.weather.wind import RHO_AIR, USV105_WINDAGE, Windage
 
-__all__ = ["USV105_HULL", "WeatherHull", "drift_loads", "environment_loads", "wind_loads"]
+__all__ = [
+    "USV105_HULL",
+    "WeatherHull",
+    "drift_loads",
+    "environment_loads",
+    "relative_drift_loads",
+    "relative_trig",
+    "relative_wind_loads",
+    "wind_loads",
+]
 
 
 @dataclass(frozen=True)
@@ -64,9 +73,12 @@ def wind_loads(hull: WeatherHull, nu: Any, psi: Any, speed: Any, direction: Any)
     ``direction`` the direction it blows towards (rad, NED).
     """
     rel = direction - psi
-    windy = _wind_load(
-        hull.windage, hull.rho_air, nu[0] - speed * ca.cos(rel), nu[1] - speed * ca.sin(rel)
-    )
+    return relative_wind_loads(hull, nu, speed, ca.cos(rel), ca.sin(rel))
+
+
+def relative_wind_loads(hull: WeatherHull, nu: Any, speed: Any, cos_rel: Any, sin_rel: Any) -> Any:
+    """:func:`wind_loads` given cos and sin of the wind's direction relative to the heading."""
+    windy = _wind_load(hull.windage, hull.rho_air, nu[0] - speed * cos_rel, nu[1] - speed * sin_rel)
     still = _wind_load(hull.windage, hull.rho_air, nu[0], nu[1])
     return ca.if_else(speed > 0, windy - still, ca.DM.zeros(3))
 
@@ -78,23 +90,30 @@ def drift_loads(hull: WeatherHull, psi: Any, pressure: Any, direction: Any) -> A
     waves travel towards (rad, NED). A segment of length ℓ, outward normal n, lit by waves along
     k̂ (n·k̂ < 0) takes p_d (n·k̂)² ℓ along −n.
     """
+    rel = direction - psi
+    return relative_drift_loads(hull, pressure, ca.cos(rel), ca.sin(rel))
+
+
+def relative_drift_loads(hull: WeatherHull, pressure: Any, kx: Any, ky: Any) -> Any:
+    """:func:`drift_loads` given k̂ = (cos, sin) of the waves' direction relative to the heading.
+
+    Per segment i the lit share min(n_i·k̂, 0)² (= (n·k̂)² where lit, else 0) times the
+    constants −ℓ n_x, −ℓ n_y and the moment arm −ℓ (m_x n_y − m_y n_x) of the waterline; terms
+    whose constant is 0 (the sides along x, the stern across) are left out of the sums.
+    """
     v = np.asarray(hull.waterline.vertices, dtype=float)
     edge = np.roll(v, -1, axis=0) - v
     length = np.hypot(edge[:, 0], edge[:, 1])
     normal = np.stack([-edge[:, 1], edge[:, 0]], -1) / length[:, None]
     mid = v + 0.5 * edge
-    rel = direction - psi
-    kx, ky = ca.cos(rel), ca.sin(rel)
-    fx: Any = 0.0
-    fy: Any = 0.0
-    mz: Any = 0.0
+    sums: list[Any] = [0.0, 0.0, 0.0]
     for (nx, ny), ell, (mx, my) in zip(normal, length, mid, strict=True):  # 5 segments, symbolic
-        nk = kx * nx + ky * ny
-        lit = ca.if_else(nk < 0, nk**2, 0.0) * float(ell)
-        sx, sy = -pressure * lit * float(nx), -pressure * lit * float(ny)
-        fx, fy = fx + sx, fy + sy
-        mz = mz + float(mx) * sy - float(my) * sx
-    return ca.vertcat(fx, fy, mz)
+        nk = (kx * float(nx) if nx else 0.0) + (ky * float(ny) if ny else 0.0)
+        lit = ca.fmin(nk, 0.0) ** 2
+        for k, const in enumerate((-ell * nx, -ell * ny, -ell * (mx * ny - my * nx))):
+            if const != 0.0:
+                sums[k] = sums[k] + float(const) * lit
+    return pressure * ca.vertcat(*sums)
 
 
 def environment_loads(
@@ -110,3 +129,10 @@ def environment_loads(
     return wind_loads(hull, nu, psi, wind_speed, wind_direction) + drift_loads(
         hull, psi, drift_pressure, wave_direction
     )
+
+
+def relative_trig(cos_dir: Any, sin_dir: Any, cos_psi: Any, sin_psi: Any) -> tuple[Any, Any]:
+    """cos and sin of (β − ψ) from those of a direction β and the heading ψ (angle difference
+    formulas): the compiled kernel gets cos β, sin β per episode and shares cos ψ, sin ψ with
+    the vessel's kinematics, so the loads cost no trigonometric call."""
+    return cos_dir * cos_psi + sin_dir * sin_psi, sin_dir * cos_psi - cos_dir * sin_psi

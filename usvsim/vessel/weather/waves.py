@@ -118,10 +118,21 @@ def jonswap(
     hs = np.asarray(hs_m, dtype=float)
     wp = 2.0 * math.pi / np.asarray(tp_s, dtype=float)
     sigma = np.where(w <= wp, 0.07, 0.09)
-    r = np.exp(-((w - wp) ** 2) / (2.0 * sigma**2 * wp**2))
+    r = _exp_of_negative(-((w - wp) ** 2) / (2.0 * sigma**2 * wp**2))
     a_gamma = 1.0 - 0.287 * math.log(gamma)
-    pm = 5.0 / 16.0 * hs**2 * wp**4 * w**-5.0 * np.exp(-1.25 * (wp / w) ** 4)
-    return a_gamma * pm * gamma**r
+    # x⁴ as (x²)² and γ^r as exp(r ln γ): the same values to rounding, a fifth of the time of
+    # NumPy's scalar pow (every episode start evaluates S on drift_pressure's 3000 frequencies)
+    ratio2 = (wp / w) ** 2
+    wp2 = wp**2
+    pm = 5.0 / 16.0 * hs**2 * (wp2 * wp2) * w**-5.0 * _exp_of_negative(-1.25 * (ratio2 * ratio2))
+    return a_gamma * pm * np.exp(r * math.log(gamma))
+
+
+def _exp_of_negative(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """exp(x) for x ≤ 0, taken as 0 below x = -700 (exp < 1e-304): NumPy's exp is 10-200x
+    slower where its result underflows, and JONSWAP's tails reach x ~ -1e4."""
+    x = np.asarray(x, dtype=float)
+    return np.where(x > -700.0, np.exp(np.maximum(x, -700.0)), 0.0)
 
 
 @dataclass(frozen=True)
