@@ -1,0 +1,87 @@
+"""sb-mpc-radar's published rows: merged into the committed data by benchmarks/stress_merge.py
+and benchmarks/colreg_table.py --merge, which add a later run's helmsmen without running the
+others again and refuse a run whose shared helmsmen disagree with the file."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+ORDER = ["los", "vo", "sb-mpc", "vo-radar", "sb-mpc-radar"]
+
+
+def _script(name: str) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _row(helmsman: str, episode_set: str, successes: int) -> dict:
+    return {"helmsman": helmsman, "episode_set": episode_set, "successes": successes, "wall_s": 1.0}
+
+
+def _run(helmsmen: list[str], rows: list[dict]) -> dict:
+    return {"suite": "stress", "split": "test", "sets": ["a", "b"], "episodes_per_set": 100,
+            "helmsmen": helmsmen, "rows": rows, "wall_s": 60.0}  # fmt: skip
+
+
+def test_stress_merge_adds_rows_after_the_helmsman_before_it() -> None:
+    merge = _script("stress_merge").merge
+    base = _run(["vo", "vo-radar", "model"],
+                [_row(h, s, 90) for s in "ab" for h in ("vo", "vo-radar", "model")])  # fmt: skip
+    new = _run(
+        ["vo", "sb-mpc-radar"], [_row(h, s, 90) for s in "ab" for h in ("vo", "sb-mpc-radar")]
+    )
+    new["rows"][0]["wall_s"] = 9.0  # timing may differ, counts may not
+    assert merge(base, new, ORDER) == ["sb-mpc-radar"]
+    assert base["helmsmen"] == ["vo", "vo-radar", "sb-mpc-radar", "model"]
+    assert [(r["episode_set"], r["helmsman"]) for r in base["rows"]][:4] == [
+        ("a", "vo"), ("a", "vo-radar"), ("a", "sb-mpc-radar"), ("a", "model"),
+    ]  # fmt: skip
+    assert base["merged"] == [
+        {"helmsmen": ["sb-mpc-radar"], "run_helmsmen": ["vo", "sb-mpc-radar"], "wall_s": 60.0}
+    ]
+    other = _run(["vo", "sb-mpc"], [_row("vo", "a", 89), _row("vo", "b", 90)])
+    with pytest.raises(SystemExit, match="vo on a differs"):
+        merge(base, other, ORDER)
+
+
+def test_colreg_table_merge_adds_a_row_and_a_column_and_refuses_a_changed_row() -> None:
+    merge_block = _script("colreg_table").merge_block
+    old = "head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `vo-radar` | 2 |\n| `m` | 3 |\n"
+    new = "other head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `sb-mpc-radar` | 4 |\n"
+    merged = merge_block(old, new, "{} merged", ORDER)
+    assert merged == (
+        "head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `vo-radar` | 2 |\n"
+        "| `sb-mpc-radar` | 4 |\n| `m` | 3 |\n\n`sb-mpc-radar` merged\n"
+    )
+    assert merge_block(merged, new, "{} merged", ORDER) == merged  # nothing new: unchanged
+    cols_old = "| problem | `vo` | `sb-mpc` |\n|---|---|---|\n| p1 | 1 | 2 |\n"
+    cols_new = "| problem | `sb-mpc` | `sb-mpc-radar` |\n|---|---|---|\n| p1 | 2 | 5 |\n"
+    assert merge_block(cols_old, cols_new, "{}", ORDER, columns=True).splitlines()[:3] == [
+        "| problem | `vo` | `sb-mpc` | `sb-mpc-radar` |",
+        "|---|---|---|---|",
+        "| p1 | 1 | 2 | 5 |",
+    ]
+    with pytest.raises(SystemExit, match="vo: the new run's row differs"):
+        merge_block(old, new.replace("| `vo` | 1 |", "| `vo` | 7 |"), "{}", ORDER)
+
+
+def test_committed_data_and_page_hold_the_same_sb_mpc_radar_rows() -> None:
+    stress = json.loads((ROOT / "docs" / "data" / "stress.json").read_text())
+    helmsmen = stress["helmsmen"]
+    assert helmsmen.index("sb-mpc-radar") == helmsmen.index("vo-radar") + 1
+    rows = [r for r in stress["rows"] if r["helmsman"] == "sb-mpc-radar"]
+    assert [r["episode_set"] for r in rows] == stress["sets"] and len(rows) == 22
+    assert all(r["episodes"] == 100 and r["perceives"] == "radar tracks" for r in rows)
+    page = (ROOT / "docs" / "guide" / "colreg-suite.md").read_text()
+    table = _script("colreg_table").stress_table(stress)
+    row = next(ln for ln in table.splitlines() if ln.startswith("| `sb-mpc-radar` |"))
+    assert row in page
