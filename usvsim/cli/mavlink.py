@@ -106,7 +106,7 @@ def run_sitl_physics(args: SitlPhysicsArgs) -> int:
             flush=True,
         )
         return 0
-    physics = JsonPhysics(vessel, math.radians(args.heading_deg), args.mapping())
+    physics = JsonPhysics(vessel, math.radians(args.heading_deg), args.mapping(), args.weather())
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
         sock.bind((args.bind, args.port))

@@ -54,7 +54,11 @@ for the next (a radio or router glitch), ``drop_link_at_s`` closes the link and 
 vehicle (a crash: the TCP peer sees EOF, then refused connections), ``mute_telemetry_after_s``
 stops telemetry only.
 An ocean current (``current_mps`` towards ``current_dir_deg``) makes HOLD drift (LOITER in a
-current: see :mod:`usvsim.mavlink.rover_modes`).
+current: see :mod:`usvsim.mavlink.rover_modes`). Wind and waves (``wind`` m/s from ``wind_dir``
+deg, gusts 10 %, WMO ``sea_state``, as ``usvsim manoeuvre``'s; seeded by ``seed``): the boat
+steps in :class:`usvsim.vessel.weather_plant.WeatherPlant` (the autopilot with its wave filter)
+and, motors off, in :class:`usvsim.vessel.weather_open_loop.OpenLoopWeather`; the navigation
+filter and GPS_RAW_INT see the first-order wave motion (so does the reported estimate).
 
 ArduPilot equivalents for the same bridge::
 
@@ -76,6 +80,7 @@ import numpy as np
 
 from usvsim.common.angles import ssa
 from usvsim.common.options import bounds, check_bounds
+from usvsim.evaluation.manoeuvre import TrialWeather
 from usvsim.mavlink.link import LinkLostError, MavlinkLink, load_signing_key, message_id
 from usvsim.mavlink.messages import (
     EKF,
@@ -108,6 +113,7 @@ from usvsim.mavlink.rover_modes import (
     MissionFollower,
 )
 from usvsim.mavlink.rover_protocol import ATC_FIELDS, MissionStore, RoverParameters, sitl_parameters
+from usvsim.mavlink.sitl_physics import check_sea_state
 from usvsim.nav.filter import Navigator
 from usvsim.nav.geo import GeoOrigin, geodetic_from_ned, ned_from_geodetic
 from usvsim.nav.models import NavConfig
@@ -116,6 +122,8 @@ from usvsim.task.scenario import BoatNoise
 from usvsim.vessel.autopilot import AutopilotConfig, initial_controller_state
 from usvsim.vessel.model import build_dynamics, build_rk4_step
 from usvsim.vessel.plant import Plant, PlantState
+from usvsim.vessel.weather_open_loop import OpenLoopWeather
+from usvsim.vessel.weather_plant import WeatherPlant, WeatherPlantState, sensed_offsets
 
 __all__ = ["FIRMWARE_VERSION", "RoverSitl", "SitlArgs"]
 
@@ -198,10 +206,21 @@ class SitlArgs:
     freeze_for_s: float = field(default=3.0, metadata=bounds(gt=0, le=600))  # ... for wall s
     drop_link_at_s: float = field(default=0.0, metadata=bounds(ge=0))  # faults: crash at sim s
     drop_client_at_s: float = field(default=0.0, metadata=bounds(ge=0))  # faults: tcpin, sim s
+    # mean wind speed, m/s (gusts 10 %); 0: none. Weather uses usv105's windage and waterline
+    wind: float = field(default=0.0, metadata=bounds(ge=0.0, le=40.0))
+    # direction the wind blows from, deg clockwise from north; 90: from the east
+    wind_dir: float = field(default=90.0, metadata=bounds(ge=0.0, lt=360.0))
+    # WMO sea state code 0-8 (Bales 1983 H_s, T_p); waves come from the wind's direction
+    sea_state: int = field(default=0, metadata=bounds(ge=0, le=8))
 
     def __post_init__(self) -> None:
         # the ranges above (usvsim.common.options), for library callers too
         check_bounds(self)
+        check_sea_state(self.sea_state)
+
+    def weather(self) -> TrialWeather:
+        """The vehicle's wind and sea (as ``usvsim manoeuvre``'s; ``calm`` without either)."""
+        return TrialWeather(self.wind, self.wind_dir, self.sea_state, seed=self.seed)
 
 
 def _autopilot(name: str) -> AutopilotConfig:
@@ -264,12 +283,13 @@ class RoverSitl:
             else np.asarray(start_eta, dtype=float).reshape(1, 3)
         )
         self.state = self.plant.initial_state(eta, np.array([args.speed_mps]))
+        self._start_weather(eta)
         self.nav = Navigator(NavConfig(dt_s=self.plant.dt_s), 1)
         self._noise = BoatNoise(1)  # the simulator's per-episode stream: same seed, same noise
         self._noise.seed(np.array([0]), [args.seed if noise_seed is None else noise_seed])
         # BoatNoise serves the Generator.normal interface the navigator draws from
         self._noise_stream = cast(np.random.Generator, self._noise)
-        self.nav.reset(self.state.eta, self.state.nu, self._noise_stream)
+        self.nav.reset(*self._sensed(), self._noise_stream)
         self._gps_rng = np.random.default_rng(args.seed + 1)
         self.time_ms = 0
         self.step_index = 0
@@ -303,6 +323,50 @@ class RoverSitl:
         self.record = SitlRecord()
         self.record.modes.append((0.0, self.mode))
 
+    # --- weather ---------------------------------------------------------------------------
+
+    def _start_weather(self, eta: np.ndarray) -> None:
+        """Wind and waves (``--wind``, ``--sea-state``): the closed loop steps in the weather
+        plant, motors off in :class:`OpenLoopWeather`; the sensors (navigation filter, GPS) see
+        the first-order wave motion. Calm: neither is built, every number as without."""
+        weather = self.args.weather()
+        self.weather: WeatherPlant | None = None
+        if weather.calm:
+            return
+        self.weather = WeatherPlant(self.plant, seed=self.args.seed)
+        speed = np.array([self.args.speed_mps])
+        self._weather_state = self.weather.initial_state(
+            eta, weather.conditions(1), speed, calm=self.state
+        )
+        self._open_loop = OpenLoopWeather(self.plant.vessel, self.plant.dt_s)
+        self._open_loop_rng = np.random.default_rng([self.args.seed, 38])  # motors-off draws
+
+    def _sensed(self) -> tuple[np.ndarray, np.ndarray]:
+        """(η, ν) as the sensors see them: plus the first-order wave motion in waves."""
+        if self.weather is None:
+            return self.state.eta, self.state.nu
+        ws = self._weather_state
+        d = sensed_offsets(ws.x, ws.m, ws.inputs)
+        nu = self.state.nu.copy()
+        nu[:, 2] += d[:, 3]
+        return self.state.eta + d[:, 0:3], nu
+
+    def _step_in_weather(self, refs: tuple[float, float] | None, a_cmd: list[float]) -> None:
+        """One plant step in the weather: the weather plant's closed loop on ``refs``, or the
+        open loop on ``a_cmd`` where the motors are off (``refs`` None)."""
+        assert self.weather is not None
+        ws = self._weather_state
+        if refs is None:
+            x, m = self._open_loop.step(
+                ws.x, np.array([a_cmd]), self.plant.current, ws.m, ws.inputs, self._open_loop_rng
+            )
+            x[0, 2] = float(ssa(x[0, 2]))
+            c = initial_controller_state(self.plant.kind, x[:, 2], x[:, 5])
+            self._weather_state = WeatherPlantState(x, c, m, ws.inputs)
+        else:
+            self._weather_state, _ = self.weather.step(ws, [refs[0]], [refs[1]])
+        self.state = self._weather_state.plant
+
     # --- readiness -------------------------------------------------------------------------
 
     @property
@@ -322,6 +386,8 @@ class RoverSitl:
             self.autopilot = replace(self.autopilot, **changes)
             if self.autopilot.kind == "rover":  # the rover cascade runs on these gains
                 self.plant = Plant(self.plant.vessel, self.autopilot, current=self.plant.current)
+                if self.weather is not None:
+                    self.weather = WeatherPlant(self.plant, seed=self.args.seed)
 
     # --- command handling ------------------------------------------------------------------
 
@@ -528,7 +594,11 @@ class RoverSitl:
         """Advance the vehicle clock by one plant step, the physics unless frozen."""
         self._astern_mps = 0.0
         refs = self._references()
-        if not self.frozen:
+        if not self.frozen and self.weather is not None:
+            self._step_in_weather(refs, [self._brake_thrust(), 0.0] if refs is None else [])
+            self.step_index += 1
+            self.nav.step(self.step_index, *self._sensed(), self._noise_stream)
+        elif not self.frozen:
             if refs is None:  # motors off (or braking): the vessel model, actuators direct
                 a_cmd = [self._brake_thrust(), 0.0]
                 x = np.asarray(self._coast(self.state.x[0], a_cmd, self.plant.current))
@@ -584,7 +654,7 @@ class RoverSitl:
             sog = float(np.hypot(vel[0], vel[1]))
             self.link.send_vfr_hud(VfrHud(sog, round(math.degrees(psi)) % 360, self._thrust_pct))
         if "GPS_RAW_INT" in names:
-            raw = sample_gps(self.state.x[:, 0:2], self._gps_rng, self.nav.cfg.sensors)[0]
+            raw = sample_gps(self._sensed()[0][:, 0:2], self._gps_rng, self.nav.cfg.sensors)[0]
             lat, lon = geodetic_from_ned(raw[0], raw[1], self.origin)
             self.link.send_gps_raw(
                 GpsRaw(t * 1000, 3, float(lat), float(lon), 12),

@@ -60,8 +60,13 @@ from numpy.typing import NDArray
 from usvsim.common.angles import ssa
 from usvsim.common.errors import UserError
 from usvsim.common.options import bounds
+from usvsim.evaluation.manoeuvre import TrialWeather
 from usvsim.vessel.model import NX, build_dynamics, build_rk4_step
 from usvsim.vessel.vessels import Actuation, VesselParams
+from usvsim.vessel.weather.waves import WaveResponse, wave_motion_init
+from usvsim.vessel.weather.wind import GustParams
+from usvsim.vessel.weather_open_loop import OpenLoopWeather
+from usvsim.vessel.weather_plant import NWS, sensed_offsets, weather_inputs
 
 __all__ = [
     "JsonPhysics",
@@ -77,6 +82,13 @@ MAGIC_16 = 18458
 MAGIC_32 = 29569
 GRAVITY_MPS2 = 9.80665  # m/s², standard gravity
 _HEADER = struct.Struct("<HHI")
+
+
+def check_sea_state(code: object) -> None:
+    """``--sea-state`` must be a WMO code 0-8 (one line, :class:`UserError`), as for
+    ``usvsim manoeuvre`` (``usvsim sitl`` and ``sitl-physics``)."""
+    if isinstance(code, bool) or not isinstance(code, int) or not 0 <= code <= 8:
+        raise UserError(f"--sea-state must be an integer code 0-8, got {code!r}")
 
 
 @dataclass(frozen=True)
@@ -98,9 +110,21 @@ class SitlPhysicsArgs:
     throttle_pwm_max: int = field(default=2000, metadata=bounds(ge=500, le=2500))  # µs, full
     duration_s: float = field(default=0.0, metadata=bounds(ge=0))  # physics s; 0: until Ctrl-C
     write_params: str = ""  # write the vessel's Rover .parm file here and exit ('' = serve)
+    # mean wind speed, m/s (gusts 10 %); 0: none. Weather uses usv105's windage and waterline
+    wind: float = field(default=0.0, metadata=bounds(ge=0.0, le=40.0))
+    # direction the wind blows from, deg clockwise from north; 90: from the east
+    wind_dir: float = field(default=90.0, metadata=bounds(ge=0.0, lt=360.0))
+    # WMO sea state code 0-8 (Bales 1983 H_s, T_p); waves come from the wind's direction
+    sea_state: int = field(default=0, metadata=bounds(ge=0, le=8))
+    seed: int = field(default=0, metadata=bounds(ge=0))  # gusts and wave motion
+
+    def weather(self) -> TrialWeather:
+        """The wind and sea (as ``usvsim manoeuvre``'s; ``calm`` without either)."""
+        return TrialWeather(self.wind, self.wind_dir, self.sea_state, seed=self.seed)
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""
+        check_sea_state(self.sea_state)
         if self.steering_channel == self.throttle_channel:
             raise UserError(
                 f"--steering-channel and --throttle-channel must differ, both are "
@@ -209,7 +233,12 @@ def actuator_command(
 class JsonPhysics:
     """The vessel model stepped frame by frame from servo frames (no sockets: see :func:`run`).
 
-    State ``x`` (8,) as in :mod:`usvsim.vessel.model`; physics time ``time_s``.
+    State ``x`` (8,) as in :mod:`usvsim.vessel.model`; physics time ``time_s``. In ``weather``
+    (not calm) each frame is a step of :class:`usvsim.vessel.weather_open_loop.OpenLoopWeather`
+    (wind and wave drift loads, gusts and wave motion at the frame's rate, seeded by the
+    weather's seed) and the reply's position, heading and yaw rate carry the first-order wave
+    motion (what ArduPilot's GPS, compass and gyro would see; the velocity does not, as in the
+    simulator's sensors); weather states ``m`` (8,) as the weather plant's.
     """
 
     def __init__(
@@ -217,6 +246,7 @@ class JsonPhysics:
         vessel: VesselParams,
         heading_rad: float = 0.0,
         mapping: ServoMapping | None = None,
+        weather: TrialWeather | None = None,
     ) -> None:
         self.vessel = vessel
         self.mapping = mapping or ServoMapping()
@@ -224,6 +254,12 @@ class JsonPhysics:
         self._steps: dict[int, ca.Function] = {}
         self._ch = (self.mapping.steering_channel - 1, self.mapping.throttle_channel - 1)
         self._heading0 = heading_rad
+        self.weather = None if weather is None or weather.calm else weather
+        if self.weather is not None:
+            self._rng = np.random.default_rng(self.weather.seed)
+            self._weather_steps: dict[
+                int, tuple[OpenLoopWeather, NDArray[np.float64], WaveResponse]
+            ] = {}
         self.reset()
 
     def reset(self) -> None:
@@ -234,6 +270,28 @@ class JsonPhysics:
         self.last_count: int | None = None
         self._last_reply = ""
         self._xdot = np.zeros(NX)
+        self.m: NDArray[np.float64] = np.zeros(NWS)
+        if self.weather is not None:  # gusts and wave motion from their stationary laws
+            _, inputs, resp = self._weather_inputs(10)
+            sigma = self.weather.gust_intensity * self.weather.wind_speed_mps
+            self.m[0] = sigma * self._rng.standard_normal()
+            self.m[1:3] = wave_motion_init(self._rng, resp)[0]
+            self.m[5] = self._heading0 + sensed_offsets(self.x, self.m, inputs[0])[2]
+
+    def _weather_inputs(
+        self, rate_hz: int
+    ) -> tuple[OpenLoopWeather, NDArray[np.float64], WaveResponse]:
+        """The open-loop step at ``rate_hz``, the weather inputs (1, 30) for its step (the
+        wave motion at the sea's peak frequency: the boat starts at rest) and the wave
+        response; built once per frame rate."""
+        assert self.weather is not None
+        if rate_hz not in self._weather_steps:
+            dt = 1.0 / rate_hz
+            cond = self.weather.conditions(1)
+            zero, heading = np.zeros(1), np.full(1, self._heading0)
+            inputs, resp = weather_inputs(cond, zero, heading, dt, GustParams(), None, (1.0, 0.0))
+            self._weather_steps[rate_hz] = (OpenLoopWeather(self.vessel, dt), inputs, resp)
+        return self._weather_steps[rate_hz]
 
     def _step_function(self, rate_hz: int) -> ca.Function:
         if rate_hz not in self._steps:
@@ -248,8 +306,16 @@ class JsonPhysics:
             self.reset()  # SITL restarted
         steer, throttle = (frame.pwm_us[i] if i < len(frame.pwm_us) else 0 for i in self._ch)
         a_cmd = actuator_command(steer, throttle, self.vessel.actuation, self.mapping)
-        p = [0.0, 0.0]
-        x_next = np.asarray(self._step_function(frame.frame_rate_hz)(self.x, a_cmd, p)).ravel()
+        if self.weather is None:
+            p = [0.0, 0.0]
+            step = self._step_function(frame.frame_rate_hz)
+            x_next = np.asarray(step(self.x, a_cmd, p)).ravel()
+        else:
+            open_loop, inputs, _ = self._weather_inputs(frame.frame_rate_hz)
+            xs, ms = open_loop.step(
+                self.x[None], np.array([a_cmd]), (0.0, 0.0), self.m[None], inputs, self._rng
+            )
+            x_next, self.m = xs[0], ms[0]
         self._xdot = (x_next - self.x) * frame.frame_rate_hz  # mean rate over the frame
         x_next[2] = float(ssa(x_next[2]))
         self.x = x_next
@@ -265,6 +331,10 @@ class JsonPhysics:
         c, s = math.cos(psi), math.sin(psi)
         # body acceleration of a rotating frame: a = ν̇ + r × ν (Fossen 2021, §3.1)
         ax, ay = u_dot - r * v, v_dot + r * u
+        if self.weather is not None:  # the first-order wave motion the sensors see
+            inputs = next(iter(self._weather_steps.values()))[1][0]
+            dn, de, dpsi, dr = (float(a) for a in sensed_offsets(self.x, self.m, inputs))
+            x_n, y_e, psi, r = x_n + dn, y_e + de, float(ssa(psi + dpsi)), r + dr
         return {
             "timestamp": self.time_s,
             "imu": {"gyro": [0.0, 0.0, r], "accel_body": [ax, ay, -GRAVITY_MPS2]},
