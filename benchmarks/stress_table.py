@@ -15,7 +15,7 @@ SHORT = {"categorical": "cat", "gaussian": "gau", "positional": "pos"}
 
 
 def short_name(helmsman: str) -> str:
-    """``il-categorical-positional`` → ``il-cat-pos`` (the table's column labels)."""
+    """``positional-categorical-gail-study`` → ``pos-cat-gail-study`` (the column labels)."""
     return "-".join(SHORT.get(part, part) for part in helmsman.split("-"))
 
 

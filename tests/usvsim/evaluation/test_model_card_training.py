@@ -22,7 +22,7 @@ from usvsim.cli.main import main
 from usvsim.evaluation.model_cards import load_cards, stress_summary
 from usvsim.evaluation.stats import difference_interval
 
-MODEL = "rl-gaussian-positional"  # about 10 s of training on one core
+MODEL = "positional-gaussian-trpo-study"  # setup rl-gaussian-positional: ~10 s of training
 SETS = ("study", "two-obstacles", "goal-anywhere")  # one easy set and two that discriminate
 
 
