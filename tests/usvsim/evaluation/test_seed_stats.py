@@ -185,3 +185,34 @@ def test_seed_files_are_package_data() -> None:
     patterns = data["tool"]["setuptools"]["package-data"]["usvsim"]
     assert "models/seeds/*.json" in patterns
     assert SEEDS_DIR == root / "usvsim" / "models" / "seeds"
+
+
+def _script() -> Any:
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[3] / "benchmarks" / "seed_table.py"
+    spec = importlib.util.spec_from_file_location("seed_table", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_seed_table_script_writes_the_file_with_its_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    files = {}
+    for split, rates in (("validation", VALIDATION), ("test", TEST)):
+        files[split] = tmp_path / f"{split}.json"
+        files[split].write_text(json.dumps(_payload(split, rates, [0, 1, 2])))
+    out = tmp_path / "seeds" / "setup-x.json"
+    argv = ["--setup", "setup-x", "--validation", str(files["validation"]), "--test",
+            str(files["test"]), "--rename", "s0=0,s1=1,s2=2", "--out", str(out)]  # fmt: skip
+    assert _script().main(argv) == 0
+    table = load_seed_tables(out.parent)["setup-x"]
+    assert table.picked_seed == 0 and table.seeds == (0, 1, 2)
+    assert table.command.startswith("python benchmarks/seed_table.py --setup setup-x")
+    assert "rule picks seed 0" in capsys.readouterr().out
+    bad = [*argv[:-4], "--rename", "s0:0", "--out", str(out)]
+    assert _script().main(bad) == 2
+    assert "--rename 's0:0': write LABEL=SEED" in capsys.readouterr().err
