@@ -223,7 +223,7 @@ def run_perf(args: PerfArgs) -> int:
         from usvsim.task.torch_env import torch_env_rates
 
         result["torch_env"] = torch_env_rates(args.device, seconds=args.seconds)
-        from usvsim.task.torch_openwater import torch_openwater_rates
+        from usvsim.task.torch_openwater_speed import torch_openwater_rates
 
         result["torch_openwater"] = torch_openwater_rates(args.device, seconds=args.seconds)
     if args.json:

@@ -6,8 +6,10 @@ each episode's current at its cruise speed (:mod:`usvsim.vessel.torch_plant`, ge
 CasADi plant), the sensors and Kalman filter with the episode's GNSS faults (noise scale,
 outliers, dropout; :mod:`usvsim.nav.torch_nav`, generated from the CasADi filter), the moving
 vessels, the judge at every 0.1 s plant step against every disc, the reward, the horizon, the
-``scene`` observation (:mod:`usvsim.task.torch_scene`) and the restart of finished boats. No host
-round trip and no Python loop over boats, discs or vessels per step.
+``scene`` observation (:mod:`usvsim.task.torch_scene`) or the radar image of every disc with the
+episode's radar degradation (:mod:`usvsim.task.torch_scene_radar`: the CPU image pixel for pixel,
+from the same counter-based draws of each boat's frame key) and the restart of finished boats.
+No host round trip and no Python loop over boats, discs or vessels per step.
 
 Episodes are the CPU family's draws, packed on the host and copied to the device
 (:mod:`usvsim.task.torch_openwater_episodes`): with the same seed the same episodes as the CPU
@@ -31,16 +33,15 @@ Noise: ``noise="device"`` draws the sensor normals and the outlier draws from se
 reading the restarted boats back to the host every step.
 
 Returns of :meth:`~TorchOpenWaterEnv.step`, tensors on the device: obs (N, 52) (``scene``,
-``observation_dtype``), reward (N,), terminated (N,) bool, truncated (N,) bool, info (the CPU
-env's per-boat entries as (N,) tensors, and ``final_obs``: every boat's observation before the
-restarts).
+``observation_dtype``; ``radar``: (N, 1, 50, 119) uint8; ``radar+goal``: a dict of the image and
+the standardised goal (N, 2) float32), reward (N,), terminated (N,) bool, truncated (N,) bool,
+info (the CPU env's per-boat entries as (N,) tensors, and ``final_obs``: every boat's
+observation before the restarts).
 """
 
 from __future__ import annotations
 
 import math
-import os
-import time
 from dataclasses import replace
 from typing import Any, Literal
 
@@ -48,10 +49,17 @@ import numpy as np
 import torch
 
 from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_state, torch_ssa
+from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
 from usvsim.task.scenario import BoatNoise, Scenario
 from usvsim.task.torch_env import plant_and_filter, torch_heading_change
 from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
+from usvsim.task.torch_observations import (
+    TorchObservation,
+    relative_polar_torch,
+    select_rows,
+    standardized_goal,
+)
 from usvsim.task.torch_openwater_episodes import OpenWaterTable, family_table
 from usvsim.task.torch_scene import (
     TorchDiscs,
@@ -60,17 +68,18 @@ from usvsim.task.torch_scene import (
     nearest_and_hits_torch,
     scene_observation_torch,
 )
+from usvsim.task.torch_scene_radar import (
+    FRAME_DRAWS,
+    GOLDEN,
+    SceneRadarGrid,
+    render_scene_torch,
+)
 from usvsim.vessel.torch_plant import DTYPES, TorchPlant
 
-__all__ = [
-    "TORCH_OPENWATER_OBSERVATIONS",
-    "TorchOpenWaterEnv",
-    "measure_openwater_steps",
-    "torch_openwater_rates",
-]
+__all__ = ["TORCH_OPENWATER_OBSERVATIONS", "TorchOpenWaterEnv"]
 
 #: The observation kinds the torch open-water env builds.
-TORCH_OPENWATER_OBSERVATIONS = ("scene",)
+TORCH_OPENWATER_OBSERVATIONS = ("scene", "radar", "radar+goal")
 _HORIZON_REF_S = 20_000.0  # s, OpenWaterVectorEnv's reference horizon K_ref · 2 s
 Columns = tuple[torch.Tensor, ...]
 
@@ -92,7 +101,7 @@ class TorchOpenWaterEnv:
     device : "torch-cpu" | "cuda" | "cuda:K"
     dtype : "float64" | "float32"
     action : "gaussian" | "categorical"
-    observation : "scene"
+    observation : "scene" | "radar" | "radar+goal"
     observation_dtype : "float32" | "float64"
         float32 as the CPU env; float64 keeps the simulation's numbers (tests).
     reward_horizon : "episode" | "fixed"
@@ -174,6 +183,7 @@ class TorchOpenWaterEnv:
         self._ref_decisions = replace(sc, time_limit_s=_HORIZON_REF_S).max_decisions
         self._steps = torch.arange(1, self.T + 1, device=self.device)
         self._rows = torch.arange(n, device=self.device)
+        self._radar_grid = SceneRadarGrid(RadarConfig(), self.dtype, self.device)
         gains = torch.tensor(self.plant.kernel.gains, dtype=self.dtype, device=self.device)
         self._gains = tuple(gains.unbind(0))  # shared by all boats: 0-d tensors, built once
         self._ready = False
@@ -189,13 +199,17 @@ class TorchOpenWaterEnv:
 
         self._table = {name: put(getattr(table, name)) for name in vars(table)}
         self._table_np = table
+        if table.statics.shape[1] + table.vessels.shape[1] > 32:
+            raise ValueError("a scene of the torch open-water env holds at most 32 discs")
+        self._degraded = bool((table.radar > 0).any())  # the table's images need draws
         start = self.plant.initial_state(table.start_eta, table.speed_mps)
         self._table["x0"], self._table["c0"] = start.x, start.c
+        self._table["n_statics"] = self._table["statics_ok"].sum(dim=1)
         self._n_rows = table.n_episodes
 
     # ----------------------------------------------------------------------------- reset
     @torch.no_grad()
-    def reset(self, *, seed: int | None = None) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+    def reset(self, *, seed: int | None = None) -> tuple[TorchObservation, dict[str, torch.Tensor]]:
         """Start every boat's first episode; ``seed`` seeds the episode draw (boat i from
         ``seed + i``, as the CPU env) and the device noise."""
         if seed is None:
@@ -218,9 +232,13 @@ class TorchOpenWaterEnv:
         self._n_dec = torch.zeros(n, dtype=torch.int64, device=dev)
         self._min_d = torch.zeros(n, dtype=dt, device=dev)
         self._t_goal = torch.zeros(n, dtype=dt, device=dev)
+        self._frame = torch.zeros(n, dtype=torch.int64, device=dev)  # radar frames this episode
+        # the most static discs of any episode started so far (a 0-d tensor): the CPU batch pads
+        # its statics to it, which numbers the vessels and so picks their missed-return draws
+        self._k_seen = torch.zeros((), dtype=torch.int64, device=dev)
         self.discs = self._discs_of(self._row)
         everyone = torch.ones(n, dtype=torch.bool, device=dev)
-        obs = self._restart(everyone, self._observe())
+        obs = self._restart(everyone, self._observe(advance=None))
         self._ready = True
         return obs, {"goal_ne": self._take("goal_ne").clone()}
 
@@ -236,7 +254,7 @@ class TorchOpenWaterEnv:
             ve[..., 0:2], ve[..., 2], ve[..., 3], ve[..., 4], ve[..., 5], t["vessels_ok"][rows],
         )  # fmt: skip
 
-    def _restart(self, boats: torch.Tensor, obs: torch.Tensor) -> torch.Tensor:
+    def _restart(self, boats: torch.Tensor, obs: TorchObservation) -> TorchObservation:
         """Start the next episode of ``boats`` (N,) bool; returns ``obs`` with those boats'
         rows their first observation."""
         t = self._table
@@ -256,8 +274,10 @@ class TorchOpenWaterEnv:
         self._min_d = torch.where(boats, d0[:, 0], self._min_d)
         self._t_goal = torch.where(boats, math.inf, self._t_goal)
         self._n_dec = torch.where(boats, 0, self._n_dec)
-        fresh = self._observe()
-        return torch.where(boats[:, None], fresh, obs)
+        self._frame = torch.where(boats, 0, self._frame)
+        started_k = torch.where(boats, t["n_statics"][row], 0).amax()
+        self._k_seen = torch.maximum(self._k_seen, started_k)
+        return select_rows(boats, self._observe(advance=boats), obs)
 
     def _seed_outlier_streams(self, boats: torch.Tensor, row: torch.Tensor) -> None:
         """Replay: seed the restarting boats' outlier streams as the CPU batch does (host)."""
@@ -270,15 +290,37 @@ class TorchOpenWaterEnv:
         self._outlier_boats[idx] = self._table_np.gnss[rows, 5] > 0
 
     # ----------------------------------------------------------------------------- observe
-    def _observe(self) -> torch.Tensor:
-        """Every boat's ``scene`` observation from its estimate and the discs now."""
+    def _observe(self, advance: torch.Tensor | None) -> TorchObservation:
+        """Every boat's observation from its estimate and the discs now; a radar image draws
+        each boat's current frame, and the boats ``advance`` (N,) bool (None: none) move on to
+        their next frame (``OpenWaterBatch._observe`` draws one frame per observation)."""
         t_s = self._n_dec.to(self.dtype) * self.scenario.decision_period_s
         centres, velocity = self.discs.at(t_s)
-        obs = scene_observation_torch(
-            self._n[0:2].T, self._n[8], self._n[2:4].T, self._take("goal_ne"), centres,
-            self.discs.radii_all, velocity, self.discs.ok_all,
+        pos, psi, goal = self._n[0:2].T, self._n[8], self._take("goal_ne")
+        if self.observation_kind == "scene":
+            obs = scene_observation_torch(
+                pos, psi, self._n[2:4].T, goal, centres, self.discs.radii_all, velocity,
+                self.discs.ok_all,
+            )  # fmt: skip
+            return obs.to(self.observation_dtype)
+        r, b = relative_polar_torch(pos, psi, centres)
+        degradation = keys = None
+        if self._degraded:
+            degradation = self._take("radar")
+            keys = self._take("radar_base") + GOLDEN * (self._frame * FRAME_DRAWS)
+        if advance is not None:
+            self._frame = self._frame + advance
+        k, m = self.discs.static_ok.shape[1], self.discs.vessel_ok.shape[1]
+        arange = torch.arange(max(k, m), device=self.device)
+        miss_draw = torch.cat([arange[:k], self._k_seen + arange[:m]])  # the CPU's disc numbers
+        image = render_scene_torch(
+            r, b, self.discs.radii_all, self.discs.ok_all, self._radar_grid, degradation, keys,
+            miss_draw=miss_draw,
         )  # fmt: skip
-        return obs.to(self.observation_dtype)
+        if self.observation_kind == "radar":
+            return image
+        r_g, b_g = relative_polar_torch(pos, psi, goal[:, None, :])
+        return {"radar": image, "goal": standardized_goal(r_g[:, 0], b_g[:, 0])}
 
     # ----------------------------------------------------------------------------- step
     def _outlier_normals(self) -> torch.Tensor:
@@ -318,7 +360,7 @@ class TorchOpenWaterEnv:
     @torch.no_grad()
     def step(
         self, actions: Any
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, dict[str, Any]]:
+    ) -> tuple[TorchObservation, torch.Tensor, torch.Tensor, torch.Tensor, dict[str, Any]]:
         """One decision step of every boat, finished boats restarted (module docstring)."""
         if not self._ready:
             raise RuntimeError("call reset() before step()")
@@ -377,7 +419,7 @@ class TorchOpenWaterEnv:
         reward, terminated, truncated = self._horizon(
             pole + goal_term, terminated, truncated, out_of_area, time_s, limit
         )
-        obs = self._observe()
+        obs = self._observe(advance=torch.ones_like(terminated))
         info = {
             "final_obs": obs,
             "reward_pole": pole,
@@ -430,61 +472,3 @@ class TorchOpenWaterEnv:
     def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:
         """Navigation estimate now: position (N, 2) m and heading (N,) rad."""
         return self._n[0:2].T.clone(), self._n[8].clone()
-
-
-def measure_openwater_steps(env: TorchOpenWaterEnv, seconds: float = 1.0, seed: int = 0) -> float:
-    """Decision steps (boat decisions of 2 s, restarts included) per second of ``env``: random
-    Gaussian actions drawn once, steps until ``seconds`` have passed (at least 2), a GPU
-    synchronised before each clock reading."""
-    sync = torch.cuda.synchronize if env.device.type == "cuda" else (lambda: None)
-    gen = torch.Generator(device=env.device).manual_seed(seed)
-    shape = (env.num_envs, 1) if env.action_kind == "gaussian" else (env.num_envs,)
-    if env.action_kind == "gaussian":
-        actions = torch.rand(shape, generator=gen, device=env.device, dtype=env.dtype) * 2 - 1
-    else:
-        actions = torch.randint(41, shape, generator=gen, device=env.device)
-    env.reset(seed=seed)
-    env.step(actions)  # warm-up
-    sync()
-    steps, start = 0, time.perf_counter()
-    while steps < 2 or time.perf_counter() - start < seconds:
-        env.step(actions)
-        steps += 1
-        if steps % 8 == 0 or env.device.type != "cuda":
-            sync()
-    sync()
-    return env.num_envs * steps / (time.perf_counter() - start)
-
-
-def torch_openwater_rates(
-    device: str, sizes: tuple[int, ...] = (256, 1024), seconds: float = 1.0
-) -> dict[str, Any]:
-    """Decision steps/s of the torch open-water env (scene, ``OPEN_WATER_FAMILY``) on ``device``
-    in float64 and float32 beside the C path's ``OpenWaterVectorEnv`` (scene) at each of
-    ``sizes`` boats, measured in the same run (``usvsim perf --device``)."""
-    from usvsim.task.openwater_env import OpenWaterVectorEnv  # the C path (CasADi, gymnasium)
-
-    rows: dict[str, dict[str, float]] = {}
-    for n in sizes:
-        cpu = OpenWaterVectorEnv(n, observation="scene")
-        cpu.reset(seed=0)
-        actions = np.random.default_rng(0).uniform(-1.0, 1.0, (n, 1))
-        steps, start = 0, time.perf_counter()
-        while steps < 2 or time.perf_counter() - start < seconds:
-            cpu.step(actions)
-            steps += 1
-        row = {"C path": n * steps / (time.perf_counter() - start)}
-        for dtype in ("float64", "float32"):
-            env = TorchOpenWaterEnv(n, device=device, dtype=dtype, per_boat=2)
-            row[dtype] = measure_openwater_steps(env, seconds)
-        rows[f"N={n}"] = row
-    return {
-        "device": device,
-        "observation": "scene",
-        "decision_steps_per_s": {k: {c: round(v) for c, v in r.items()} for k, r in rows.items()},
-        "over_C_path": {
-            k: {d: round(r[d] / r["C path"], 3) for d in ("float64", "float32")}
-            for k, r in rows.items()
-        },
-        "load_average_1min": round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None,
-    }

@@ -36,6 +36,9 @@ time_limit_s      (E,)        s
 statics           (E, K, 3)   [x_N m, y_E m, radius m]; ``statics_ok`` (E, K)
 vessels           (E, M, 6)   [x0_N m, y0_E m, course rad, speed m/s, turn rad/s, radius m];
                               ``vessels_ok`` (E, M)
+radar             (E, 4)      [p_clutter, speckle, p_missed, noise amplitude] (``RadarQuality``)
+radar_base        (E,)        ``mix64(radar_seed)`` as int64 bits: frame f's key is
+                              ``base + G f 2²²`` (:class:`usvsim.task.scene_radar.RadarStreams`)
 ================  ==========  ================================================================
 """
 
@@ -72,6 +75,8 @@ class OpenWaterTable:
     statics_ok: NDArray[np.bool_]
     vessels: FloatArray
     vessels_ok: NDArray[np.bool_]
+    radar: FloatArray
+    radar_base: NDArray[np.int64]
 
     @property
     def n_episodes(self) -> int:
@@ -81,7 +86,7 @@ class OpenWaterTable:
         """Write the table to ``path`` (``.npz``), atomically (a temporary file, then renamed)."""
         path = Path(path)
         tmp = path.with_name(path.name + ".tmp.npz")
-        np.savez(tmp, **{f.name: getattr(self, f.name) for f in fields(self)})
+        np.savez_compressed(tmp, **{f.name: getattr(self, f.name) for f in fields(self)})
         tmp.replace(path)
 
 
@@ -105,6 +110,7 @@ def pack_episodes(
     from scipy.special import ndtri  # the CPU batch's outlier threshold (task.disturbance)
 
     from usvsim.task.scenario import Scenario, episode_geometry
+    from usvsim.task.scene_radar import mix64
 
     if not episodes:
         raise ValueError("pack_episodes needs at least one episode")
@@ -134,6 +140,16 @@ def pack_episodes(
         statics_ok=np.zeros((e_n, k), dtype=bool),
         vessels=np.zeros((e_n, m, 6)),
         vessels_ok=np.zeros((e_n, m), dtype=bool),
+        radar=np.array(
+            [
+                (q.clutter_probability, q.speckle, q.missed_probability, q.noise_amplitude)
+                for q in (e.radar for e in episodes)
+            ],
+            dtype=np.float64,
+        ).reshape(e_n, 4),
+        radar_base=mix64(np.array([int(e.radar_seed) for e in episodes], dtype=np.uint64)).view(
+            np.int64
+        ),
     )
     for i, e in enumerate(episodes):  # host packing, once per table
         obs = np.array(e.obstacles, dtype=np.float64).reshape(-1, 3)

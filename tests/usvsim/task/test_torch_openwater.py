@@ -251,7 +251,7 @@ def test_weather_and_wrong_options_are_refused() -> None:
     with pytest.raises(ValueError, match="calm water only"):
         env.reset(seed=0)
     with pytest.raises(ValueError, match="observation must be one of"):
-        TorchOpenWaterEnv(2, observation="radar")
+        TorchOpenWaterEnv(2, observation="positional")
     with pytest.raises(ValueError, match="reward_horizon"):
         TorchOpenWaterEnv(2, reward_horizon="forever")  # type: ignore[arg-type]
     env = TorchOpenWaterEnv(2, family=CALM_SETS["two-obstacles"])
@@ -283,11 +283,16 @@ def test_fixed_horizon_equals_the_cpu_env() -> None:
     assert not math.isnan(float(r_dev.sum()))
 
 
-def test_a_step_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Device noise: steps with restarts and GNSS faults read no tensor on the host."""
+@pytest.mark.parametrize("observation", ["scene", "radar+goal"])
+def test_a_step_never_reads_a_tensor_back_to_the_host(
+    monkeypatch: pytest.MonkeyPatch, observation: str
+) -> None:
+    """Device noise: steps with restarts, GNSS faults and radar degradation read no tensor on
+    the host."""
     fam = replace(CALM_SETS["start-short"], gnss_outlier_probability_range=(0.05, 0.05),
                   gnss_dropout_probability=1.0, current_speed_range_mps=(0.3, 0.6))  # fmt: skip
-    env = TorchOpenWaterEnv(16, family=fam)  # straight at the pole: collisions
+    fam = replace(fam, radar_clutter_range=(0.001, 0.001), radar_missed_range=(0.2, 0.2))
+    env = TorchOpenWaterEnv(16, family=fam, observation=observation)  # at the pole: collisions
     env.reset(seed=0)
     actions = torch.zeros((16, 1), dtype=torch.float64)
 
@@ -297,7 +302,7 @@ def test_a_step_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.Monkey
     for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
         monkeypatch.setattr(torch.Tensor, name, refuse)
     ended = []
-    for _ in range(25):
+    for _ in range(12):
         _, _, terminated, truncated, _ = env.step(actions)
         ended.append(terminated | truncated)
     monkeypatch.undo()
@@ -305,10 +310,65 @@ def test_a_step_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.Monkey
 
 
 def test_perf_figures_stand_beside_the_c_path() -> None:
-    from usvsim.task.torch_openwater import torch_openwater_rates
+    from usvsim.task.torch_openwater_speed import torch_openwater_rates
 
     figures = torch_openwater_rates("torch-cpu", sizes=(8,), seconds=0.1)
     rates = figures["decision_steps_per_s"]["N=8"]
     assert set(rates) == {"C path", "float64", "float32"} and min(rates.values()) > 0
     ratio = figures["over_C_path"]["N=8"]["float32"]
     assert ratio == pytest.approx(rates["float32"] / rates["C path"], rel=0.01, abs=1e-3)
+
+
+def test_env_runs_from_a_table_without_casadi_scipy_or_gymnasium(tmp_path: object) -> None:
+    """The GPU path: a table drawn here, the env run where only torch and NumPy are there."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "table.npz"  # type: ignore[operator]
+    family_table(CALM_SETS["everything"], 0, 4, 2).save(path)
+    code = (
+        "import sys\n"
+        "sys.modules.update(casadi=None, gymnasium=None, scipy=None, control=None,\n"
+        "                   filterpy=None)\n"
+        "import torch\n"
+        "from usvsim.task.torch_openwater import TorchOpenWaterEnv\n"
+        "from usvsim.task.torch_openwater_episodes import load_table\n"
+        f"env = TorchOpenWaterEnv(4, table=load_table({str(path)!r}), per_boat=2)\n"
+        "obs, _ = env.reset(seed=0)\n"
+        "for _ in range(3):\n"
+        "    obs, r, te, tr, info = env.step(torch.zeros((4, 1), dtype=torch.float64))\n"
+        "print(tuple(obs.shape), float(r.max()) < 0)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    ).stdout.split()
+    assert out == ["(4,", "52)", "True"]
+
+
+@pytest.mark.parametrize(
+    "name", ["everything", pytest.param("radar-noise", marks=pytest.mark.slow)]
+)
+def test_radar_goal_observations_equal_the_cpu_env(name: str) -> None:
+    """radar+goal over whole episodes (degraded radar: clutter, speckle, misses, noise; restarts
+    included): every image pixel for pixel, goal vectors within one float32 step."""
+    from usvsim.task.openwater_env import OpenWaterVectorEnv
+    from usvsim.task.torch_observations import GOAL_STD
+
+    fam = CALM_SETS[name]
+    cpu = OpenWaterVectorEnv(6, observation="radar+goal", family=fam)
+    dev = TorchOpenWaterEnv(6, family=fam, noise="replay", observation="radar+goal")
+    o_cpu, _ = cpu.reset(seed=4)
+    o_dev, _ = dev.reset(seed=4)
+    rng = np.random.default_rng(4)
+    ended = lit = 0
+    for _ in range(36):
+        np.testing.assert_array_equal(o_dev["radar"].numpy(), o_cpu["radar"])
+        assert _float32_steps(o_cpu["goal"], o_dev["goal"].double().numpy()) <= 1.0
+        lit += int((o_cpu["radar"] > 0).sum())
+        b_goal = o_cpu["goal"][:, 1] * GOAL_STD[1]
+        a = np.clip(b_goal / np.radians(30.0) + rng.normal(0, 0.3, 6), -1, 1)[:, None]
+        o_cpu, _, te, tr, _ = cpu.step(a)
+        o_dev, _, te_d, tr_d, _ = dev.step(torch.as_tensor(a))
+        np.testing.assert_array_equal(te_d.numpy() | tr_d.numpy(), te | tr)
+        ended += int((te | tr).sum())
+    assert ended >= 2 and lit > 0
