@@ -234,6 +234,15 @@ one seed.
 """
 
 
+def models_page() -> str:
+    """``models.md``: every shipped model's card (``usvsim models --json``, rendered by
+    :func:`usvsim.evaluation.model_cards.cards_markdown`) with its setup's across-seed figures."""
+    from usvsim.evaluation.model_cards import cards_markdown, load_cards
+    from usvsim.evaluation.seed_stats import load_seed_tables
+
+    return cards_markdown(load_cards(), load_seed_tables())
+
+
 def model_zoo() -> str:
     """The shipped models (``usvsim/models/models.json`` and their cards): how each was trained
     and scored, under its name and the name it was published under before."""

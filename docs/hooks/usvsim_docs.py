@@ -6,7 +6,7 @@ Generated at every build, from the code and the tools' outputs, so none of it is
   class's docstring, with a rendered episode (:mod:`gen_envs`);
 - ``cli.md``: every command's ``--help`` (:mod:`gen_cli`);
 - ``results.md``: tables from ``docs/data/*.json`` (:mod:`gen_results`), and the model zoo and
-  stress summary on the helmsmen page;
+  stress summary on the helmsmen page; ``models.md``: the model cards (``usvsim models``);
 - the manoeuvring table and plant plots on the vessels page, by ``usvsim manoeuvre`` and
   ``usvsim demo`` (:mod:`gen_plant`);
 - ``api/*.md``: mkdocstrings pages (:mod:`gen_api`);
@@ -151,6 +151,7 @@ def on_files(files: Files, config: Any) -> Files:
     _env_pages(files, config)
     _add(files, config, "cli.md", gen_cli.cli_markdown())
     _add(files, config, "results.md", gen_results.results_page())
+    _add(files, config, "models.md", gen_results.models_page())
     for uri, text in gen_api.pages().items():
         _add(files, config, uri, text)
     changelog = (ROOT / "CHANGELOG.md").read_text().replace("](docs/", "](")

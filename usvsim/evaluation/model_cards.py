@@ -471,11 +471,11 @@ def cards_markdown(
         "",
     ]
     for name, c in sorted(cards.items()):
-        lines += _card_section(name, c)
+        lines += _card_section(name, c, seeds.get(c.setup))
     return "\n".join(lines)
 
 
-def _card_section(name: str, c: ModelCard) -> list[str]:
+def _card_section(name: str, c: ModelCard, seeds: SeedTable | None) -> list[str]:
     study = c.validation.get("best_pt", {})
     heldout = c.test.get("study_heldout", {})
     mark = f" — recommended for {', '.join(c.recommended)}" if c.recommended else ""
@@ -495,6 +495,13 @@ def _card_section(name: str, c: ModelCard) -> list[str]:
         lines.append("- Validation at `best.pt`: " + _best_pt_text(study))
     lines.append(f"- Stress suite, validation split: {_pct(c.validation.get('stress', {}))}; "
                  f"test split: {_pct(c.test.get('stress', {}))}")  # fmt: skip
+    if seeds is not None:
+        each = " / ".join(f"{100 * v:.1f}" for v in seeds.original.per_seed)
+        lines.append(
+            f"- Setup `{c.setup}` over seeds {', '.join(map(str, seeds.seeds))} (stress test "
+            f"split, mean of the 22 original sets): {seeds.label} {seeds.original.cell()}; "
+            f"seeds {each} %; the seed rule picks seed {seeds.picked_seed}"
+        )
     if heldout:
         lines.append(
             f"- Study held-out (test): {heldout['successes']}/{heldout['episodes']} successes"
