@@ -524,9 +524,14 @@ def stage_report() -> None:
     for b in bench:
         if "error" in b:
             text.append(f"  {b['mode']} {b['dtype']} N={b['n']:,}: {b['error']}")
-    text += _env_table(grouped) + _train_table(grouped)
+    from gpu_check_openwater import openwater_table  # the open-water stage's lines
+
+    text += _env_table(grouped) + openwater_table(grouped) + _train_table(grouped)
     best_env = max((b.get("env_steps_per_s", 0) for b in grouped.get("env_bench", [])), default=0)
     summary["best_env_steps_per_s"] = best_env
+    summary["best_openwater_scene_decision_steps_per_s"] = max(
+        (b.get("decision_steps_per_s", 0) for b in grouped.get("ow_bench", [])), default=0
+    )
     summary["best_train_env_steps_per_s"] = max(
         (b.get("train_env_steps_per_s", 0) for b in grouped.get("train_bench", [])), default=0
     )

@@ -2,11 +2,13 @@
 # The torch plant and the study task's torch env on one GPU (issue 40): equality against
 # torch-cpu float64, then plant boat-substeps/s (float32 and float64, eager and torch.compile,
 # N = 1e3 .. 1e7) and env steps/s (float32, N = 1e3 .. 1e6; positional eager and compiled,
-# radar+goal eager), then TRPO training on the device (env steps/s of whole iterations).
+# radar+goal eager), the open-water env (equality; scene decision steps/s at N = 1e3 .. 1e6,
+# radar+goal at 1e3 .. 1e5),
+# then TRPO training on the device (env steps/s of whole iterations).
 #
 #   bash benchmarks/gpu_check.sh                      # on the GPU machine, from the repo root
 #   GPU_CHECK_DEVICE=torch-cpu GPU_CHECK_SIZES=1000,4000 GPU_CHECK_ENV_SIZES=64,256 \
-#     GPU_CHECK_TRAIN_SIZES=64,256 \
+#     GPU_CHECK_TRAIN_SIZES=64,256 GPU_CHECK_OW_SIZES=64,256 GPU_CHECK_OW_RADAR_SIZES=64,256 \
 #     GPU_CHECK_COMPILE_BACKEND=eager bash benchmarks/gpu_check.sh   # a dry run on a CPU
 #
 # Needs python with torch and numpy; nothing of this project is installed (the repository goes on
@@ -20,9 +22,11 @@
 # GPU_CHECK_SECONDS (timed seconds per point, 1.0),
 # GPU_CHECK_COMPILE_BACKEND (inductor; eager only traces, for a dry run), GPU_CHECK_BUDGET_S,
 # GPU_CHECK_LIMIT_SCALE (integer factor on every stage's limit, 1), GPU_CHECK_TRAIN_SIZES
-# (1024,8192,32768,65536), GPU_CHECK_WHEELS (a folder of wheels: gymnasium and its three small
-# dependencies, `pip download -d wheels gymnasium`, installed without network where gymnasium is
-# missing; the training stage needs it for its spaces).
+# (1024,8192,32768,65536), GPU_CHECK_OW_SIZES (open-water env, 1000,10000,100000,1000000),
+# GPU_CHECK_OW_RADAR_SIZES (its radar+goal, 1000,10000,100000),
+# GPU_CHECK_WHEELS (a folder of wheels: gymnasium and its three small dependencies,
+# `pip download -d wheels gymnasium`, installed without network where gymnasium is missing; the
+# training stage needs it for its spaces).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 export OUT="${OUT:-./gpu-out}"
@@ -31,6 +35,8 @@ DEVICE="${GPU_CHECK_DEVICE:-cuda}"
 SIZES="${GPU_CHECK_SIZES:-1000,10000,100000,1000000,10000000}"
 ENV_SIZES="${GPU_CHECK_ENV_SIZES:-1000,10000,100000,1000000}"
 TRAIN_SIZES="${GPU_CHECK_TRAIN_SIZES:-1024,8192,32768,65536}"  # boats per TRPO batch (x 64)
+OW_SIZES="${GPU_CHECK_OW_SIZES:-1000,10000,100000,1000000}"  # open-water env (scene) boats
+OW_RADAR_SIZES="${GPU_CHECK_OW_RADAR_SIZES:-1000,10000,100000}"  # and radar+goal (images)
 SECONDS_PER_POINT="${GPU_CHECK_SECONDS:-1.0}"
 BACKEND="${GPU_CHECK_COMPILE_BACKEND:-inductor}"
 BUDGET="${GPU_CHECK_BUDGET_S:-470}"
@@ -115,6 +121,12 @@ env_bench() {  # dtype mode limit [observation]
 bench float32 compile 150
 run env-equality 60 "$PY" benchmarks/gpu_check.py env-equality --device "$DEVICE"
 env_bench float32 eager 60
+# the open-water env (scene): equality on the device, then decision steps/s (issue 40)
+run ow-equality 60 "$PY" benchmarks/gpu_check_openwater.py equality --device "$DEVICE"
+run ow-bench 60 "$PY" benchmarks/gpu_check_openwater.py bench --device "$DEVICE" \
+  --sizes "$OW_SIZES" --seconds "$SECONDS_PER_POINT"
+run ow-bench-radar 60 "$PY" benchmarks/gpu_check_openwater.py bench --device "$DEVICE" \
+  --sizes "$OW_RADAR_SIZES" --seconds "$SECONDS_PER_POINT" --observation radar+goal
 # TRPO training on the device (rollouts, GAE, CG and line search there), iterations/s
 run train-bench 120 "$PY" benchmarks/gpu_check_train.py --device "$DEVICE" --sizes "$TRAIN_SIZES"
 env_bench float32 eager 45 radar+goal

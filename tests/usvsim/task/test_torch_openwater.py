@@ -372,3 +372,34 @@ def test_radar_goal_observations_equal_the_cpu_env(name: str) -> None:
         np.testing.assert_array_equal(te_d.numpy() | tr_d.numpy(), te | tr)
         ended += int((te | tr).sum())
     assert ended >= 2 and lit > 0
+
+
+def test_scene_radar_equals_render_scene() -> None:
+    """300 random scenes (poles, islets, a boat inside an islet, bearings past ±π), clean and
+    degraded from random frame keys: pixel for pixel; mix64 bit for bit."""
+    from usvsim.task.radar import RadarConfig
+    from usvsim.task.scene_radar import RadarDegradation, mix64, render_scene, stream_keys
+    from usvsim.task.torch_scene_radar import SceneRadarGrid, mix64_torch, render_scene_torch
+
+    rng = np.random.default_rng(0)
+    z = rng.integers(0, 2**63, 1000, dtype=np.uint64) * np.uint64(2) + np.uint64(1)
+    np.testing.assert_array_equal(
+        mix64_torch(torch.as_tensor(z.view(np.int64))).numpy(), mix64(z).view(np.int64)
+    )
+    n, j = 300, 10
+    rho, phi = rng.uniform(0, 220, (n, j)), rng.uniform(-4, 4, (n, j))
+    radius = np.where(rng.random((n, j)) < 0.4, 1.0, rng.uniform(1, 30, (n, j)))
+    ok = rng.random((n, j)) < 0.8
+    levels = [np.where(rng.random(n) < 0.5, rng.uniform(0, 0.01, n), 0.0) for _ in range(3)]
+    levels.append(np.where(rng.random(n) < 0.5, rng.uniform(0, 40, n), 0.0))
+    keys = stream_keys(rng.integers(0, 2**62, n).tolist(), rng.integers(0, 100, n))
+    grid = SceneRadarGrid(RadarConfig(), torch.float64, torch.device("cpu"))
+    t = [torch.as_tensor(a) for a in (rho, phi, radius, ok)]
+    clean = render_scene(rho, phi, radius, ok)
+    np.testing.assert_array_equal(render_scene_torch(*t, grid).numpy(), clean)
+    degraded = render_scene(rho, phi, radius, ok, None, RadarDegradation(*levels), keys)
+    got = render_scene_torch(
+        *t, grid, torch.as_tensor(np.stack(levels, 1)), torch.as_tensor(keys.view(np.int64))
+    )
+    np.testing.assert_array_equal(got.numpy(), degraded)
+    assert (degraded != clean).any() and (clean > 0).any()
