@@ -2,7 +2,8 @@
 
 N boats (default 1024) of the default vessel with its PID autopilot, stepped ``--steps`` plant
 steps per call; three kernels timed in interleaved blocks so that machine load hits them alike,
-``--repeats`` times, medians reported with the 1-minute load average::
+``--repeats`` times, medians reported (per wall-clock second and per CPU second of the process)
+with the 1-minute load average before and after::
 
     python benchmarks/weather_cost.py
     python benchmarks/weather_cost.py --n 1024 --repeats 7 --json
@@ -34,14 +35,16 @@ from usvsim.vessel.weather.waves import sea_state_from_code
 from usvsim.vessel.weather_plant import SeaConditions, WeatherPlant
 
 
-def _timer(run: Callable[[], object], block_s: float) -> float:
-    """Calls of ``run`` per second over about ``block_s`` seconds."""
+def _timer(run: Callable[[], object], block_s: float) -> tuple[float, float]:
+    """Calls of ``run`` per second of wall-clock time and per second of this process's CPU
+    time (all its threads) over about ``block_s`` seconds. On a machine shared with other jobs
+    the CPU-time rate is the steadier one: time spent waiting for a core is not counted."""
     run()  # warm
-    t0, calls = time.perf_counter(), 0
+    t0, c0, calls = time.perf_counter(), time.process_time(), 0
     while time.perf_counter() - t0 < block_s:
         run()
         calls += 1
-    return calls / (time.perf_counter() - t0)
+    return calls / (time.perf_counter() - t0), calls / (time.process_time() - c0)
 
 
 def measure(n: int, steps: int, repeats: int, block_s: float) -> dict[str, object]:
@@ -61,10 +64,15 @@ def measure(n: int, steps: int, repeats: int, block_s: float) -> dict[str, objec
         "weather": lambda: weather.step(windy, ref, n_steps=steps),
     }
     rates: dict[str, list[float]] = {k: [] for k in runs}
+    cpu_rates: dict[str, list[float]] = {k: [] for k in runs}
+    load_before = os.getloadavg()[0]
     for _ in range(repeats):
         for key, run in runs.items():
-            rates[key].append(_timer(run, block_s) * n * steps)
+            wall, cpu = _timer(run, block_s)
+            rates[key].append(wall * n * steps)
+            cpu_rates[key].append(cpu * n * steps)
     med = {k: float(np.median(v)) for k, v in rates.items()}
+    cpu_med = {k: float(np.median(v)) for k, v in cpu_rates.items()}
     return {
         "n_boats": n,
         "steps_per_call": steps,
@@ -72,7 +80,9 @@ def measure(n: int, steps: int, repeats: int, block_s: float) -> dict[str, objec
         "boat_substeps_per_s": {k: round(v) for k, v in med.items()},
         "weather_over_calm": round(med["weather"] / med["calm"], 3),
         "weather_calm_over_calm": round(med["weather-calm"] / med["calm"], 3),
-        "load_average_1min": round(os.getloadavg()[0], 2),
+        "boat_substeps_per_cpu_s": {k: round(v) for k, v in cpu_med.items()},
+        "cpu_weather_over_calm": round(cpu_med["weather"] / cpu_med["calm"], 3),
+        "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)],
         "repeats": repeats,
     }
 
@@ -94,7 +104,8 @@ def main() -> None:
     print(
         f"N={args.n}, {result['kernel']} kernel, load {result['load_average_1min']}: "
         + ", ".join(f"{k} {v:,}/s" for k, v in rates.items())
-        + f"; weather / calm = {result['weather_over_calm']}"
+        + f"; weather / calm = {result['weather_over_calm']} (per CPU second: "
+        + f"{result['cpu_weather_over_calm']})"
     )
 
 

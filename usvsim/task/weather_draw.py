@@ -97,12 +97,13 @@ class WeatherRanges:
             raise UserError(f"wave spread must lie in [0, π] rad, got {self.wave_spread_rad}")
 
 
+# Bales' table (sea states 2-8): H_s (m) and most probable T_p (s), in increasing H_s
+_BALES_HS_TP = tuple(zip(*(SEA_STATES[c][:2] for c in sorted(SEA_STATES) if c >= 2), strict=True))
+
+
 def _bales_period(hs_m: float) -> float:
     """Most probable T_p (s) of H_s: Bales' table (sea states 2-8) interpolated, clipped."""
-    codes = sorted(c for c in SEA_STATES if c >= 2)
-    hs = [SEA_STATES[c][0] for c in codes]
-    tp = [SEA_STATES[c][1] for c in codes]
-    return float(np.interp(hs_m, hs, tp))
+    return float(np.interp(hs_m, *_BALES_HS_TP))
 
 
 def draw_weather(ranges: WeatherRanges, seed: int, k: int, course_rad: float) -> Weather:

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.interpolate import CubicSpline
 from scipy.special import i1e, k1e
 
 from usvsim.common.errors import UserError
@@ -44,6 +45,7 @@ __all__ = [
     "WaterlinePolygon",
     "WaveResponse",
     "drift_pressure",
+    "drift_pressure_direct",
     "drift_table",
     "encounter_frequency",
     "encounter_response",
@@ -312,6 +314,33 @@ def _reflection_grid(draft_m: float) -> tuple[NDArray[np.float64], NDArray[np.fl
     return omega, r2
 
 
+def drift_pressure_direct(
+    hs_m: ArrayLike,
+    tp_s: ArrayLike,
+    draft_m: float = USV105_WATERLINE.draft_m,
+    gamma: float = 3.3,
+) -> NDArray[np.float64]:
+    """p_d = ρ g ∫ S(ω) R²(ω) dω (N/m) per boat, shape (N,), by the trapezoid rule on 3000
+    frequencies (:func:`drift_pressure` interpolates it); 0 in a calm sea."""
+    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))[:, None]
+    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))[:, None]
+    omega, r2 = _reflection_grid(float(draft_m))
+    s = jonswap(omega, hs, np.where(hs > 0, tp, 1.0), gamma)
+    m_r = np.trapezoid(s * r2, omega, axis=1)  # m²
+    return np.asarray(RHO_WATER * G * m_r, dtype=float)
+
+
+@functools.lru_cache(maxsize=8)
+def _drift_pressure_spline(draft_m: float, gamma: float) -> CubicSpline:
+    """ln p_d(H_s = 1 m) against ln T_p over :data:`TP_RANGE_S` (400 log-spaced periods, 0.07 s
+    once per draft and γ): within 2e-8 of :func:`drift_pressure_direct` (tested)."""
+    tp = np.geomspace(*TP_RANGE_S, 400)
+    unit = np.concatenate(
+        [drift_pressure_direct(np.ones(c.size), c, draft_m, gamma) for c in np.array_split(tp, 4)]
+    )
+    return CubicSpline(np.log(tp), np.log(unit))
+
+
 def drift_pressure(
     hs_m: ArrayLike,
     tp_s: ArrayLike,
@@ -319,13 +348,21 @@ def drift_pressure(
     gamma: float = 3.3,
 ) -> NDArray[np.float64]:
     """p_d = ρ g ∫ S(ω) R²(ω) dω (N/m) per boat, shape (N,): the drift load per metre of a wall
-    met head-on (module docstring); 0 in a calm sea."""
-    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))[:, None]
-    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))[:, None]
-    omega, r2 = _reflection_grid(float(draft_m))
-    s = jonswap(omega, hs, np.where(hs > 0, tp, 1.0), gamma)
-    m_r = np.trapezoid(s * r2, omega, axis=1)  # m²
-    return np.asarray(RHO_WATER * G * m_r, dtype=float)
+    met head-on (module docstring); 0 in a calm sea.
+
+    S ∝ H_s² at a given T_p, so p_d = H_s² p_d(1 m, T_p), the latter interpolated (a cubic
+    spline in ln T_p of :func:`drift_pressure_direct`, within 2e-8 of it): an episode start
+    costs 10 μs instead of S on 3000 frequencies (250 μs). T_p outside :data:`TP_RANGE_S` is
+    integrated directly."""
+    hs = np.atleast_1d(np.asarray(hs_m, dtype=float))
+    tp = np.atleast_1d(np.asarray(tp_s, dtype=float))
+    hs, tp = np.broadcast_arrays(hs, tp)
+    inside = (tp >= TP_RANGE_S[0]) & (tp <= TP_RANGE_S[1])
+    if not np.all(inside | (hs <= 0)):
+        return drift_pressure_direct(hs, tp, draft_m, gamma)
+    spline = _drift_pressure_spline(float(draft_m), float(gamma))
+    unit = np.exp(spline(np.log(np.where(inside, tp, TP_RANGE_S[0]))))
+    return np.where(hs > 0, hs**2 * unit, 0.0)
 
 
 def mean_drift_force(
