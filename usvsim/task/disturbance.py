@@ -184,27 +184,18 @@ class BoatDisturbances:
         boats = np.asarray(boats, dtype=np.intp)
         if self.weather_inputs is None:
             raise RuntimeError("start_calm_weather first: the boats' weather rows are not set")
-        m = np.zeros((boats.size, NWS))
-        windy = self.weather_active[boats]
-        wavy = np.array([self._weather[b].hs_m > 0 for b in boats.tolist()], dtype=bool)
-        for sel in (windy & wavy, windy & ~wavy, ~windy):
-            rows = np.flatnonzero(sel)
-            if rows.size == 0:
-                continue
-            # the episodes' own streams draw the gust and wave starts of boats with weather
-            rng = episode_noise(boats[rows]) if windy[rows[0]] else None
-            conditions = sea_conditions([self._weather[b] for b in boats[rows].tolist()])
-            state = plant.initial_state(
-                eta[rows],
-                conditions,
-                speed_mps[rows],
-                rng=rng,
-                wave_filter=None if wavy[rows[0]] else False,
-                calm=None if calm is None else PlantState(x=calm.x[rows], c=calm.c[rows]),
-            )
-            m[rows] = state.m
-            self.weather_inputs[boats[rows]] = state.inputs
-        return m
+        if boats.size == 0:
+            return np.zeros((0, NWS))
+        # one start for all: the episodes' own streams draw the gust and wave starts of the
+        # boats with weather, the plant's generator those of the others (multiplied by zero)
+        windy = np.flatnonzero(self.weather_active[boats])
+        draws = _SplitDraws(
+            episode_noise(boats[windy]) if windy.size else None, windy, plant.rng, boats.size
+        )
+        conditions = sea_conditions([self._weather[b] for b in boats.tolist()])
+        state = plant.initial_state(eta, conditions, speed_mps, rng=draws, calm=calm)  # type: ignore[arg-type]
+        self.weather_inputs[boats] = state.inputs
+        return state.m
 
     def inputs(
         self, episode_time_s: FloatArray, dt_s: float, n_steps: int
@@ -240,4 +231,24 @@ class BoatDisturbances:
         out[:, gnss_index] = np.where(
             faulty[:, None], normals[:, gnss_index] * scale, normals[:, gnss_index]
         )
+        return out
+
+
+class _SplitDraws:
+    """Standard normals for ``n`` boats: the rows ``rows`` from ``episode`` (their streams, in
+    the order asked), the others from ``other`` (a generator), as separate draws would give."""
+
+    def __init__(self, episode: Any, rows: NDArray[np.intp], other: Any, n: int) -> None:
+        self.episode, self.rows, self.other = episode, rows, other
+        rest = np.ones(n, dtype=bool)
+        rest[rows] = False
+        self.others = np.flatnonzero(rest)
+
+    def standard_normal(self, size: int | tuple[int, ...]) -> FloatArray:
+        shape = (size,) if isinstance(size, (int, np.integer)) else tuple(size)
+        out = np.empty(shape)
+        if self.rows.size:
+            out[self.rows] = self.episode.standard_normal((self.rows.size, *shape[1:]))
+        if self.others.size:
+            out[self.others] = self.other.standard_normal((self.others.size, *shape[1:]))
         return out

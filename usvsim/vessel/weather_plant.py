@@ -328,13 +328,16 @@ def weather_inputs(
         out[:, col[name]] = chol[:, int(name[1]), int(name[2])]
     out[:, col["yaw_gain"]] = yaw_gain
     if wave_filter is not None:
+        # only boats in waves get a filter (their Riccati equations alone: each boat's gains
+        # do not depend on the others, observer.solve_filter_riccati); calm ones keep zeros
         wavy = cond.hs_m > 0
-        scale = yaw_gain * resp.omega0**3 / G * np.sin(2.0 * (cond.wave_dir_rad - heading_rad))
-        gains = observer_gains(phi, chol, scale, *yaw_model, dt_s, wave_filter)
         out[:, col["wave_filter"]] = wavy
-        for k, name in enumerate(OBSERVER_STATES):
-            for j, y in enumerate(("compass", "gyro")):
-                out[:, col[f"gain_{name}_{y}"]] = np.where(wavy, gains[:, k, j], 0.0)
+        if wavy.any():
+            rel = cond.wave_dir_rad[wavy] - heading_rad[wavy]
+            scale = yaw_gain * resp.omega0[wavy] ** 3 / G * np.sin(2.0 * rel)
+            gains = observer_gains(phi[wavy], chol[wavy], scale, *yaw_model, dt_s, wave_filter)
+            first = col[f"gain_{OBSERVER_STATES[0]}_compass"]  # the ten gains, row-major
+            out[wavy, first : first + 2 * len(OBSERVER_STATES)] = gains.reshape(-1, 10)
     return out, resp
 
 
