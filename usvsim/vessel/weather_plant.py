@@ -265,15 +265,16 @@ class SeaConditions:
         """Raise :class:`UserError` (one line) on a shape or value out of range."""
         for name in self.__dataclass_fields__:
             arr = np.asarray(getattr(self, name), dtype=float)
-            if arr.shape != (n,) or not np.all(np.isfinite(arr)):
+            if arr.shape != (n,) or not np.isfinite(arr).all():
                 raise UserError(f"SeaConditions.{name} must be {n} finite numbers")
-        if np.any(self.wind_speed_mps < 0) or np.any(self.wind_speed_mps > WIND_SPEED_MAX_MPS):
+        wind, gust, hs = self.wind_speed_mps, self.gust_intensity, self.hs_m
+        if not ((wind >= 0) & (wind <= WIND_SPEED_MAX_MPS)).all():
             raise UserError(f"wind speed must lie in [0, {WIND_SPEED_MAX_MPS:g}] m/s")
-        if np.any(self.gust_intensity < 0) or np.any(self.gust_intensity > 0.5):
+        if not ((gust >= 0) & (gust <= 0.5)).all():
             raise UserError("gust intensity must lie in [0, 0.5]")
-        if np.any(self.hs_m < 0) or np.any(self.hs_m > HS_MAX_M):
+        if not ((hs >= 0) & (hs <= HS_MAX_M)).all():
             raise UserError(f"significant wave height must lie in [0, {HS_MAX_M:g}] m")
-        if np.any((self.hs_m > 0) & ((self.tp_s < 1.0) | (self.tp_s > 25.0))):
+        if ((hs > 0) & ((self.tp_s < 1.0) | (self.tp_s > 25.0))).any():
             raise UserError("peak period must lie in [1, 25] s")
 
 

@@ -180,7 +180,7 @@ def _transition(resp: WaveResponse, dt_s: float) -> tuple[NDArray[np.float64], N
     The filter is x'' + 2λω₀x' + ω₀²x = K w; w is white noise of intensity π (one-sided
     PSD 1 in ω), so y = x' has PSD |h(jω)|².
     """
-    w, z, k = resp.omega0, resp.damping, resp.gain
+    w, z = resp.omega0, resp.damping
     if np.any(z >= 1.0):
         raise UserError("wave response damping λ must be < 1 (a peaked spectrum)")
     wd = w * np.sqrt(1.0 - z**2)
@@ -191,10 +191,16 @@ def _transition(resp: WaveResponse, dt_s: float) -> tuple[NDArray[np.float64], N
     phi[:, 0, 1] = e * s / wd
     phi[:, 1, 0] = -e * w**2 / wd * s
     phi[:, 1, 1] = e * (c - z * w / wd * s)
-    p = np.zeros_like(phi)
+    return phi, _stationary_covariance(resp)
+
+
+def _stationary_covariance(resp: WaveResponse) -> NDArray[np.float64]:
+    """P∞ (N, 2, 2) of the wave response filter (:func:`_transition`), diagonal."""
+    w, z, k = resp.omega0, resp.damping, resp.gain
+    p = np.zeros((w.size, 2, 2))
     p[:, 0, 0] = math.pi * k**2 / (4.0 * z * w**3)
     p[:, 1, 1] = math.pi * k**2 / (4.0 * z * w)
-    return phi, p
+    return p
 
 
 def _chol2(p: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -232,7 +238,9 @@ def encounter_response(
 
 def wave_motion_init(rng: np.random.Generator, resp: WaveResponse) -> NDArray[np.float64]:
     """Filter states (N, 2) drawn from the stationary distribution (no start-up transient)."""
-    _, p = _transition(resp, 1.0)
+    if np.any(resp.damping >= 1.0):
+        raise UserError("wave response damping λ must be < 1 (a peaked spectrum)")
+    p = _stationary_covariance(resp)
     return np.einsum("nij,nj->ni", _chol2(p), rng.standard_normal((resp.omega0.size, 2)))
 
 
