@@ -134,6 +134,9 @@ env_bench float32 compile 170  # inductor on the env's ~800-op step: minutes (42
 bench float32 eager 40
 bench float64 eager 40
 bench float64 compile 100
+# the open-water env with the plant + filter step compiled (last: compiling takes minutes)
+run ow-bench-compile 150 "$PY" benchmarks/gpu_check_openwater.py bench --device "$DEVICE" \
+  --sizes "$OW_SIZES" --seconds "$SECONDS_PER_POINT" --mode compile --backend "$BACKEND"
 
 "$PY" benchmarks/gpu_check.py report 2>&1 | tee -a "$LOG"
 rm -f "$OUT/reference.npy"  # 7 MB of intermediate numbers

@@ -15,7 +15,8 @@ in float64 and float32 against the same env on torch-cpu in float64 (itself test
 CPU env in the CPU test suite): positions, headings, observations, rewards, flags.
 Also the degraded radar images of 256 random scenes on the device against torch-cpu (the int64
 SplitMix64 arithmetic). ``bench``: decision steps/s (one 2 s decision of one boat, 20 plant
-steps, restarts included) at each N, float32, eager, ``--observation scene`` or ``radar+goal``;
+steps, restarts included) at each N, float32, ``--observation scene`` or ``radar+goal``, eager
+or ``--mode compile`` (plant + filter step through ``torch.compile``, the first step compiles);
 at the first N whether a step waits for the device (CUDA's sync debug mode). Boat i's k-th
 episode is table row (8 i + k) mod 1,024 (the table cycles).
 """
@@ -169,7 +170,13 @@ def _step_syncs(env: Any) -> str | None:
 
 
 def stage_bench(
-    device: str, dtype: str, sizes: list[int], seconds: float, observation: str = "scene"
+    device: str,
+    dtype: str,
+    sizes: list[int],
+    seconds: float,
+    observation: str = "scene",
+    mode: str = "eager",
+    backend: str = "inductor",
 ) -> None:
     import torch
 
@@ -182,18 +189,22 @@ def stage_bench(
         try:
             t0 = time.perf_counter()
             env = TorchOpenWaterEnv(n, table=table, per_boat=PER_BOAT, device=device, dtype=dtype,
-                                    observation=observation)  # fmt: skip
+                                    observation=observation, compile=mode == "compile",
+                                    compile_backend=backend)  # fmt: skip
             env.reset(seed=0)
+            env.step(torch.zeros((n, 1), device=env.device, dtype=env.dtype))  # compiles here
+            if env.device.type == "cuda":
+                torch.cuda.synchronize()
+            first_s = time.perf_counter() - t0  # setup, reset and the first step
             syncs = _step_syncs(env) if n == sizes[0] else None
-            first_s = time.perf_counter() - t0
             rate = measure_openwater_steps(env, seconds)
         except torch.cuda.OutOfMemoryError as err:
-            record("ow_bench", device=device, dtype=dtype, observation=observation, n=n,
-                   error=str(err)[:200])  # fmt: skip
+            record("ow_bench", device=device, dtype=dtype, observation=observation, mode=mode,
+                   n=n, error=str(err)[:200])  # fmt: skip
             break
         peak = torch.cuda.max_memory_allocated() / 2**30 if env.device.type == "cuda" else None
         record(
-            "ow_bench", device=device, dtype=dtype, observation=observation, n=n,
+            "ow_bench", device=device, dtype=dtype, observation=observation, mode=mode, n=n,
             setup_s=round(first_s, 2), decision_steps_per_s=round(rate), step_syncs=syncs,
             peak_gib=None if peak is None else round(peak, 2),
         )  # fmt: skip
@@ -231,8 +242,8 @@ def openwater_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
             text.append(f"  {b['observation']:>10} N={b['n']:>10,} {b['dtype']}: {b['error']}")
             continue
         text.append(
-            f"  {b['observation']:>10} N={b['n']:>10,} {b['dtype']}: "
-            f"{b['decision_steps_per_s']:.3e}"
+            f"  {b['observation']:>10} {b.get('mode', 'eager'):>7} N={b['n']:>10,} {b['dtype']}: "
+            f"{b['decision_steps_per_s']:.3e} (first step {b['setup_s']} s)"
             + (f" (peak {b['peak_gib']} GiB)" if b.get("peak_gib") is not None else "")
             + (f"; host syncs in a step: {b['step_syncs']}" if b.get("step_syncs") else "")
         )
@@ -252,6 +263,8 @@ def main() -> None:
     bench.add_argument("--sizes", default="1000,10000,100000,1000000")
     bench.add_argument("--seconds", type=float, default=1.0)
     bench.add_argument("--observation", default="scene", choices=["scene", "radar+goal"])
+    bench.add_argument("--mode", default="eager", choices=["eager", "compile"])
+    bench.add_argument("--backend", default="inductor")  # torch.compile backend
     args = parser.parse_args()
     if args.stage == "make-table":
         make_table()
@@ -259,7 +272,9 @@ def main() -> None:
         stage_equality(args.device, args.dtypes.split(","))
     else:
         sizes = [int(float(s)) for s in args.sizes.split(",")]
-        stage_bench(args.device, args.dtype, sizes, args.seconds, args.observation)
+        stage_bench(
+            args.device, args.dtype, sizes, args.seconds, args.observation, args.mode, args.backend
+        )
 
 
 if __name__ == "__main__":

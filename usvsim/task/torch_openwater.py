@@ -52,7 +52,7 @@ from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_stat
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
 from usvsim.task.scenario import BoatNoise, Scenario
-from usvsim.task.torch_env import plant_and_filter, torch_heading_change
+from usvsim.task.torch_env import compiled_substep, plant_and_filter, torch_heading_change
 from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
 from usvsim.task.torch_observations import (
     TorchObservation,
@@ -111,6 +111,9 @@ class TorchOpenWaterEnv:
     scenario : Scenario, optional
         Decision period, plant step, goal radius, safety distance (default the study's).
     reward : GaussianReward, optional
+    compile : bool
+        Run a plant step + filter step through ``torch.compile`` (for a GPU; the study env's
+        :func:`usvsim.task.torch_env.compiled_substep`), ``compile_backend`` its backend.
     """
 
     def __init__(
@@ -130,6 +133,8 @@ class TorchOpenWaterEnv:
         noise: Literal["device", "replay"] = "device",
         scenario: Scenario | None = None,
         reward: GaussianReward | None = None,
+        compile: bool = False,
+        compile_backend: str = "inductor",
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
@@ -186,6 +191,7 @@ class TorchOpenWaterEnv:
         self._radar_grid = SceneRadarGrid(RadarConfig(), self.dtype, self.device)
         gains = torch.tensor(self.plant.kernel.gains, dtype=self.dtype, device=self.device)
         self._gains = tuple(gains.unbind(0))  # shared by all boats: 0-d tensors, built once
+        self._substep = compiled_substep(compile_backend) if compile else plant_and_filter
         self._ready = False
 
     # ----------------------------------------------------------------------------- tables
@@ -375,7 +381,7 @@ class TorchOpenWaterEnv:
         s, n = tuple(self._s.unbind(0)), tuple(self._n.unbind(0))
         xs, ys = [], []
         for j in range(T):  # the plant steps of one decision
-            s, n = plant_and_filter(
+            s, n = self._substep(
                 self.plant.kernel.step,
                 self.nav.step,
                 self.plant.kernel.nx,
