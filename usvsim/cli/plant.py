@@ -274,7 +274,7 @@ def run_perf(args: PerfArgs) -> int:
     if torch_ow:
         over = torch_ow["over_C_path"]
         print(
-            f"torch env, open water scene ({torch_ow['device']}, same run, load "
+            f"torch env, open water ({torch_ow['device']}, same run, load "
             f"{torch_ow['load_average_1min']}): decision steps/s "
             + "; ".join(
                 f"{n} "

@@ -42,14 +42,16 @@ def measure_openwater_steps(env: TorchOpenWaterEnv, seconds: float = 1.0, seed: 
 def torch_openwater_rates(
     device: str, sizes: tuple[int, ...] = (256, 1024), seconds: float = 1.0
 ) -> dict[str, Any]:
-    """Decision steps/s of the torch open-water env (scene, ``OPEN_WATER_FAMILY``) on ``device``
-    in float64 and float32 beside the C path's ``OpenWaterVectorEnv`` (scene) at each of
-    ``sizes`` boats, measured in the same run (``usvsim perf --device``)."""
+    """Decision steps/s of the torch open-water env (``OPEN_WATER_FAMILY``) on ``device`` in
+    float64 and float32 beside the C path's ``OpenWaterVectorEnv`` with the same observation,
+    measured in the same run (``usvsim perf --device``): scene at each of ``sizes`` boats,
+    radar+goal at the first (its images cost a CPU ~10x the scene)."""
     from usvsim.task.openwater_env import OpenWaterVectorEnv  # the C path (CasADi, gymnasium)
 
     rows: dict[str, dict[str, float]] = {}
-    for n in sizes:
-        cpu = OpenWaterVectorEnv(n, observation="scene")
+    runs = [("scene", n) for n in sizes] + [("radar+goal", sizes[0])]
+    for observation, n in runs:
+        cpu = OpenWaterVectorEnv(n, observation=observation)  # type: ignore[arg-type]
         cpu.reset(seed=0)
         actions = np.random.default_rng(0).uniform(-1.0, 1.0, (n, 1))
         steps, start = 0, time.perf_counter()
@@ -58,12 +60,13 @@ def torch_openwater_rates(
             steps += 1
         row = {"C path": n * steps / (time.perf_counter() - start)}
         for dtype in ("float64", "float32"):
-            env = TorchOpenWaterEnv(n, device=device, dtype=dtype, per_boat=2)
+            env = TorchOpenWaterEnv(
+                n, device=device, dtype=dtype, per_boat=2, observation=observation
+            )
             row[dtype] = measure_openwater_steps(env, seconds)
-        rows[f"N={n}"] = row
+        rows[f"{observation} N={n}"] = row
     return {
         "device": device,
-        "observation": "scene",
         "decision_steps_per_s": {k: {c: round(v) for c, v in r.items()} for k, r in rows.items()},
         "over_C_path": {
             k: {d: round(r[d] / r["C path"], 3) for d in ("float64", "float32")}

@@ -313,9 +313,10 @@ def test_perf_figures_stand_beside_the_c_path() -> None:
     from usvsim.task.torch_openwater_speed import torch_openwater_rates
 
     figures = torch_openwater_rates("torch-cpu", sizes=(8,), seconds=0.1)
-    rates = figures["decision_steps_per_s"]["N=8"]
+    assert set(figures["decision_steps_per_s"]) == {"scene N=8", "radar+goal N=8"}
+    rates = figures["decision_steps_per_s"]["radar+goal N=8"]
     assert set(rates) == {"C path", "float64", "float32"} and min(rates.values()) > 0
-    ratio = figures["over_C_path"]["N=8"]["float32"]
+    ratio = figures["over_C_path"]["radar+goal N=8"]["float32"]
     assert ratio == pytest.approx(rates["float32"] / rates["C path"], rel=0.01, abs=1e-3)
 
 
