@@ -1,7 +1,8 @@
 """The open-water task (``usvsim/OpenWater-v0``) as batched tensor code on any torch device.
 
 :class:`TorchOpenWaterEnv` is :class:`usvsim.task.openwater_env.OpenWaterVectorEnv` (autoreset
-``SAME_STEP``, the ``scene`` observation) with everything of a step on the device: the plant in
+``SAME_STEP``; the ``scene``, ``positional``, ``radar`` and ``radar+goal`` observations) with
+everything of a step on the device: the plant in
 each episode's current at its cruise speed (:mod:`usvsim.vessel.torch_plant`, generated from the
 CasADi plant), the sensors and Kalman filter with the episode's GNSS faults (noise scale,
 outliers, dropout; :mod:`usvsim.nav.torch_nav`, generated from the CasADi filter), the moving
@@ -66,6 +67,7 @@ from usvsim.task.torch_scene import (
     gaussian_reward_torch,
     judge_period_torch,
     nearest_and_hits_torch,
+    positional_torch,
     scene_observation_torch,
 )
 from usvsim.task.torch_scene_radar import (
@@ -79,7 +81,7 @@ from usvsim.vessel.torch_plant import DTYPES, TorchPlant
 __all__ = ["TORCH_OPENWATER_OBSERVATIONS", "TorchOpenWaterEnv"]
 
 #: The observation kinds the torch open-water env builds.
-TORCH_OPENWATER_OBSERVATIONS = ("scene", "radar", "radar+goal")
+TORCH_OPENWATER_OBSERVATIONS = ("scene", "positional", "radar", "radar+goal")
 _HORIZON_REF_S = 20_000.0  # s, OpenWaterVectorEnv's reference horizon K_ref · 2 s
 Columns = tuple[torch.Tensor, ...]
 
@@ -101,7 +103,7 @@ class TorchOpenWaterEnv:
     device : "torch-cpu" | "cuda" | "cuda:K"
     dtype : "float64" | "float32"
     action : "gaussian" | "categorical"
-    observation : "scene" | "radar" | "radar+goal"
+    observation : "scene" | "positional" | "radar" | "radar+goal"
     observation_dtype : "float32" | "float64"
         float32 as the CPU env; float64 keeps the simulation's numbers (tests).
     reward_horizon : "episode" | "fixed"
@@ -308,6 +310,9 @@ class TorchOpenWaterEnv:
                 pos, psi, self._n[2:4].T, goal, centres, self.discs.radii_all, velocity,
                 self.discs.ok_all,
             )  # fmt: skip
+            return obs.to(self.observation_dtype)
+        if self.observation_kind == "positional":
+            obs = positional_torch(pos, psi, goal, centres, self.discs.radii_all, self.discs.ok_all)
             return obs.to(self.observation_dtype)
         r, b = relative_polar_torch(pos, psi, centres)
         degradation = keys = None

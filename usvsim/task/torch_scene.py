@@ -12,6 +12,8 @@ here                           NumPy original
 :func:`judge_period_torch`     :func:`usvsim.task.scene_distances.judge_period` (the reference
                                path: every disc at every sub-step, ``hypot``)
 :func:`scene_observation_torch` :func:`usvsim.task.observations.scene_observation`
+:func:`positional_torch`       ``observe_scene("positional", ...)``
+                               (:mod:`usvsim.task.openwater_batch`)
 :func:`gaussian_reward_torch`  :class:`usvsim.task.reward.GaussianReward`
 =============================  ================================================================
 
@@ -36,6 +38,7 @@ __all__ = [
     "TorchJudgement",
     "gaussian_reward_torch",
     "judge_period_torch",
+    "positional_torch",
     "scene_observation_torch",
     "vessel_motion_torch",
 ]
@@ -44,6 +47,7 @@ __all__ = [
 #: gymnasium; tested equal): k nearest discs, 6 features each.
 SCENE_K = 8
 SCENE_FEATURES = 6
+NO_OBSTACLE_RANGE_M = 1000.0  # m, usvsim.task.openwater_batch.NO_OBSTACLE_RANGE_M
 
 
 @dataclass(frozen=True)
@@ -238,6 +242,35 @@ def scene_observation_torch(
     m = order.shape[1]
     out[:, 4 : 4 + SCENE_FEATURES * m] = feats.reshape(n, -1)
     return out
+
+
+def positional_torch(
+    pos_ne: torch.Tensor,
+    psi_rad: torch.Tensor,
+    goal_ne: torch.Tensor,
+    centres_ne: torch.Tensor,
+    radii_m: torch.Tensor,
+    valid: torch.Tensor,
+) -> torch.Tensor:
+    """The open-water ``positional`` observation (N, 4) ``[r_eq, φ, r_goal, φ_goal]``: the disc
+    nearest by pole-equivalent range ``r − R + 1 m`` in the study's pole slot (the first such
+    disc), a pole 1 km astern where no disc is valid (``observe_scene("positional", ...)``).
+    Shapes as :func:`scene_observation_torch`; returns the inputs' dtype."""
+    r, b = relative_polar_torch(pos_ne, psi_rad, centres_ne)
+    r_eq = torch.where(valid, r + (1.0 - radii_m), math.inf)
+    j = torch.argmin(r_eq, dim=1, keepdim=True)
+    near_r, near_b = r_eq.gather(1, j)[:, 0], b.gather(1, j)[:, 0]
+    none = ~torch.isfinite(near_r)
+    r_g, b_g = relative_polar_torch(pos_ne, psi_rad, goal_ne[:, None, :])
+    return torch.stack(
+        [
+            torch.where(none, NO_OBSTACLE_RANGE_M, near_r),
+            torch.where(none, -math.pi, near_b),
+            r_g[:, 0],
+            b_g[:, 0],
+        ],
+        dim=1,
+    )
 
 
 def gaussian_reward_torch(

@@ -251,7 +251,7 @@ def test_weather_and_wrong_options_are_refused() -> None:
     with pytest.raises(ValueError, match="calm water only"):
         env.reset(seed=0)
     with pytest.raises(ValueError, match="observation must be one of"):
-        TorchOpenWaterEnv(2, observation="positional")
+        TorchOpenWaterEnv(2, observation="radar+nav")
     with pytest.raises(ValueError, match="reward_horizon"):
         TorchOpenWaterEnv(2, reward_horizon="forever")  # type: ignore[arg-type]
     env = TorchOpenWaterEnv(2, family=CALM_SETS["two-obstacles"])
@@ -404,3 +404,27 @@ def test_scene_radar_equals_render_scene() -> None:
     )
     np.testing.assert_array_equal(got.numpy(), degraded)
     assert (degraded != clean).any() and (clean > 0).any()
+
+
+def test_positional_observations_equal_the_cpu_env() -> None:
+    """positional (the nearest disc by pole-equivalent range; a pole 1 km astern where nothing
+    is around): within one float32 step of the CPU env's, flags identical."""
+    from usvsim.task.openwater_env import OpenWaterVectorEnv
+
+    fam = replace(CALM_SETS["moving-vessels"], n_vessels_range=(0, 2))  # some boats see nothing
+    cpu = OpenWaterVectorEnv(8, observation="positional", family=fam)
+    dev = TorchOpenWaterEnv(8, family=fam, noise="replay", observation="positional",
+                            observation_dtype="float64")  # fmt: skip
+    o_cpu, _ = cpu.reset(seed=5)
+    o_dev, _ = dev.reset(seed=5)
+    rng = np.random.default_rng(5)
+    nothing = 0
+    for _ in range(30):
+        assert _float32_steps(o_cpu, o_dev.numpy()) <= 1.0
+        nothing += int((o_cpu[:, 0] == 1000.0).sum())
+        a = np.clip(o_cpu[:, 3] / np.radians(30.0) + rng.normal(0, 0.3, 8), -1, 1)[:, None]
+        o_cpu, _, te, tr, _ = cpu.step(a)
+        o_dev, _, te_d, tr_d, _ = dev.step(torch.as_tensor(a))
+        np.testing.assert_array_equal(te_d.numpy(), te)
+        np.testing.assert_array_equal(tr_d.numpy(), tr)
+    assert nothing > 0
