@@ -161,7 +161,7 @@ def _print_wave_filter(vessel: Any, plant: Any) -> None:
 
     weather = TrialWeather(0.0, 45.0, 4)
     state = WeatherPlant(plant).initial_state(np.zeros((1, 3)), weather.conditions(1))
-    print(wave_filter_design(state))
+    print(wave_filter_design(state, plant.design))
     off, on = wave_filter_activity(vessel, plant.cruise_speed_mps, weather, n=8, seconds=120.0)
     print(
         f"  sea state 4, heading kept with the waves 45° off the quarter: nozzle RMS "

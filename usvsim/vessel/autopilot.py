@@ -48,6 +48,8 @@ from usvsim.vessel.vessels import Actuation, VesselParams
 
 __all__ = [
     "NC",
+    "WAVE_BANDWIDTH_RATIO",
+    "WAVE_DESIGN_MIN_HS_M",
     "AutopilotConfig",
     "AutopilotDesign",
     "YawModel",
@@ -56,6 +58,7 @@ __all__ = [
     "design_autopilot",
     "design_report",
     "sway_yaw_design_model",
+    "wave_mode_gain_changes",
 ]
 
 NC = 5  # controller state size
@@ -290,10 +293,7 @@ def design_autopilot(
         nomoto, model = nomoto_from_linear(A, B), "nomoto"
     else:
         nomoto, model = sway_yaw_design_model(vessel, speed), "sway-yaw"
-    m, d, wn, z = nomoto.m, nomoto.d, config.omega_n, config.zeta
-    Kp = m * wn**2  # Fossen (2021) eq. (15.85), no restoring term (k = 0)
-    Kd = 2.0 * z * wn * m - d  # eq. (15.86)
-    Ki = wn / 10.0 * Kp  # eq. (15.87)
+    Kp, Kd, Ki = _pid_gains(nomoto.m, nomoto.d, config.omega_n, config.zeta)
     return AutopilotDesign(
         config=config,
         nomoto=nomoto,
@@ -310,6 +310,52 @@ def design_autopilot(
             else config.brake_cap_factor
         ),
     )
+
+
+def _pid_gains(m: float, d: float, wn: Any, z: float) -> tuple[Any, Any, Any]:
+    """K_p, K_d, K_i by pole placement on m ṙ + d r = τ_N (``wn`` a float or an array)."""
+    Kp = m * wn**2  # Fossen (2021) eq. (15.85), no restoring term (k = 0)
+    Kd = 2.0 * z * wn * m - d  # eq. (15.86)
+    Ki = wn / 10.0 * Kp  # eq. (15.87)
+    return Kp, Kd, Ki
+
+
+#: -, the heading loop's closed-loop bandwidth in waves over the wave encounter frequency,
+#: ω_b = ratio × ω_e. Chosen on heading-keeping validation seed 11 (sea states 3 and 4, waves
+#: 45° off the quarter) from 1.25, 1, 0.75, 0.5: the largest whose wave filter cuts the nozzle
+#: rate by half in both (1.25: sea state 3 cut 48 %); docs/guide/weather.md, *Wave filter*.
+WAVE_BANDWIDTH_RATIO = 1.0
+#: m, the significant wave height from which the PID takes its wave design: the lower limit of
+#: WMO sea state code 2, "smooth (wavelets)", 0.1-0.5 m (code 1, "calm (rippled)", is below).
+WAVE_DESIGN_MIN_HS_M = 0.1
+
+
+def wave_mode_gain_changes(
+    design: AutopilotDesign, omega_e_rad_s: NDArray[np.float64], hs_m: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Changes (N, 3) of [K_p, K_d, K_i] for N boats whose wave filter is on: the PID placed
+    with its closed-loop bandwidth at ``WAVE_BANDWIDTH_RATIO`` × the encounter frequency
+    ``omega_e_rad_s`` (N,) where that is below the calm design's, in waves of significant
+    height ``hs_m`` (N,) of at least ``WAVE_DESIGN_MIN_HS_M``; zero elsewhere and for the
+    ``rover`` autopilot.
+
+    With a wave filter the heading loop's bandwidth belongs below the wave band, or it reacts
+    to what the filter lets through at wave frequency (Fossen 2021, §13.3 on wave filtering).
+    ω_n = min(ω_n, ω_b / √(1 − 2ζ² + √(4ζ⁴ − 4ζ² + 2))), the natural frequency whose
+    second-order closed loop has bandwidth ω_b (Fossen 2021, §15.3; 1.55 ω_b at ζ = 1), then
+    the gains of :func:`design_autopilot` (eqs. 15.85-15.87) on the same design model.
+    """
+    c = design.config
+    omega_e = np.asarray(omega_e_rad_s, dtype=float)
+    out = np.zeros((omega_e.size, 3))
+    if c.kind != "pid":
+        return out
+    z2 = c.zeta**2
+    per_bandwidth = 1.0 / math.sqrt(1.0 - 2.0 * z2 + math.sqrt(4.0 * z2 * z2 - 4.0 * z2 + 2.0))
+    wn = np.minimum(c.omega_n, WAVE_BANDWIDTH_RATIO * omega_e * per_bandwidth)
+    lower = (np.asarray(hs_m, dtype=float) >= WAVE_DESIGN_MIN_HS_M) & (wn < c.omega_n)
+    gains = np.stack(_pid_gains(design.nomoto.m, design.nomoto.d, wn, c.zeta), axis=-1)
+    return np.where(lower[:, None], gains - [design.Kp, design.Kd, design.Ki], 0.0)
 
 
 def _sat(x: Any, lim: Any) -> Any:

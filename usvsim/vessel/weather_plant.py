@@ -9,7 +9,9 @@ boat (each boat its own weather, as per-boat inputs of the compiled kernel):
 2. **Wave filter**: a Kalman observer (:mod:`usvsim.vessel.weather.observer`, Fossen 2021
    §13.3) estimates the low-frequency ψ̂, r̂ from the compass ψ_m and the actuators' yaw moment;
    where a boat's filter is off (input ``wave_filter`` = 0) the autopilot gets ψ_m, r_m exactly;
-3. the autopilot (:func:`usvsim.vessel.autopilot.control_law`) on the filtered ψ and r;
+3. the autopilot (:func:`usvsim.vessel.autopilot.control_law`) on the filtered ψ and r; where
+   the filter is on in waves, with its PID's bandwidth at the encounter frequency (inputs
+   ``pid_dk*``, :func:`usvsim.vessel.autopilot.wave_mode_gain_changes`; 0 in calm water);
 4. one RK4 step of the vessel with current and the environmental load τ_env
    (:func:`usvsim.vessel.model.build_dynamics` with ``weather``): wind V_w = max(V̄ + g, 0) from
    β_w plus the wave drift (:func:`usvsim.vessel.weather.loads.environment_loads` on the
@@ -50,7 +52,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from usvsim.common.angles import ssa_casadi
 from usvsim.common.errors import UserError
-from usvsim.vessel.autopilot import NG, AutopilotKind, control_law
+from usvsim.vessel.autopilot import (
+    NG,
+    AutopilotDesign,
+    AutopilotKind,
+    control_law,
+    wave_mode_gain_changes,
+)
 from usvsim.vessel.codegen import BatchStepper
 from usvsim.vessel.model import (
     NX,
@@ -131,6 +139,10 @@ WEATHER_INPUTS = (
     "wave_filter",  # 1: the autopilot gets the observer's estimate, 0: the compass and gyro
     # steady-state Kalman gains of the observer, per state (OBSERVER_STATES) and measurement
     *(f"gain_{k}_{y}" for k in OBSERVER_STATES for y in ("compass", "gyro")),
+    # the PID's wave design minus its calm one (autopilot.wave_mode_gain_changes; 0: calm)
+    "pid_dkp",  # N m/rad
+    "pid_dkd",  # N m s/rad
+    "pid_dki",  # N m/(rad s)
 )
 #: Weather states per boat, in order (after the calm plant's 13).
 WEATHER_STATES = (
@@ -154,7 +166,7 @@ def build_weather_step(
     innovations: Literal["uniform", "normal"] = "uniform",
     turn_damping: float = 0.0,
 ) -> ca.Function:
-    """``step(s[21], w[30], g[NG], e[3]) -> s_next[21]`` (module docstring); ``e`` three
+    """``step(s[21], w[37], g[NG], e[3]) -> s_next[21]`` (module docstring); ``e`` three
     uniforms in [0, 1) (gust, wave motion ×2), or standard normals with ``innovations``
     "normal" (a caller whose per-boat streams draw normals); ``yaw_model`` (m kg m²,
     d N m s/rad) the autopilot's design model and ``turn_damping`` d₂ (N m s²/rad²) the
@@ -185,7 +197,9 @@ def build_weather_step(
     r_f = r_m + on * (r_hat - r_m)
     # 3. autopilot on what it senses
     x_sensed = ca.vertcat(x[0], x[1], psi_f, x[3], x[4], r_f, x[6], x[7])
-    a_cmd, c_next = control_law(vessel, kind, x_sensed, c, w[0:2], g, dt_s)
+    dg = [w[_I[f"pid_d{k}"]] for k in ("kp", "kd", "ki")]  # 0 keeps the calm gains exactly
+    g_boat = ca.vertcat(g[0] + dg[0], g[1] + dg[1], g[2] + dg[2], g[3:])
+    a_cmd, c_next = control_law(vessel, kind, x_sensed, c, w[0:2], g_boat, dt_s)
     # the observer predicts with the yaw moment the actuators give over the step: their state
     # where they lag, the saturated command where they are instantaneous (model.build_dynamics)
     act = vessel.actuation
@@ -281,7 +295,7 @@ class SeaConditions:
 @dataclass(frozen=True)
 class WeatherPlantState:
     """N boats: plant ``x`` (N, 8), autopilot ``c`` (N, 5), weather states ``m`` (N, 8) and
-    the per-episode weather inputs ``inputs`` (N, 30) (:data:`WEATHER_INPUTS` from wind_mean)."""
+    the per-episode weather inputs ``inputs`` (N, 33) (:data:`WEATHER_INPUTS` from wind_mean)."""
 
     x: NDArray[np.float64]
     c: NDArray[np.float64]
@@ -302,10 +316,13 @@ def weather_inputs(
     wave_filter: ObserverNoise | None,
     yaw_model: tuple[float, float],
     yaw_gain: float = 1.0,
+    autopilot: AutopilotDesign | None = None,
 ) -> tuple[NDArray[np.float64], WaveResponse]:
-    """Per-boat weather inputs (N, 30) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
+    """Per-boat weather inputs (N, 33) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
     wave response they were built from; ``wave_filter`` None: the filter off for every boat,
-    else its tuning (calm boats keep it off: nothing to filter, and no estimator lag)."""
+    else its tuning (calm boats keep it off: nothing to filter, and no estimator lag).
+    ``autopilot``: where the filter is on, its PID takes the wave design
+    (:func:`usvsim.vessel.autopilot.wave_mode_gain_changes`); None: the calm gains."""
     n = cond.hs_m.size
     resp = encounter_response(
         cond.hs_m, cond.tp_s, cond.wave_dir_rad - heading_rad, speed_mps, dt_s
@@ -339,6 +356,10 @@ def weather_inputs(
             gains = observer_gains(phi[wavy], chol[wavy], scale, *yaw_model, dt_s, wave_filter)
             first = col[f"gain_{OBSERVER_STATES[0]}_compass"]  # the ten gains, row-major
             out[wavy, first : first + 2 * len(OBSERVER_STATES)] = gains.reshape(-1, 10)
+            if autopilot is not None:
+                out[wavy, col["pid_dkp"] : col["pid_dki"] + 1] = wave_mode_gain_changes(
+                    autopilot, resp.omega0[wavy], cond.hs_m[wavy]
+                )
     return out, resp
 
 
@@ -360,7 +381,7 @@ def sensed_offsets(
     x: NDArray[np.float64], m: NDArray[np.float64], inputs: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """:func:`sensed_offsets_expr` in NumPy: plant states ``x`` (..., 8), weather states ``m``
-    (..., 8), weather inputs ``inputs`` (..., 30) → (..., 4)."""
+    (..., 8), weather inputs ``inputs`` (..., 33) → (..., 4)."""
     col = {name: i - 4 for name, i in _I.items()}
     omega, beta = inputs[..., col["wave_omega"]], inputs[..., col["wave_dir"]]
     shape = inputs[..., col["yaw_gain"]] * omega**2 / G * np.sin(2.0 * (beta - x[..., 2]))
@@ -376,9 +397,10 @@ def wave_offsets(state: WeatherPlantState) -> NDArray[np.float64]:
     return sensed_offsets(state.x, state.m, state.inputs)[:, :3]
 
 
-def wave_filter_design(state: WeatherPlantState) -> str:
+def wave_filter_design(state: WeatherPlantState, autopilot: AutopilotDesign | None = None) -> str:
     """One line per boat kind: the wave filter's design for the first boat of ``state`` (the
-    encounter frequency, the wave motion's damping and the observer's steady-state gains)."""
+    encounter frequency, the wave motion's damping and the observer's steady-state gains);
+    with ``autopilot`` (the plant's design) a second line, its PID's natural frequency there."""
     col = {name: i - 4 for name, i in _I.items()}
     row = state.inputs[0]
     if row[col["wave_filter"]] == 0:
@@ -387,9 +409,17 @@ def wave_filter_design(state: WeatherPlantState) -> str:
         f"{k} {row[col[f'gain_{k}_compass']]:.3g}/{row[col[f'gain_{k}_gyro']]:.3g}"
         for k in OBSERVER_STATES
     )
-    return (
+    line = (
         f"wave filter: Kalman observer (Fossen 2021 §13.3) at the encounter frequency "
         f"{row[col['wave_omega']]:.3f} rad/s; steady-state gains (compass/gyro): {gains}"
+    )
+    if autopilot is None or autopilot.config.kind != "pid":
+        return line
+    omega_n = math.sqrt((autopilot.Kp + row[col["pid_dkp"]]) / autopilot.nomoto.m)
+    return (
+        f"{line}\n  PID with the filter: ω_n = {omega_n:.3f} rad/s (calm "
+        f"{autopilot.config.omega_n:g}), its closed-loop bandwidth at the encounter frequency "
+        "(autopilot.wave_mode_gain_changes; Fossen 2021 §13.3, §15.3)"
     )
 
 
@@ -481,6 +511,7 @@ class WeatherPlant:
             self.gusts,
             observer,
             self.yaw_model,
+            autopilot=self.plant.design,
         )
         m = np.zeros((n, NWS))
         sigma = conditions.gust_intensity * conditions.wind_speed_mps
