@@ -14,7 +14,10 @@ relative is tested). Measured on 2 cores (``usvsim perf``): see the README.
 
 A per-step input (e.g. sensor noise) can be passed as :class:`GatheredSteps`, a pool of numbers
 per boat and a small layout table: the driver builds each step's input itself, so no
-(N, steps, inputs) array is built in Python. The generated code's ``fmod``, ``fmax`` and ``fmin``
+(N, steps, inputs) array is built in Python; NumPy's uniforms can be passed as
+:class:`usvsim.vessel.pcg64.Pcg64Uniforms`, a generator state from which the driver generates
+them. :meth:`BatchStepper.run_recorded` writes only a trajectory's leading states and the final
+state. The generated code's ``fmod``, ``fmax`` and ``fmin``
 calls go to exact stand-ins (same bits as the C library, fewer cycles; see ``_EXACT_LIBM``).
 
 Where no C compiler is found the fallback evaluates ``Function.map(N, "thread", 2)`` in CasADi's
@@ -37,9 +40,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.cbuild import CompileError, cache_dir, compile_library, cpu_signature
+from usvsim.vessel.pcg64 import PCG64_C_SOURCE, Pcg64Uniforms
 from usvsim.vessel.soa import SoaUnsupportedError, soa_source
 
-__all__ = ["BACKENDS", "SOA_BUILDS", "BatchStepper", "CompileError", "GatheredSteps", "cache_dir"]
+__all__ = [
+    "BACKENDS",
+    "SOA_BUILDS",
+    "BatchStepper",
+    "CompileError",
+    "GatheredSteps",
+    "cache_dir",
+]
 
 #: ``auto``: the fastest that builds (soa, else scalar, else casadi); ``compiled``: soa, else
 #: scalar, else an error; ``soa``, ``scalar``, ``casadi``: that one only.
@@ -118,10 +129,15 @@ _DRIVER = r"""
 #define NS {ns}
 #define NPS {nps}
 /* per-step input (k, j) of boat i: pool[i, index[k, j]] * factor[k, j], or factor[k, j] where
-   index[k, j] < 0 (see GatheredSteps) */
+   index[k, j] < 0 (see GatheredSteps); where pcg is given, the uniforms of Pcg64Uniforms.
+   traj (N, n_sub, n_rec) receives the first n_rec states after each sub-step, last (N, NS)
+   (where given) the final state */
 void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
                const double* per_boat, int n_per_boat, const double* pool, int n_pool,
-               const long long* index, const double* factor, double* traj) {{
+               const long long* index, const double* factor,
+               const unsigned long long* pcg, int n_rec, double* traj, double* last) {{
+  usv_u128 pcg_state = 0, pcg_inc = 0;
+  if (pcg) usv_pcg_unpack(pcg, &pcg_state, &pcg_inc);
   #pragma omp parallel for schedule(static) if(n >= 64)
   for (int i = 0; i < n; ++i) {{
     double s[NS], s_next[NS], e[NPS > 0 ? NPS : 1];
@@ -130,6 +146,8 @@ void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
     casadi_int iw[{sz_iw} + 1];
     casadi_real w[{sz_w} + 1];
     const double* row = pool ? pool + (long)i * n_pool : 0;
+    usv_u128 lane = pcg ? usv_pcg_advance(pcg_state, pcg_inc,
+                                          (unsigned long long)i * n_sub * NPS) : 0;
     memcpy(s, s0 + (long)i * NS, sizeof(s));
     for (int k = 0; k < n_sub; ++k) {{
       arg[0] = s;
@@ -137,6 +155,10 @@ void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
       arg[2] = shared_in;
       if (NPS > 0) {{
         for (int j = 0; j < NPS; ++j) {{
+          if (pcg) {{
+            e[j] = usv_pcg_double(&lane, pcg_inc);
+            continue;
+          }}
           long long c = index[k * NPS + j];
           e[j] = c >= 0 ? row[c] * factor[k * NPS + j] : factor[k * NPS + j];
         }}
@@ -145,8 +167,9 @@ void usv_batch(int n, int n_sub, const double* s0, const double* shared_in,
       res[0] = s_next;
       {fname}(arg, res, iw, w, 0);
       memcpy(s, s_next, sizeof(s));
-      memcpy(traj + ((long)i * n_sub + k) * NS, s_next, sizeof(s));
+      memcpy(traj + ((long)i * n_sub + k) * n_rec, s_next, n_rec * sizeof(double));
     }}
+    if (last) memcpy(last + (long)i * NS, s, sizeof(s));
   }}
 }}
 """
@@ -175,7 +198,7 @@ def _generate_source(fn: ca.Function) -> str:
         sz_w=fn.sz_w(),
         fname=fn.name(),
     )
-    return _EXACT_LIBM + body + driver
+    return _EXACT_LIBM + PCG64_C_SOURCE + body + driver
 
 
 def _compile(source: str, flags: list[str] | None = None) -> Path:
@@ -206,7 +229,9 @@ class GatheredSteps:
         return np.where(self.index >= 0, gathered, self.factor)
 
 
-def _load_kernel(fn: ca.Function, kernel: str) -> tuple[Callable[..., None], str]:
+def _load_kernel(
+    fn: ca.Function, kernel: str, record: int | None = None
+) -> tuple[Callable[..., None], str]:
     """The compiled batch function (``usv_soa_batch`` or ``usv_batch``, one signature) of ``fn``
     and the name of its build.
 
@@ -222,7 +247,7 @@ def _load_kernel(fn: ca.Function, kernel: str) -> tuple[Callable[..., None], str
     if kernel == "scalar":
         batch, build = ctypes.CDLL(str(_compile(scalar))).usv_batch, "scalar"
     else:
-        source, failures = soa_source(fn, scalar), []
+        source, failures = soa_source(fn, scalar, record=record), []
         for build, flags in SOA_BUILDS:
             try:
                 lib = _compile(source, flags)
@@ -239,10 +264,16 @@ def _load_kernel(fn: ca.Function, kernel: str) -> tuple[Callable[..., None], str
         *(ptr, ptr),  # s0, shared
         *(ptr, int_),  # per_boat, its width
         *(ptr, int_, ptr, ptr),  # pool, its width, index, factor (GatheredSteps)
-        ptr,  # trajectory out
+        ptr,  # Pcg64Uniforms.words (or NULL)
+        int_,  # states recorded per sub-step
+        *(ptr, ptr),  # trajectory out, final state out (or NULL)
     ]
     batch.restype = None
     return batch, build
+
+
+#: What :meth:`BatchStepper.run` takes as per-step inputs.
+PerStep = NDArray[np.float64] | GatheredSteps | Pcg64Uniforms
 
 
 class BatchStepper:
@@ -254,9 +285,14 @@ class BatchStepper:
 
     ``backend`` (see ``Backend``) picks the kernel; :attr:`kernel` says which one runs
     (``soa``, ``scalar`` or ``casadi``) and :attr:`backend` whether it is compiled.
+    ``record``: the count of leading states :meth:`run_recorded` will mostly record, which the
+    structure-of-arrays driver copies in a loop of constant length (default: the whole state;
+    any count works).
     """
 
-    def __init__(self, fn: ca.Function, backend: Backend = "auto") -> None:
+    def __init__(
+        self, fn: ca.Function, backend: Backend = "auto", record: int | None = None
+    ) -> None:
         if fn.n_in() not in (3, 4) or fn.n_out() != 1 or fn.size1_out(0) != fn.size1_in(0):
             raise ValueError("BatchStepper needs fn(state, per_boat, shared[, per_step]) -> state")
         if backend not in BACKENDS:
@@ -273,7 +309,7 @@ class BatchStepper:
             if backend not in ("auto", "compiled", kernel):
                 continue
             try:
-                self._batch, self.build = _load_kernel(fn, kernel)
+                self._batch, self.build = _load_kernel(fn, kernel, record)
             except (CompileError, SoaUnsupportedError) as err:
                 errors.append(f"{kernel}: {err}")
                 continue
@@ -289,10 +325,25 @@ class BatchStepper:
         per_boat: NDArray[np.float64],
         shared: NDArray[np.float64],
         n_sub: int,
-        per_step: NDArray[np.float64] | GatheredSteps | None = None,
+        per_step: PerStep | None = None,
     ) -> NDArray[np.float64]:
         """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na), shared (ng,) and,
-        for a four-input ``fn``, per-step inputs (N, n_sub, nps) or their :class:`GatheredSteps`."""
+        for a four-input ``fn``, per-step inputs (N, n_sub, nps), their :class:`GatheredSteps`
+        or :class:`Pcg64Uniforms`."""
+        return self.run_recorded(s0, per_boat, shared, n_sub, per_step, self.ns)[0]
+
+    def run_recorded(
+        self,
+        s0: NDArray[np.float64],
+        per_boat: NDArray[np.float64],
+        shared: NDArray[np.float64],
+        n_sub: int,
+        per_step: PerStep | None,
+        record: int,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """As :meth:`run`, recording only the first ``record`` states of each sub-step: the
+        trajectory (N, n_sub, record) and the final state (N, ns) (the same numbers as
+        :meth:`run`'s, fewer bytes written)."""
         s0 = np.ascontiguousarray(s0, dtype=np.float64)
         per_boat = np.ascontiguousarray(per_boat, dtype=np.float64)
         shared = np.ascontiguousarray(shared, dtype=np.float64)
@@ -308,9 +359,14 @@ class BatchStepper:
             raise ValueError(f"shared input must have shape ({self.ng},), got {shared.shape}")
         if not isinstance(n_sub, (int, np.integer)) or n_sub < 1:
             raise ValueError(f"n_sub must be a positive integer, got {n_sub!r}")
+        if not 1 <= record <= self.ns:
+            raise ValueError(f"record must lie in [1, {self.ns}], got {record!r}")
         steps = self._checked_steps(per_step, n, int(n_sub))
-        traj = np.empty((n, n_sub, self.ns))
         if self._batch is not None:
+            traj = np.empty((n, n_sub, record))
+            last = np.empty((n, self.ns))
+            gathered = steps if isinstance(steps, GatheredSteps) else None
+            words = steps.words() if isinstance(steps, Pcg64Uniforms) else None
             self._batch(
                 n,
                 n_sub,
@@ -318,35 +374,46 @@ class BatchStepper:
                 shared.ctypes.data,
                 per_boat.ctypes.data,
                 self.na,
-                None if steps is None else steps.pool.ctypes.data,
-                0 if steps is None else steps.pool.shape[1],
-                None if steps is None else steps.index.ctypes.data,
-                None if steps is None else steps.factor.ctypes.data,
+                None if gathered is None else gathered.pool.ctypes.data,
+                0 if gathered is None else gathered.pool.shape[1],
+                None if gathered is None else gathered.index.ctypes.data,
+                None if gathered is None else gathered.factor.ctypes.data,
+                None if words is None else words.ctypes.data,
+                record,
                 traj.ctypes.data,
+                last.ctypes.data,
             )
-            return traj
+            return traj, last
         fmap = self._maps.get(n)
         if fmap is None:
             fmap = self._maps[n] = self.fn.map(n, "thread", 2)
-        dense = None if steps is None else steps.dense()
+        dense: NDArray[np.float64] | None = None
+        if isinstance(steps, Pcg64Uniforms):
+            dense = steps.dense((n, int(n_sub), self.nps))
+        elif steps is not None:
+            dense = steps.dense()
+        full = np.empty((n, n_sub, self.ns))
         s = s0.T
         for k in range(n_sub):
             extra = () if dense is None else (dense[:, k, :].T,)
             s = np.asarray(fmap(s, per_boat.T, shared, *extra))
-            traj[:, k, :] = s.T
-        return traj
+            full[:, k, :] = s.T
+        return np.ascontiguousarray(full[:, :, :record]), full[:, -1].copy()
 
     def _checked_steps(
-        self, per_step: NDArray[np.float64] | GatheredSteps | None, n: int, n_sub: int
-    ) -> GatheredSteps | None:
+        self, per_step: PerStep | None, n: int, n_sub: int
+    ) -> GatheredSteps | Pcg64Uniforms | None:
         """``per_step`` as contiguous :class:`GatheredSteps` of checked shapes (the C code
-        trusts them); an (N, n_sub, nps) array becomes a pool read in order."""
+        trusts them) or the :class:`Pcg64Uniforms` given; an (N, n_sub, nps) array becomes a
+        pool read in order."""
         if not self.nps:
             if per_step is not None:
                 raise ValueError("this step function takes no per-step input")
             return None
         if per_step is None:
             raise ValueError("this step function needs a per-step input")
+        if isinstance(per_step, Pcg64Uniforms):
+            return per_step
         if not isinstance(per_step, GatheredSteps):
             dense = np.ascontiguousarray(per_step, dtype=np.float64)
             if dense.shape != (n, n_sub, self.nps):

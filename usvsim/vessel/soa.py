@@ -27,8 +27,10 @@ The driver (``usv_soa_batch``) has the scalar driver's signature (``usv_batch`` 
 block arrays over all sub-steps (a block short of B boats is filled with copies of its first,
 so that every boat runs through the same vector code: a boat's numbers do not depend on the
 batch it is in), each sub-step's per-step input is gathered from its pool
-(:class:`usvsim.vessel.codegen.GatheredSteps`) into a block array, and each sub-step's state is
-written to the (N, n_sub, ns) trajectory.
+(:class:`usvsim.vessel.codegen.GatheredSteps`) or generated
+(:class:`usvsim.vessel.pcg64.Pcg64Uniforms`, the block's eight streams in vector code) into a
+block array, and each sub-step's leading states (all, or a count given) are written to the
+(N, n_sub, count) trajectory, the last state to its own array.
 """
 
 from __future__ import annotations
@@ -191,6 +193,35 @@ _DEFINES = r"""
 #define NA {na}
 #define NPS {nps}
 #define NPS1 (NPS > 0 ? NPS : 1)
+#define NREC {record}
+/* usv_pcg_double for the B boats of a block at once: each boat's 128-bit state as two 64-bit
+   halves, the product by the multiplier modulo 2^128 from 64-bit products (the high half of
+   the low product from 32-bit pieces), so that the loop vectorises; the same numbers
+   (tested against Generator.random) */
+USV_INLINE void usv_pcg_doubles(unsigned long long* restrict hi, unsigned long long* restrict lo,
+                                usv_u128 inc, double* restrict out) {{
+  const unsigned long long m_hi = (unsigned long long)(USV_PCG_MULT >> 64);
+  const unsigned long long m_lo = (unsigned long long)USV_PCG_MULT;
+  const unsigned long long i_hi = (unsigned long long)(inc >> 64);
+  const unsigned long long i_lo = (unsigned long long)inc;
+  const unsigned long long b0 = m_lo & 0xffffffffULL, b1 = m_lo >> 32;
+  #pragma omp simd
+  for (int j = 0; j < B; ++j) {{
+    unsigned long long l = lo[j], h = hi[j];
+    unsigned long long a0 = l & 0xffffffffULL, a1 = l >> 32;
+    unsigned long long p00 = a0 * b0, p01 = a0 * b1, p10 = a1 * b0, p11 = a1 * b1;
+    unsigned long long mid = (p00 >> 32) + (p01 & 0xffffffffULL) + (p10 & 0xffffffffULL);
+    unsigned long long high = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
+    unsigned long long new_lo = l * m_lo + i_lo;
+    unsigned long long new_hi = high + h * m_lo + l * m_hi + i_hi + (new_lo < i_lo ? 1ULL : 0ULL);
+    lo[j] = new_lo;
+    hi[j] = new_hi;
+    unsigned long long x = new_hi ^ new_lo;
+    unsigned long long rot = new_hi >> 58;
+    x = (x >> rot) | (x << ((64ULL - rot) & 63ULL));
+    out[j] = (double)(long long)(x >> 11) * (1.0 / 9007199254740992.0);
+  }}
+}}
 """
 
 _DRIVER = r"""/* the scalar generated function, for the boats whose sub-step the kernel flags */
@@ -214,8 +245,16 @@ static void usv_scalar_lane(int j, const double* s, const double* wb, const doub
 
 void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
                    const double* per_boat, int n_per_boat, const double* pool, int n_pool,
-                   const long long* index, const double* factor, double* traj) {{
+                   const long long* index, const double* factor,
+                   const unsigned long long* pcg, int n_rec, double* traj, double* last) {{
   int n_blocks = (n + B - 1) / B;
+  /* Pcg64Uniforms: boat i's draws start (i n_sub NPS) steps after the given state; one boat's
+     stride as an affine map, each block's first boat by a jump */
+  usv_u128 pcg_state = 0, pcg_inc = 0, boat_mult = 1, boat_plus = 0;
+  if (pcg) {{
+    usv_pcg_unpack(pcg, &pcg_state, &pcg_inc);
+    usv_pcg_stride(pcg_inc, (unsigned long long)n_sub * NPS, &boat_mult, &boat_plus);
+  }}
   /* dynamic: on a loaded machine a thread that runs takes the blocks of one that waits.
      Threads only from 2,048 boat-substeps: one takes ~90 ns, waking a second thread ~70 us
      (2026-12-03, quiet, plant + filter, 20 sub-steps: 64 boats 142 us in one thread, 153 us
@@ -230,13 +269,30 @@ void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
     int i0 = b * B, nb = n - i0 < B ? n - i0 : B;
     /* a block short of B boats is filled up with copies of its first: every boat goes through
        the same vector code, so a boat's numbers do not depend on the batch it is in */
+    unsigned long long lane_hi[B] __attribute__((aligned(64)));
+    unsigned long long lane_lo[B] __attribute__((aligned(64)));
+    usv_u128 lane = 0;
     for (int j = 0; j < B; ++j) {{
       long i = i0 + (j < nb ? j : 0);
       for (int m = 0; m < NS; ++m) s[m * B + j] = s0[i * NS + m];
       for (int m = 0; m < NA; ++m) wb[m * B + j] = per_boat[i * n_per_boat + m];
+      if (pcg) {{
+        if (j == 0)
+          lane = usv_pcg_advance(pcg_state, pcg_inc, (unsigned long long)i0 * n_sub * NPS);
+        else if (j < nb)
+          lane = boat_mult * lane + boat_plus;
+        else /* a filled-up boat repeats the block's first */
+          lane = ((usv_u128)lane_hi[0] << 64) | lane_lo[0];
+        lane_hi[j] = (unsigned long long)(lane >> 64);
+        lane_lo[j] = (unsigned long long)lane;
+      }}
     }}
     for (int k = 0; k < n_sub; ++k) {{
       for (int m = 0; m < NPS; ++m) {{
+        if (pcg) {{
+          usv_pcg_doubles(lane_hi, lane_lo, pcg_inc, e + m * B);
+          continue;
+        }}
         long long c = index[k * NPS + m];
         double f = factor[k * NPS + m];
         for (int j = 0; j < B; ++j)
@@ -246,13 +302,23 @@ void usv_soa_batch(int n, int n_sub, const double* s0, const double* shared_in,
       for (int j = 0; j < nb; ++j)
         if (flag[j] != 0.0) usv_scalar_lane(j, s, wb, shared_in, e, s_next);
       for (int j = 0; j < nb; ++j) {{
-        double* row = traj + ((long)(i0 + j) * n_sub + k) * NS;
-        for (int m = 0; m < NS; ++m) row[m] = s_next[m * B + j];
+        double* row = traj + ((long)(i0 + j) * n_sub + k) * n_rec;
+        /* loops of constant length for the whole state and the count the stepper was built
+           for (a loop of variable length costs the weather plant 3 % of its call) */
+        if (n_rec == NS)
+          for (int m = 0; m < NS; ++m) row[m] = s_next[m * B + j];
+        else if (n_rec == NREC)
+          for (int m = 0; m < NREC; ++m) row[m] = s_next[m * B + j];
+        else
+          for (int m = 0; m < n_rec; ++m) row[m] = s_next[m * B + j];
       }}
       double* done = s;
       s = s_next;
       s_next = done;
     }}
+    if (last)
+      for (int j = 0; j < nb; ++j)
+        for (int m = 0; m < NS; ++m) last[(long)(i0 + j) * NS + m] = s[m * B + j];
   }}
 }}
 """
@@ -345,12 +411,16 @@ static void usv_soa_kernel(const double* restrict s, const double* restrict wb,
     return kernel, libm
 
 
-def soa_source(fn: ca.Function, scalar_source: str, block: int = BLOCK) -> str:
+def soa_source(
+    fn: ca.Function, scalar_source: str, block: int = BLOCK, record: int | None = None
+) -> str:
     """C source of ``usv_soa_batch`` for ``fn(s, per_boat, shared[, per_step]) -> s_next``.
 
     ``scalar_source`` is the scalar CasADi-generated code of ``fn`` (it defines the function
-    named ``fn.name()``), used for sub-steps with special ``fmod`` arguments. Raises
-    :class:`SoaUnsupportedError` for an operation without a stand-in here.
+    named ``fn.name()``), used for sub-steps with special ``fmod`` arguments; ``record`` the
+    count of leading states recorded per sub-step that gets a loop of constant length besides
+    the whole state's (default: the whole state). Raises :class:`SoaUnsupportedError` for an
+    operation without a stand-in here.
     """
     if block < 8 or block % 8:
         raise ValueError(f"block must be a positive multiple of 8 boats, got {block}")
@@ -360,6 +430,7 @@ def soa_source(fn: ca.Function, scalar_source: str, block: int = BLOCK) -> str:
         ns=fn.size1_in(0),
         na=fn.size1_in(1),
         nps=fn.size1_in(3) if fn.n_in() == 4 else 0,
+        record=fn.size1_in(0) if record is None else int(record),
     )
     driver = _DRIVER.format(
         sz_arg=max(fn.sz_arg(), 4),

@@ -33,7 +33,7 @@ it, as an encounter-frequency estimator would).
 
 Shapes (N boats, T steps): state ``s = [x (8), c (5), m (8)]`` per boat with ``m`` the weather
 states :data:`WEATHER_STATES`; per-boat inputs ``w = [ψ_ref, U_ref, V_c, β_c, ...]`` of
-:data:`WEATHER_INPUTS`; trajectory (N, T, 21).
+:data:`WEATHER_INPUTS`; trajectory (N, T, 13) of [x, c] as the calm plant's, (N, T, 21) on request.
 
 Why this module is long: the step's input layout (:data:`WEATHER_INPUTS`), the function that
 fills it and those that read it (the kernel, the sensed offsets, the filter's design line) change
@@ -67,6 +67,7 @@ from usvsim.vessel.model import (
     rk4_expr,
     saturate_command,
 )
+from usvsim.vessel.pcg64 import Pcg64Uniforms
 from usvsim.vessel.plant import NS, Plant, PlantState
 from usvsim.vessel.vessels import VesselParams
 from usvsim.vessel.weather.loads import (
@@ -471,7 +472,7 @@ class WeatherPlant:
         )
         step = (plant.vessel, plant.kind, plant.dt_s, self.yaw_model, hull, innovations)
         self.step_function = build_weather_step(*step, self.turn_damping)
-        self._stepper = BatchStepper(self.step_function, backend=plant.kernel)  # type: ignore[arg-type]
+        self._stepper = BatchStepper(self.step_function, plant.kernel, record=NS)  # type: ignore[arg-type]
 
     @property
     def kernel(self) -> str:
@@ -529,28 +530,39 @@ class WeatherPlant:
         psi_ref_rad: ArrayLike,
         speed_ref_mps: ArrayLike | None = None,
         n_steps: int = 1,
+        *,
+        weather_states: bool = False,
     ) -> tuple[WeatherPlantState, NDArray[np.float64]]:
         """Advance all boats ``n_steps`` plant steps, references held; returns the new state and
-        the trajectory (N, n_steps, 21) of [x, c, m] after each step."""
+        the trajectory (N, n_steps, 13) of [x, c] after each step (the calm plant's), or
+        (N, n_steps, 21) of [x, c, m] with ``weather_states``.
+
+        The uniform innovations are the generator's ``random((N, n_steps, 3))``; on NumPy's
+        PCG64 (the default) the compiled kernel generates them itself
+        (:class:`usvsim.vessel.pcg64.Pcg64Uniforms`: the same numbers, no array drawn and
+        gathered) and the generator moves past them."""
         n = state.x.shape[0]
-        psi_ref = np.broadcast_to(np.asarray(psi_ref_rad, dtype=float), (n,))
         speed = self.plant.cruise_speed_mps if speed_ref_mps is None else speed_ref_mps
         w = np.empty((n, NWI))
-        w[:, 0] = psi_ref
-        w[:, 1] = np.broadcast_to(np.asarray(speed, dtype=float), (n,))
-        w[:, 2], w[:, 3] = self.plant.current
         w[:, 4:] = state.inputs
-        if not np.all(np.isfinite(w[:, :2])):
+        w[:, 0] = np.broadcast_to(np.asarray(psi_ref_rad, dtype=float), (n,))
+        w[:, 1] = np.broadcast_to(np.asarray(speed, dtype=float), (n,))
+        w[:, 2:4] = self.plant.current
+        if not np.isfinite(w[:, :2]).all():
             raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
         s0 = np.concatenate([state.x, state.c, state.m], axis=1)
         shape = (n, int(n_steps), 3)
-        draws = (
-            self.rng.random(shape)
-            if self.innovations == "uniform"
-            else self.rng.standard_normal(shape)
+        draws: NDArray[np.float64] | Pcg64Uniforms | None = None
+        if self.innovations == "uniform":
+            draws = Pcg64Uniforms.take(self.rng, n * int(n_steps) * 3)
+            if draws is None:
+                draws = self.rng.random(shape)
+        else:
+            draws = self.rng.standard_normal(shape)
+        record = NS + NWS if weather_states else NS
+        traj, last = self._stepper.run_recorded(
+            s0, w, self.plant.gains, int(n_steps), draws, record
         )
-        traj = self._stepper.run(s0, w, self.plant.gains, int(n_steps), draws)
-        last = traj[:, -1]
         new = WeatherPlantState(
             last[:, :NX].copy(), last[:, NX:NS].copy(), last[:, NS:].copy(), state.inputs
         )

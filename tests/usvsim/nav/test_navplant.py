@@ -159,7 +159,7 @@ def test_weather_fused_step_equals_weather_plant_then_navigator_on_sensed_motion
     packed = fused.run(s0, psi_ref, 3.0, T, 1, normals, None, None, start.inputs, wx)
     # reference: the weather plant with the same innovations, then the navigator on what it senses
     weather.rng = _Replay(wx.reshape(n, T, 3))
-    _, traj = weather.step(start, psi_ref, 3.0, n_steps=T)
+    _, traj = weather.step(start, psi_ref, 3.0, n_steps=T, weather_states=True)
     x, m = traj[:, :, 0:8], traj[:, :, 13:21]
     d = sensed_offsets(
         x, m, np.broadcast_to(start.inputs[:, None, :], (n, T, start.inputs.shape[1]))

@@ -127,7 +127,9 @@ def test_wave_filter_follows_turns_with_the_turn_damping() -> None:
         ahead = np.radians(np.linspace(3.0, 20.0, 16))
         err = []
         for k in range(60):
-            state, traj = weather.step(state, state.x[:, 2] + ahead, n_steps=10)
+            state, traj = weather.step(
+                state, state.x[:, 2] + ahead, n_steps=10, weather_states=True
+            )
             if k >= 20:
                 psi_hat = traj[:, :, NS + WEATHER_STATES.index("obs_psi")]
                 err.append(np.angle(np.exp(1j * (psi_hat - traj[:, :, 2]))))

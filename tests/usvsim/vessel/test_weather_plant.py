@@ -22,7 +22,12 @@ from usvsim.vessel.weather.waves import (
     wave_displacement,
 )
 from usvsim.vessel.weather.wind import wind_forces
-from usvsim.vessel.weather_plant import SeaConditions, WeatherPlant, wave_offsets
+from usvsim.vessel.weather_plant import (
+    SeaConditions,
+    WeatherPlant,
+    WeatherPlantState,
+    wave_offsets,
+)
 
 
 def _poses(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -125,6 +130,33 @@ def test_same_seed_same_weather_other_seed_other_gusts() -> None:
     assert not np.allclose(runs[0], runs[2])
 
 
+@pytest.mark.parametrize("backend", ["soa", "scalar", "casadi"])
+def test_step_equals_the_numpy_drawn_full_trajectory(backend: str) -> None:
+    """WeatherPlant.step (its uniforms generated in the kernel, Pcg64Uniforms; [x, c] recorded)
+    gives the numbers of the path it replaced bit for bit: the uniforms drawn by NumPy's
+    Generator.random((N, T, 3)) and the whole [x, c, m] recorded at every step; the end
+    states, the weather_states trajectory and the generator after two calls equal too."""
+    plant = Plant("default", backend=backend)  # type: ignore[arg-type]
+    n = 37  # a partial block
+    eta, ref = _poses(n, seed=4)
+    cond = SeaConditions.uniform(n, 10.0, 1.0, sea_state_from_code(4, 2.0))
+    weather = WeatherPlant(plant, seed=11)
+    state = start = weather.initial_state(eta, cond)
+    twin = WeatherPlant(plant, seed=11)
+    twin_state = twin.initial_state(eta, cond)
+    for steps, full in ((7, False), (30, True)):
+        state, traj = weather.step(state, ref, n_steps=steps, weather_states=full)
+        w = np.c_[ref, np.full(n, plant.cruise_speed_mps), np.tile(plant.current, (n, 1))]
+        s0 = np.c_[twin_state.x, twin_state.c, twin_state.m]
+        draws = twin.rng.random((n, steps, 3))
+        want = twin._stepper.run(s0, np.c_[w, start.inputs], plant.gains, steps, draws)
+        end = want[:, -1]
+        twin_state = WeatherPlantState(end[:, :8], end[:, 8:13], end[:, 13:], start.inputs)
+        np.testing.assert_array_equal(traj, want if full else want[:, :, :13])
+        np.testing.assert_array_equal(np.c_[state.x, state.c, state.m], want[:, -1])
+    np.testing.assert_array_equal(weather.rng.random(3), twin.rng.random(3))
+
+
 def test_gusts_and_wave_motion_have_their_stationary_spread() -> None:
     """Gust std σ_g = I V̄ = 1 m/s; wave elevation std H_s / 4 (sea state 4: 0.47 m)."""
     plant = Plant("default")
@@ -132,7 +164,8 @@ def test_gusts_and_wave_motion_have_their_stationary_spread() -> None:
     n = 256
     sea = sea_state_from_code(4, 0.5)
     cond = SeaConditions.uniform(n, 10.0, 0.0, sea, gust_intensity=0.1)
-    _, traj = weather.step(weather.initial_state(np.zeros((n, 3)), cond), 0.0, n_steps=600)
+    start = weather.initial_state(np.zeros((n, 3)), cond)
+    _, traj = weather.step(start, 0.0, n_steps=600, weather_states=True)
     gust, elevation = traj[:, ::20, 13], traj[:, ::20, 15]
     assert gust.std() == pytest.approx(1.0, rel=0.05)
     assert elevation.std() == pytest.approx(sea.hs_m / 4, rel=0.05)
