@@ -281,7 +281,7 @@ class JsonPhysics:
     def _weather_inputs(
         self, rate_hz: int
     ) -> tuple[OpenLoopWeather, NDArray[np.float64], WaveResponse]:
-        """The open-loop step at ``rate_hz``, the weather inputs (1, 30) for its step (the
+        """The open-loop step at ``rate_hz``, the weather inputs (1, 33) for its step (the
         wave motion at the sea's peak frequency: the boat starts at rest) and the wave
         response; built once per frame rate."""
         assert self.weather is not None

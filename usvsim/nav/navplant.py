@@ -228,7 +228,7 @@ class NavigatedPlant:
         """Advance packed states ``s0`` (N, 28) = [x, c, n] ``n_steps`` plant steps.
 
         With weather (:attr:`weather`): ``s0`` is (N, :attr:`layout`.size) = [x, c, m, n],
-        ``weather_inputs`` (N, 30) each boat's per-episode weather
+        ``weather_inputs`` (N, 33) each boat's per-episode weather
         (:attr:`usvsim.vessel.weather_plant.WeatherPlantState.inputs`) and ``weather_normals``
         (N, 3 n_steps) its next standard normals (gust, wave motion ×2 per step).
 

@@ -20,7 +20,7 @@ depend on the batch around it.
 
 Weather (issue 38): ``weather`` (:class:`usvsim.task.weather_draw.Weather`) steps the boat in
 wind and waves (:mod:`usvsim.vessel.weather_plant`). :class:`BoatDisturbances` keeps each boat's
-per-episode weather inputs (N, 30) (:data:`usvsim.vessel.weather_plant.WEATHER_INPUTS` from
+per-episode weather inputs (N, 33) (:data:`usvsim.vessel.weather_plant.WEATHER_INPUTS` from
 ``wind_mean``), filled on reset by :meth:`BoatDisturbances.start_weather` through
 :meth:`usvsim.vessel.weather_plant.WeatherPlant.initial_state`; the gust and wave motion start
 from their stationary distributions drawn from the episode's own noise stream (so a boat's
@@ -112,7 +112,7 @@ class BoatDisturbances:
         self.active = np.zeros(n_boats, dtype=bool)
         self._noise = BoatNoise(n_boats)
         # per-boat weather (module docstring): which boats have it, their episodes' weather and
-        # the weather plant's per-episode inputs (N, 30), allocated by the first start_weather
+        # the weather plant's per-episode inputs (N, 33), allocated by the first start_weather
         self.weather_active = np.zeros(n_boats, dtype=bool)
         self._weather: list[Weather] = [CALM] * n_boats
         self.weather_inputs: FloatArray | None = None

@@ -14,7 +14,7 @@ generator. The wave filter's states (the autopilot's, unused open loop) restart 
 and gyro, as at :meth:`WeatherPlant.initial_state`, so the autopilot can take over after it.
 
 Shapes: plant states ``x`` (N, 8), weather states ``m`` (N, 8) (:data:`WEATHER_STATES`),
-inputs (N, 30) (:data:`WEATHER_INPUTS` from ``wind_mean``), commands (N, 2).
+inputs (N, 33) (:data:`WEATHER_INPUTS` from ``wind_mean``), commands (N, 2).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from usvsim.vessel.weather_plant import WEATHER_INPUTS, sensed_offsets
 
 __all__ = ["OpenLoopWeather"]
 
-_COL = {name: i - 4 for i, name in enumerate(WEATHER_INPUTS)}  # columns of the inputs (N, 30)
+_COL = {name: i - 4 for i, name in enumerate(WEATHER_INPUTS)}  # columns of the inputs (N, 33)
 # what the step function reads of them, in this order
 _LOAD_INPUTS = ("wind_cos", "wind_sin", "drift_pressure", "wave_cos", "wave_sin")
 
