@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from usvsim.common.cbuild import CompileError, cache_dir, compile_library, cpu_signature
 from usvsim.vessel.pcg64 import PCG64_C_SOURCE, Pcg64Uniforms
-from usvsim.vessel.soa import SoaUnsupportedError, soa_source
+from usvsim.vessel.soa import BLOCK, SoaUnsupportedError, soa_source
 
 __all__ = [
     "BACKENDS",
@@ -230,7 +230,7 @@ class GatheredSteps:
 
 
 def _load_kernel(
-    fn: ca.Function, kernel: str, record: int | None = None
+    fn: ca.Function, kernel: str, record: int | None = None, block: int = BLOCK
 ) -> tuple[Callable[..., None], str]:
     """The compiled batch function (``usv_soa_batch`` or ``usv_batch``, one signature) of ``fn``
     and the name of its build.
@@ -247,7 +247,7 @@ def _load_kernel(
     if kernel == "scalar":
         batch, build = ctypes.CDLL(str(_compile(scalar))).usv_batch, "scalar"
     else:
-        source, failures = soa_source(fn, scalar, record=record), []
+        source, failures = soa_source(fn, scalar, block, record), []
         for build, flags in SOA_BUILDS:
             try:
                 lib = _compile(source, flags)
@@ -287,11 +287,16 @@ class BatchStepper:
     (``soa``, ``scalar`` or ``casadi``) and :attr:`backend` whether it is compiled.
     ``record``: the count of leading states :meth:`run_recorded` will mostly record, which the
     structure-of-arrays driver copies in a loop of constant length (default: the whole state;
-    any count works).
+    any count works). ``block``: boats per vector block of that kernel (a multiple of 8; a
+    boat's numbers do not depend on it).
     """
 
     def __init__(
-        self, fn: ca.Function, backend: Backend = "auto", record: int | None = None
+        self,
+        fn: ca.Function,
+        backend: Backend = "auto",
+        record: int | None = None,
+        block: int = BLOCK,
     ) -> None:
         if fn.n_in() not in (3, 4) or fn.n_out() != 1 or fn.size1_out(0) != fn.size1_in(0):
             raise ValueError("BatchStepper needs fn(state, per_boat, shared[, per_step]) -> state")
@@ -309,7 +314,7 @@ class BatchStepper:
             if backend not in ("auto", "compiled", kernel):
                 continue
             try:
-                self._batch, self.build = _load_kernel(fn, kernel, record)
+                self._batch, self.build = _load_kernel(fn, kernel, record, block)
             except (CompileError, SoaUnsupportedError) as err:
                 errors.append(f"{kernel}: {err}")
                 continue

@@ -12,6 +12,7 @@ import pytest
 
 from usvsim.common.errors import UserError
 from usvsim.vessel.autopilot import AutopilotConfig
+from usvsim.vessel.codegen import BatchStepper
 from usvsim.vessel.plant import Plant
 from usvsim.vessel.weather.loads import USV105_HULL, drift_loads, wind_loads
 from usvsim.vessel.weather.waves import (
@@ -132,10 +133,11 @@ def test_same_seed_same_weather_other_seed_other_gusts() -> None:
 
 @pytest.mark.parametrize("backend", ["soa", "scalar", "casadi"])
 def test_step_equals_the_numpy_drawn_full_trajectory(backend: str) -> None:
-    """WeatherPlant.step (its uniforms generated in the kernel, Pcg64Uniforms; [x, c] recorded)
-    gives the numbers of the path it replaced bit for bit: the uniforms drawn by NumPy's
-    Generator.random((N, T, 3)) and the whole [x, c, m] recorded at every step; the end
-    states, the weather_states trajectory and the generator after two calls equal too."""
+    """WeatherPlant.step (its uniforms generated in the kernel, Pcg64Uniforms; [x, c] recorded;
+    blocks of 16 boats) gives the numbers of the path it replaced bit for bit: the uniforms
+    drawn by NumPy's Generator.random((N, T, 3)), the whole [x, c, m] recorded at every step,
+    blocks of 8; the end states, the weather_states trajectory and the generator after two
+    calls equal too."""
     plant = Plant("default", backend=backend)  # type: ignore[arg-type]
     n = 37  # a partial block
     eta, ref = _poses(n, seed=4)
@@ -144,12 +146,14 @@ def test_step_equals_the_numpy_drawn_full_trajectory(backend: str) -> None:
     state = start = weather.initial_state(eta, cond)
     twin = WeatherPlant(plant, seed=11)
     twin_state = twin.initial_state(eta, cond)
+    # the step function in a stepper of the default block (8 boats; the plant's has 16)
+    reference = BatchStepper(twin.step_function, backend)  # type: ignore[arg-type]
     for steps, full in ((7, False), (30, True)):
         state, traj = weather.step(state, ref, n_steps=steps, weather_states=full)
         w = np.c_[ref, np.full(n, plant.cruise_speed_mps), np.tile(plant.current, (n, 1))]
         s0 = np.c_[twin_state.x, twin_state.c, twin_state.m]
         draws = twin.rng.random((n, steps, 3))
-        want = twin._stepper.run(s0, np.c_[w, start.inputs], plant.gains, steps, draws)
+        want = reference.run(s0, np.c_[w, start.inputs], plant.gains, steps, draws)
         end = want[:, -1]
         twin_state = WeatherPlantState(end[:, :8], end[:, 8:13], end[:, 13:], start.inputs)
         np.testing.assert_array_equal(traj, want if full else want[:, :, :13])
