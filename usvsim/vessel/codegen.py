@@ -335,7 +335,7 @@ class BatchStepper:
         """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na), shared (ng,) and,
         for a four-input ``fn``, per-step inputs (N, n_sub, nps), their :class:`GatheredSteps`
         or :class:`Pcg64Uniforms`."""
-        return self.run_recorded(s0, per_boat, shared, n_sub, per_step, self.ns)[0]
+        return self._run(s0, per_boat, shared, n_sub, per_step, self.ns, final=False)[0]
 
     def run_recorded(
         self,
@@ -349,6 +349,19 @@ class BatchStepper:
         """As :meth:`run`, recording only the first ``record`` states of each sub-step: the
         trajectory (N, n_sub, record) and the final state (N, ns) (the same numbers as
         :meth:`run`'s, fewer bytes written)."""
+        return self._run(s0, per_boat, shared, n_sub, per_step, record, final=True)
+
+    def _run(
+        self,
+        s0: NDArray[np.float64],
+        per_boat: NDArray[np.float64],
+        shared: NDArray[np.float64],
+        n_sub: int,
+        per_step: PerStep | None,
+        record: int,
+        final: bool,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`run_recorded`; the final state is an empty array unless ``final``."""
         s0 = np.ascontiguousarray(s0, dtype=np.float64)
         per_boat = np.ascontiguousarray(per_boat, dtype=np.float64)
         shared = np.ascontiguousarray(shared, dtype=np.float64)
@@ -369,7 +382,7 @@ class BatchStepper:
         steps = self._checked_steps(per_step, n, int(n_sub))
         if self._batch is not None:
             traj = np.empty((n, n_sub, record))
-            last = np.empty((n, self.ns))
+            last = np.empty((n, self.ns) if final else (0, self.ns))
             gathered = steps if isinstance(steps, GatheredSteps) else None
             words = steps.words() if isinstance(steps, Pcg64Uniforms) else None
             self._batch(
@@ -386,7 +399,7 @@ class BatchStepper:
                 None if words is None else words.ctypes.data,
                 record,
                 traj.ctypes.data,
-                last.ctypes.data,
+                last.ctypes.data if final else None,
             )
             return traj, last
         fmap = self._maps.get(n)
