@@ -40,7 +40,8 @@ import casadi as ca
 __all__ = ["BLOCK", "SoaUnsupportedError", "soa_source"]
 
 #: Boats per block: the vector loop's length (a multiple of 8 doubles, one AVX-512 register);
-#: 8, 16 and 32 measured within 5 % of each other at N = 1024, and 8 costs least at N = 1.
+#: 8, 16 and 32 measured within 5 % of each other at N = 1024, and 8 costs least at N = 1
+#: (the weather plant's larger kernel runs in blocks of 16: usvsim.vessel.weather_plant).
 BLOCK = 8
 
 
