@@ -164,8 +164,13 @@ class NavigatedPlant:
         self.step_function = ca.Function(
             "usv_nav_step", [s, w, g, e], [ca.vertcat(s_plant, n_next)]
         )
+        # with weather the environments read only [x, c] per step and the last packed state
+        # (run_recorded: its driver copies NS states per step in a loop of constant length);
+        # blocks of 16 boats, which help the weather plant alone, were slower here (N = 256)
         self._stepper = BatchStepper(
-            self.step_function, backend="casadi" if plant.backend == "casadi" else "auto"
+            self.step_function,
+            backend="casadi" if plant.backend == "casadi" else "auto",
+            record=None if weather is None else NS,
         )
 
     @property
@@ -239,6 +244,26 @@ class NavigatedPlant:
         boat's GNSS fix at that step (a dropout; default: every scheduled fix arrives). Returns
         the packed states after each step, (N, T, 28).
         """
+        args = self._inputs(
+            s0, psi_ref_rad, speed_ref_mps, n_steps, first_step_index, normals, current,
+            gnss_available, weather_inputs, weather_normals,
+        )  # fmt: skip
+        return self._stepper.run(*args)
+
+    def _inputs(
+        self,
+        s0: FloatArray,
+        psi_ref_rad: FloatArray,
+        speed_ref_mps: float | FloatArray,
+        n_steps: int,
+        first_step_index: int,
+        normals: FloatArray,
+        current: FloatArray | None,
+        gnss_available: NDArray[np.bool_] | None,
+        weather_inputs: FloatArray | None,
+        weather_normals: FloatArray | None,
+    ) -> tuple[FloatArray, FloatArray, FloatArray, int, GatheredSteps]:
+        """:meth:`run`'s arguments checked, as the stepper's (s0, w, gains, n_steps, noise)."""
         psi_ref = np.asarray(psi_ref_rad, dtype=float)
         if not (np.all(np.isfinite(psi_ref)) and np.all(np.isfinite(speed_ref_mps))):
             raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
@@ -259,7 +284,28 @@ class NavigatedPlant:
             noise = _with_weather_normals(noise, np.asarray(weather_normals, dtype=float))
         elif weather_inputs is not None or weather_normals is not None:
             raise ValueError("weather_inputs / weather_normals given to a calm NavigatedPlant")
-        return self._stepper.run(s0, w, self.plant.gains, n_steps, noise)
+        return s0, w, self.plant.gains, n_steps, noise
+
+    def run_recorded(
+        self,
+        s0: FloatArray,
+        psi_ref_rad: FloatArray,
+        speed_ref_mps: float | FloatArray,
+        n_steps: int,
+        first_step_index: int,
+        normals: FloatArray,
+        current: FloatArray | None = None,
+        gnss_available: NDArray[np.bool_] | None = None,
+        weather_inputs: FloatArray | None = None,
+        weather_normals: FloatArray | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
+        """As :meth:`run` (the same numbers), writing only ``[x, c]`` per step: the closed-loop
+        trajectory (N, T, 13) and the last packed state (N, :attr:`layout`.size)."""
+        args = self._inputs(
+            s0, psi_ref_rad, speed_ref_mps, n_steps, first_step_index, normals, current,
+            gnss_available, weather_inputs, weather_normals,
+        )  # fmt: skip
+        return self._stepper.run_recorded(*args, NS)
 
     def step(
         self,

@@ -437,25 +437,25 @@ class PoleAvoidanceBatch:
             (self._n_decisions * sc.decision_period_s).astype(np.float64), sc.dt_s, T
         )
         w_in, w_normals = self._weather_inputs(T)  # None, None in a calm batch
+        args: tuple[Any, ...]
         if speed is None:  # the study's call, unchanged
-            packed = self._navplant.run(
-                self._s, psi_ref, sc.speed_mps, T, first, normals,
-                weather_inputs=w_in, weather_normals=w_normals,
-            )  # fmt: skip
+            args = (self._s, psi_ref, sc.speed_mps, T, first, normals, None, None, w_in, w_normals)
         else:
             layout = self._navplant.noise_steps(first, T, normals)
             fires = layout.factor[:, 1:5] > 0
             normals = self.disturbances.perturb_normals(normals, layout.index[:, 1:5][fires])
-            packed = self._navplant.run(
-                self._s, psi_ref, speed, T, first, normals, current, gnss, w_in, w_normals
-            )
-        self._s = packed[:, -1].copy()
-        self._plant_step += T
+            args = (self._s, psi_ref, speed, T, first, normals, current, gnss, w_in, w_normals)
         lay = self._layout
+        if w_in is None:
+            packed = self._navplant.run(*args)
+            self._s, traj = packed[:, -1].copy(), packed[:, :, lay.closed_loop]
+        else:  # the weather states and the filter's are read at the last step only
+            traj, self._s = self._navplant.run_recorded(*args)
+        self._plant_step += T
         self._est_pos = self._s[:, lay.nav_pos].copy()
         self._est_psi = self._s[:, lay.nav_psi].copy()
         self._n_decisions += 1
-        return packed[:, :, lay.closed_loop], dpsi
+        return traj, dpsi
 
     def _weather_inputs(self, n_steps: int) -> tuple[FloatArray | None, FloatArray | None]:
         """The weather plant's per-boat inputs and innovations for ``n_steps`` steps: 3 n_steps
