@@ -40,13 +40,21 @@ gets ``disturbance.weather`` = :func:`usvsim.task.weather_draw.draw_weather` of 
 its course χ (start → goal), drawn from the weather's own stream ``default_rng([seed, k,
 WEATHER_STREAM])``: no other draw of the episode moves. ``weather=None`` (the default) leaves
 the episodes as they were (calm: the batch keeps the calm plant).
+
+Traffic (issue 41): with ``traffic`` (a :class:`TrafficDraw`, e.g.
+:class:`usvsim.task.colreg_family.ColregTraffic`) episode k gets further vessels drawn by it
+from their own stream ``default_rng([seed, k, TRAFFIC_STREAM])``, after every other draw of the
+episode and relative to its start, goal and cruise speed: no other draw moves, and
+``traffic=None`` (the default) leaves every episode bit for bit as it was.
 """
 
 from __future__ import annotations
 
 import math
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,9 +66,11 @@ from usvsim.task.weather_draw import WeatherRanges, draw_weather
 
 __all__ = [
     "ENCOUNTERS",
+    "TRAFFIC_STREAM",
     "OpenWaterEpisode",
     "OpenWaterScenario",
     "RadarQuality",
+    "TrafficDraw",
     "Vessel",
     "draw_open_water",
     "from_pole_episodes",
@@ -71,6 +81,7 @@ FloatArray = NDArray[np.float64]
 ENCOUNTERS = ("head-on", "crossing", "overtaking")
 _R_POLE = 1.0  # m, the study's pole radius: distances are pole-equivalent (module docstring)
 Range = tuple[float, float]
+TRAFFIC_STREAM = zlib.crc32(b"traffic")  # the traffic draw's stream (module docstring)
 
 
 @dataclass(frozen=True)
@@ -128,6 +139,15 @@ class OpenWaterEpisode:
         )
 
 
+class TrafficDraw(Protocol):
+    """Draws further vessels for an episode (module docstring, "Traffic"): a frozen, hashable
+    parameter object with this one method."""
+
+    def vessels(self, episode: OpenWaterEpisode, rng: np.random.Generator) -> tuple[Vessel, ...]:
+        """The vessels to add to ``episode`` (its start, goal and cruise speed), from ``rng``."""
+        ...
+
+
 @dataclass(frozen=True)
 class OpenWaterScenario:
     """Parameters of the family; the defaults are the study's pole task (module docstring)."""
@@ -171,6 +191,7 @@ class OpenWaterScenario:
     time_factor: float = 2.0  # -, time limit = max(150 s, factor × |S G| / U)
     area_margin_m: float = 150.0  # m, area radius = |A − mid(S, G)| + |S G| / 2 + margin
     weather: WeatherRanges | None = None  # wind and waves per episode (module docstring); calm
+    traffic: TrafficDraw | None = None  # further vessels from their own stream (docstring)
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
@@ -358,12 +379,23 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
 
 
 def draw_open_water(sc: OpenWaterScenario, seed: int, n: int) -> tuple[OpenWaterEpisode, ...]:
-    """``n`` episodes of ``sc``; episode k from ``default_rng([seed, k])``, its weather (if
-    ``sc.weather``) from its own stream (module docstring)."""
+    """``n`` episodes of ``sc``; episode k from ``default_rng([seed, k])``, its traffic and
+    weather (if ``sc.traffic``, ``sc.weather``) from their own streams (module docstring)."""
     episodes = tuple(_draw_one(np.random.default_rng([seed, k]), sc) for k in range(n))
+    if sc.traffic is not None:
+        draw = sc.traffic
+        episodes = tuple(
+            replace(e, vessels=e.vessels + draw.vessels(e, _traffic_rng(seed, k)))
+            for k, e in enumerate(episodes)
+        )
     if sc.weather is None:
         return episodes
     return tuple(_with_weather(e, sc.weather, seed, k) for k, e in enumerate(episodes))
+
+
+def _traffic_rng(seed: int, k: int) -> np.random.Generator:
+    """The traffic stream of episode k of the set of seed ``seed`` (module docstring)."""
+    return np.random.default_rng([seed, k, TRAFFIC_STREAM])
 
 
 def _with_weather(
