@@ -14,7 +14,9 @@ first sample where the range is below ``entry_range_m`` and a risk of collision 
 predicted from the present velocities is below ``risk_cpa_m`` and comes within ``risk_tcpa_s``
 (or the range is already below ``risk_cpa_m``). A target that never meets both has no encounter.
 
-Classification at that sample (COLREG rules 13-15; sectors of :class:`ColregParams`):
+Classification at that sample (COLREG rules 13-15; sectors of :class:`ColregParams`; the
+geometry and the table are :mod:`usvsim.task.colreg_geometry`'s, shared with the training
+reward :mod:`usvsim.task.colreg_reward`):
 
 ========================  ==============================================================
 OVERTAKING_GIVE_WAY        |α| > 112.5° (own ship abaft the target's beam), own faster (13)
@@ -55,15 +57,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from enum import IntEnum
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.angles import ssa
-from usvsim.evaluation.colreg_params import ColregParams
 from usvsim.evaluation.stats import Proportion, proportion
+from usvsim.task.colreg_geometry import (
+    GIVE_WAY,
+    STAND_ON,
+    EncounterType,
+    classify_encounter,
+    encounter_kinematics,
+)
+from usvsim.task.colreg_params import ColregParams
 
 __all__ = [
     "ColregParams",
@@ -120,25 +128,6 @@ class EncounterTracks:
             raise ValueError(f"EncounterTracks.dt_s must be a positive number, got {self.dt_s}")
 
 
-class EncounterType(IntEnum):
-    """The own ship's role in an encounter, decided when it begins (module docstring)."""
-
-    NONE = 0  # no risk of collision within the entry range
-    HEAD_ON = 1  # rule 14
-    CROSSING_GIVE_WAY = 2  # rules 15, 16
-    CROSSING_STAND_ON = 3  # rules 15, 17
-    OVERTAKING_GIVE_WAY = 4  # rule 13: the own ship overtakes
-    OVERTAKEN_STAND_ON = 5  # rules 13, 17: the own ship is overtaken
-
-
-GIVE_WAY = (
-    EncounterType.HEAD_ON,
-    EncounterType.CROSSING_GIVE_WAY,
-    EncounterType.OVERTAKING_GIVE_WAY,
-)
-STAND_ON = (EncounterType.CROSSING_STAND_ON, EncounterType.OVERTAKEN_STAND_ON)
-
-
 @dataclass(frozen=True)
 class ColregResult:
     """Per-encounter arrays of shape (E, K) (module docstring for the score and ``passed``).
@@ -179,51 +168,28 @@ def _first(mask: BoolArray) -> tuple[BoolArray, IntArray]:
 
 
 def _kinematics(tr: EncounterTracks) -> dict[str, np.ndarray]:
-    """Range, bearing, aspect, CPA and TCPA of every target at every sample, (E, K, T)."""
-    d = np.asarray(tr.target_north_east_m, float) - np.asarray(tr.own_north_east_m, float)[:, None]
+    """Range, bearing, aspect, CPA and TCPA of every target at every sample, (E, K, T)
+    (:func:`usvsim.task.colreg_geometry.encounter_kinematics`)."""
     chi_o = np.asarray(tr.own_course_rad, float)[:, None]  # (E, 1, T)
-    chi_t = np.asarray(tr.target_course_rad, float)
     u_o = np.asarray(tr.own_speed_mps, float)[:, None]
     u_t = np.asarray(tr.target_speed_mps, float)
-    dv_n = u_t * np.cos(chi_t) - u_o * np.cos(chi_o)  # target velocity relative to own ship
-    dv_e = u_t * np.sin(chi_t) - u_o * np.sin(chi_o)
-    rng = np.hypot(d[..., 0], d[..., 1])
-    dv2 = dv_n**2 + dv_e**2
-    moving = dv2 > 1e-12
-    tcpa = np.where(
-        moving, -(d[..., 0] * dv_n + d[..., 1] * dv_e) / np.where(moving, dv2, 1.0), 0.0
-    )
-    cpa = np.hypot(d[..., 0] + dv_n * tcpa, d[..., 1] + dv_e * tcpa)
-    los = np.arctan2(d[..., 1], d[..., 0])  # line of sight own -> target
-    # own ship in the target's body frame (x forward, y starboard): which side of its track
-    x_t = -(d[..., 0] * np.cos(chi_t) + d[..., 1] * np.sin(chi_t))
-    y_t = -(-d[..., 0] * np.sin(chi_t) + d[..., 1] * np.cos(chi_t))
+    kin = encounter_kinematics(
+        np.asarray(tr.own_north_east_m, float)[:, None], chi_o, u_o,
+        np.asarray(tr.target_north_east_m, float), np.asarray(tr.target_course_rad, float), u_t,
+    )  # fmt: skip
+    rng = kin.range_m
     return {
         "range": rng,
-        "bearing": ssa(los - chi_o),
-        "aspect": ssa(los + np.pi - chi_t),
-        "cpa": cpa,
-        "tcpa": tcpa,
-        "x_t": x_t,
-        "y_t": y_t,
+        "bearing": kin.bearing_rad,
+        "aspect": kin.aspect_rad,
+        "cpa": kin.cpa_m,
+        "tcpa": kin.tcpa_s,
+        "x_t": kin.x_t_m,
+        "y_t": kin.y_t_m,
         "u_o": np.broadcast_to(u_o, rng.shape),
         "u_t": u_t,
         "chi_o": np.broadcast_to(chi_o, rng.shape),
     }
-
-
-def _classify(bearing: FloatArray, aspect: FloatArray, u_o: FloatArray, u_t: FloatArray,
-              p: ColregParams) -> IntArray:  # fmt: skip
-    """EncounterType of each (E, K) geometry at its start (module docstring table)."""
-    out = np.where(bearing >= -p.crossing_port_rad, EncounterType.CROSSING_GIVE_WAY,
-                   EncounterType.CROSSING_STAND_ON)  # fmt: skip
-    out = np.where((np.abs(bearing) < p.head_on_rad) & (np.abs(aspect) < p.head_on_rad),
-                   EncounterType.HEAD_ON, out)  # fmt: skip
-    out = np.where((np.abs(bearing) > p.overtaking_rad) & (u_t > u_o),
-                   EncounterType.OVERTAKEN_STAND_ON, out)  # fmt: skip
-    out = np.where((np.abs(aspect) > p.overtaking_rad) & (u_o > u_t),
-                   EncounterType.OVERTAKING_GIVE_WAY, out)  # fmt: skip
-    return out.astype(np.intp)
 
 
 def _ramp(value: FloatArray, full: float, zero: float) -> FloatArray:
@@ -288,8 +254,8 @@ def _evaluate_block(tracks: EncounterTracks, p: ColregParams) -> ColregResult:
     entry = live & (rng < p.entry_range_m) & (risk | (rng < p.risk_cpa_m))
     has, t0 = _first(entry)
     at0 = {name: _gather(kin[name], t0) for name in ("bearing", "aspect", "u_o", "u_t", "chi_o")}
-    kind = np.where(has, _classify(at0["bearing"], at0["aspect"], at0["u_o"], at0["u_t"], p),
-                    EncounterType.NONE).astype(np.intp)  # fmt: skip
+    role = classify_encounter(at0["bearing"], at0["aspect"], at0["u_o"], at0["u_t"], p)
+    kind = np.where(has, role, EncounterType.NONE).astype(np.intp)
 
     tt = np.arange(t)
     after = live & has[..., None] & (tt >= t0[..., None])
