@@ -12,6 +12,17 @@ list likewise); a helmsman in both is left as it is, and its rows in the new run
 file's in every count and distance (the same episodes; timing fields aside), otherwise nothing is
 written and the exit status is 1. The file records each merge under ``merged`` (helmsmen added,
 the run's helmsmen and wall-clock) and is written atomically.
+
+``--replace-sets a,b`` instead replaces the rows of sets whose episodes changed (e.g. ``everything``
+gaining weather) for every helmsman of the file, from a new run of those sets only::
+
+    usvsim bench --suite stress --sets everything --helmsmen all --json > everything.json
+    python benchmarks/stress_merge.py --replace-sets everything docs/data/stress.json \
+        everything.json
+
+The new run must hold each named set for every helmsman of the file (a model named in the file
+by a former name is matched through the registry's aliases), the same split and episodes per
+set; the file records the replacement under ``replaced`` (sets, wall-clock).
 """
 
 from __future__ import annotations
@@ -64,15 +75,55 @@ def merge(base: dict[str, Any], new: dict[str, Any], order: list[str]) -> list[s
     return added
 
 
+def replace_sets(
+    base: dict[str, Any], new: dict[str, Any], sets: list[str], aliases: dict[str, str]
+) -> None:
+    """Replace, in place, ``base``'s rows of ``sets`` by ``new``'s (module docstring);
+    ``aliases``: former model name -> current name, for helmsmen the file names by an old name.
+    ``SystemExit`` where ``new`` lacks a set or a helmsman's row, or the runs differ in kind."""
+    for key in ("suite", "split", "episodes_per_set"):
+        if base.get(key) != new.get(key):
+            raise SystemExit(
+                f"stress_merge: the runs differ in {key} ({base.get(key)!r}, {new.get(key)!r})"
+            )
+    unknown = [s for s in sets if s not in base["sets"]]
+    if unknown:
+        raise SystemExit(f"stress_merge: {unknown} are not sets of the file ({base['sets']})")
+    fresh = {(r["episode_set"], r["helmsman"]): r for r in new["rows"]}
+    rows = []
+    for r in base["rows"]:
+        if r["episode_set"] not in sets:
+            rows.append(r)
+            continue
+        h = r["helmsman"]
+        row = fresh.get((r["episode_set"], h)) or fresh.get((r["episode_set"], aliases.get(h, h)))
+        if row is None:
+            raise SystemExit(f"stress_merge: the new run has no row for {h} on {r['episode_set']}")
+        rows.append({**row, "helmsman": h})
+    base["rows"] = rows
+    base["replaced"] = [*base.get("replaced", []), {"sets": sets, "wall_s": new.get("wall_s")}]
+
+
 def main(argv: list[str]) -> int:
+    sets: list[str] = []
+    if argv[:1] == ["--replace-sets"] and len(argv) > 1:
+        sets, argv = [s for s in argv[1].split(",") if s], argv[2:]
     if len(argv) != 2:
-        print("usage: python benchmarks/stress_merge.py STRESS_JSON NEW_JSON", file=sys.stderr)
+        print(
+            "usage: python benchmarks/stress_merge.py [--replace-sets A,B] STRESS_JSON NEW_JSON",
+            file=sys.stderr,
+        )
         return 2
     from usvsim.common.fileio import atomic_write_text
-    from usvsim.helm.registry import available_helmsmen
+    from usvsim.helm.registry import available_helmsmen, model_aliases
 
     path = Path(argv[0])
     base, new = json.loads(path.read_text()), json.loads(Path(argv[1]).read_text())
+    if sets:
+        replace_sets(base, new, sets, dict(model_aliases()))
+        atomic_write_text(path, json.dumps(base, indent=2) + "\n")
+        print(f"replaced the rows of {', '.join(sets)} in {path}")
+        return 0
     added = merge(base, new, list(available_helmsmen()))
     if added:
         atomic_write_text(path, json.dumps(base, indent=2) + "\n")

@@ -53,6 +53,21 @@ def test_stress_merge_adds_rows_after_the_helmsman_before_it() -> None:
         merge(base, other, ORDER)
 
 
+def test_stress_merge_replace_sets_swaps_one_sets_rows_for_every_helmsman() -> None:
+    replace_sets = _script("stress_merge").replace_sets
+    base = _run(["vo", "old-name"], [_row(h, s, 90) for s in "ab" for h in ("vo", "old-name")])
+    new = _run(["vo", "new-name"], [_row("vo", "b", 70), _row("new-name", "b", 60)])
+    replace_sets(base, new, ["b"], {"old-name": "new-name"})
+    assert [(r["episode_set"], r["helmsman"], r["successes"]) for r in base["rows"]] == [
+        ("a", "vo", 90), ("a", "old-name", 90), ("b", "vo", 70), ("b", "old-name", 60),
+    ]  # fmt: skip
+    assert base["replaced"] == [{"sets": ["b"], "wall_s": 60.0}]
+    with pytest.raises(SystemExit, match="no row for old-name on b"):
+        replace_sets(base, new, ["b"], {})
+    with pytest.raises(SystemExit, match="not sets of the file"):
+        replace_sets(base, new, ["c"], {})
+
+
 def test_colreg_table_merge_adds_a_row_and_a_column_and_refuses_a_changed_row() -> None:
     merge_block = _script("colreg_table").merge_block
     old = "head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `vo-radar` | 2 |\n| `m` | 3 |\n"
