@@ -50,6 +50,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from usvsim.task.batch import ActionKind, Observation, observation_rows, write_observation_rows
+from usvsim.task.colreg_reward import COLREG_TERMS, ColregReward, ColregRewardWeights
 from usvsim.task.horizon import RewardHorizon, apply_reward_horizon
 from usvsim.task.observations import OBSERVATION_KINDS, ObservationKind
 from usvsim.task.openwater import OpenWaterEpisode, OpenWaterScenario, draw_open_water
@@ -283,7 +284,10 @@ class OpenWaterVectorEnv(VectorEnv):
 
     ``info["reward_pole"]``, ``info["reward_goal"]``. ``reward_horizon="fixed"`` (train with
     it) adds on a terminating step the discounted reward of staying there until the episode's
-    own time limit, as in :class:`usvsim.task.env.PoleAvoidanceEnv`.
+    own time limit, as in :class:`usvsim.task.env.PoleAvoidanceEnv`. ``colreg_reward``
+    (:class:`usvsim.task.colreg_reward.ColregRewardWeights`; default None: off) adds the
+    per-decision COLREG terms of :mod:`usvsim.task.colreg_reward` (``info["reward_colreg"]``
+    and ``info["reward_colreg_<term>"]``).
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
@@ -299,13 +303,14 @@ class OpenWaterVectorEnv(VectorEnv):
     ## Arguments
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
-    ``plant``, ``radar``, ``backend`` (wind and waves: ``family=weather_family()``; the default
-    family is calm). ``render_mode`` must be ``None``: the top view draws one pole
-    (:mod:`usvsim.task.render`). ``info_observation`` (e.g. ``"scene"``): ``reset`` and
-    every ``step`` also return that form of the returned observation as
-    ``info["observation_<kind>"]`` (N, ...) (after an autoreset the new episode's, as the
-    observation; ``final_info`` does not carry it): privileged input for a learner that trains
-    on more than the policy sees (a GAIL discriminator on the true scene beside a radar policy).
+    ``plant``, ``radar``, ``backend``, ``colreg_reward`` (wind and waves:
+    ``family=weather_family()``; the default family is calm). ``render_mode`` must be
+    ``None``: the top view draws one pole (:mod:`usvsim.task.render`). ``info_observation``
+    (e.g. ``"scene"``): ``reset`` and every ``step`` also return that form of the returned
+    observation as ``info["observation_<kind>"]`` (N, ...) (after an autoreset the new
+    episode's, as the observation; ``final_info`` does not carry it): privileged input for a
+    learner that trains on more than the policy sees (a GAIL discriminator on the true scene
+    beside a radar policy).
     """
 
     def __init__(
@@ -323,6 +328,7 @@ class OpenWaterVectorEnv(VectorEnv):
         radar: RadarConfig | None = None,
         backend: Literal["auto", "compiled", "casadi"] = "auto",
         info_observation: ObservationKind | None = None,
+        colreg_reward: ColregRewardWeights | None = None,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -334,6 +340,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self.render_mode = None
         self.family = OPEN_WATER_FAMILY if family is None else family
         self.reward: RewardFunction = reward or GaussianReward()
+        self.colreg = None if colreg_reward is None else ColregReward(colreg_reward, num_envs)
         self.sim = OpenWaterBatch(
             num_envs, observation=observation, action=action, plant=plant, radar=radar,
             backend=backend,
@@ -368,6 +375,8 @@ class OpenWaterVectorEnv(VectorEnv):
         limits = self.sim.time_limit[boats]
         self._max_decisions[boats] = np.ceil(limits / self.sim.base.decision_period_s - 1e-9)
         self._decisions[boats] = 0
+        if self.colreg is not None:
+            self.colreg.reset(boats)
         return self._observation(obs)
 
     def _observation(self, obs: Observation) -> Observation:
@@ -411,8 +420,14 @@ class OpenWaterVectorEnv(VectorEnv):
         time_s = (self._decisions * dp).astype(np.float64)
         o = self.options
         shifted = time_s + (self._horizon.max_decisions - self._max_decisions) * dp
+        total, extra = terms.total, {}
+        if self.colreg is not None:
+            colreg = self.colreg.from_batch(self.sim, res, time_s - dp)
+            total = total + colreg.total
+            extra = {f"reward_colreg_{t}": getattr(colreg, t) for t in COLREG_TERMS}
+            extra["reward_colreg"] = colreg.total
         reward, terminated, truncated = apply_reward_horizon(
-            o.reward_horizon, o.gamma, self._horizon, terms.total, res.terminated, res.truncated,
+            o.reward_horizon, o.gamma, self._horizon, total, res.terminated, res.truncated,
             res.out_of_area, shifted,
         )  # fmt: skip
         arrays: dict[str, NDArray[np.generic]] = {
@@ -429,6 +444,7 @@ class OpenWaterVectorEnv(VectorEnv):
             "is_success": res.is_success,
             "time_s": time_s,
             "time_to_goal_s": res.time_to_goal_s,
+            **extra,
         }
         everyone = np.ones(self.num_envs, dtype=bool)
         info: dict[str, Any] = {}
