@@ -30,7 +30,10 @@ frames tile one SplitMix64 sequence per boat without overlap. Draws ``0 .. P −
 pixels', one 64-bit number each, split into independent uniforms: bits 0–19 the clutter trial
 (clutter where ``u < p_clutter``; p is thus rounded up to a multiple of 2⁻²⁰), bits 20–35 the
 noise value (16 bits), 36–49 the clutter intensity and 50–63 the speckle factor (14 bits each;
-the image keeps 8). Draw ``P + j`` (top 24 bits) decides disc j's missed return.
+the image keeps 8). Draw ``P + m`` (top 24 bits) decides the missed return of the boat's m-th
+valid disc, its valid discs counted in order from 0: a slot that is not valid (padding) takes no
+draw, so a boat's image does not depend on how its discs are padded, e.g. to the widest scene of
+the boats batched with it.
 
 :func:`render_scene` runs the compiled kernel (:mod:`usvsim.task.scene_radar_kernel`, the same
 arithmetic in C, OpenMP over boats) where it builds, else this module's NumPy path.
@@ -63,7 +66,7 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-MAX_DISCS = 32  # discs a scene may hold (missed-return draws per frame)
+MAX_DISCS = 32  # valid discs a boat may see (missed-return draws per frame)
 GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment
 FRAME_DRAWS = 1 << 22  # draws reserved per frame: pixels + MAX_DISCS must fit
 
@@ -160,8 +163,8 @@ def render_scene(
 ) -> NDArray[np.uint8]:
     """Radar images (N, 1, rows, cols) uint8 of N boats, each seeing J discs.
 
-    ``range_m``, ``bearing_rad`` (relative to heading), ``radius_m``, ``valid`` all (N, J);
-    J ≤ :data:`MAX_DISCS`. ``keys`` (N,) uint64: each boat's frame key
+    ``range_m``, ``bearing_rad`` (relative to heading), ``radius_m``, ``valid`` all (N, J); at
+    most :data:`MAX_DISCS` valid discs per boat. ``keys`` (N,) uint64: each boat's frame key
     (:meth:`RadarStreams.frame_keys`), needed where ``degradation`` degrades a boat. Discs no
     larger than ``box_radius_m`` (the study's 1 m pole) are drawn as the study draws its pole, as
     their polar box (:func:`usvsim.task.radar.render_radar`, the same pixels). ``backend``:
@@ -170,14 +173,17 @@ def render_scene(
     Raises
     ------
     ValueError
-        If J > :data:`MAX_DISCS`, a boat is degraded without ``keys``, the image has more than
-        2²² − 32 pixels, or ``compiled`` is asked for where no C compiler builds the kernel.
+        If a boat has more than :data:`MAX_DISCS` valid discs, a boat is degraded without
+        ``keys``, the image has more than 2²² − 32 pixels, or ``compiled`` is asked for where no
+        C compiler builds the kernel.
     """
     cfg = cfg or RadarConfig()
     rho = np.ascontiguousarray(range_m, dtype=float)
     n, j = rho.shape
-    if j > MAX_DISCS:
-        raise ValueError(f"a scene holds at most {MAX_DISCS} discs, got {j}")
+    valid = np.asarray(valid, dtype=bool)
+    most = int(valid.sum(axis=1).max(initial=0))
+    if most > MAX_DISCS:
+        raise ValueError(f"a boat sees at most {MAX_DISCS} valid discs, got {most}")
     if cfg.n_rows * cfg.n_cols + MAX_DISCS > FRAME_DRAWS:
         raise ValueError(f"a radar image holds at most {FRAME_DRAWS - MAX_DISCS} pixels")
     degraded = degradation is not None and bool(degradation.degraded.any())
@@ -192,7 +198,6 @@ def render_scene(
         raise ValueError(f"backend must be auto, compiled or numpy; got {backend!r}")
     phi = ssa(np.asarray(bearing_rad, dtype=float))
     r = np.ascontiguousarray(radius_m, dtype=float)
-    valid = np.asarray(valid, dtype=bool)
     inside = rho < r
     box = r <= box_radius_m  # the study's pole: its polar box
     half = np.arcsin(np.minimum(r / np.maximum(rho, 1e-12), 1.0))
@@ -202,7 +207,9 @@ def render_scene(
         return _render_compiled(kernel, discs, cfg, degradation, keys)
     if degraded:
         assert degradation is not None and keys is not None
-        u_miss = frame_draws(keys, cfg.n_rows * cfg.n_cols, j) >> np.uint64(40)
+        rank = np.maximum(np.cumsum(valid, axis=1) - 1, 0)  # place among the valid discs
+        draws = frame_draws(keys, cfg.n_rows * cfg.n_cols, j)
+        u_miss = np.take_along_axis(draws, rank, axis=1) >> np.uint64(40)
         p_miss = np.where(degradation.degraded, degradation.missed_probability, 0.0)
         discs = replace(discs, valid=valid & (u_miss.astype(float) * 2.0**-24 >= p_miss[:, None]))
     lit = _lit_pixels(discs, cfg)

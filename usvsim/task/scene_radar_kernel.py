@@ -2,13 +2,13 @@
 
 The C below is a line-for-line port of the NumPy path of :mod:`usvsim.task.scene_radar` (the
 reference; the module docstring there states the geometry and the laws): per boat (OpenMP over
-boats), the missed returns, then each valid disc's lit columns and range rows, then one pass
-over the pixels for speckle, clutter and additive noise, each pixel's draws from one
-counter-based hash (SplitMix64) of the boat's frame key. Float arithmetic is that of the
-reference (double for the geometry, float32 for the intensities, no FMA contraction), so the
-two agree bit for bit except where a libm ``sin``/``cos`` and NumPy's differ in the last bit at
-a cell edge (measured: no pixel differed in 5,120 random boat-frames of 12 discs, 30 M pixels;
-the test compares 1,024).
+boats), the missed returns (a disc's draw numbered among the boat's valid discs), then each valid
+disc's lit columns and range rows, then one pass over the pixels for speckle, clutter and
+additive noise, each pixel's draws from one counter-based hash (SplitMix64) of the boat's frame
+key. Float arithmetic is that of the reference (double for the geometry, float32 for the
+intensities, no FMA contraction), so the two agree bit for bit except where a libm
+``sin``/``cos`` and NumPy's differ in the last bit at a cell edge (measured: no pixel differed
+in 5,120 random boat-frames of 12 discs, 30 M pixels; the test compares 1,024).
 
 Built on first use with the system compiler (:func:`usvsim.common.cbuild.compile_library`),
 ``-O3 -march=native`` with a portable fallback; where neither builds, :func:`load_kernel`
@@ -68,11 +68,13 @@ void usv_scene_radar(int n, int j, int rows, int cols, double dr, const double* 
     const uint64_t key = keys ? keys[b] : 0;
     const int degrade = keys && (p_clutter[b] > 0 || speckle[b] > 0 || p_miss[b] > 0 ||
                                  noise[b] > 0);
+    int rank = 0;  /* valid discs so far: padding slots take no draw */
     for (int d = 0; d < j; ++d) {
       const long k = (long)b * j + d;
       if (!(flags[k] & 1)) continue;
-      if (degrade) {  /* missed return: draw `pixels + d` of the frame, 24 bits */
-        uint64_t h = mix64(key + GOLDEN * (uint64_t)(pixels + d + 1));
+      const int m = rank++;
+      if (degrade) {  /* missed return: draw `pixels + m` of the frame, 24 bits */
+        uint64_t h = mix64(key + GOLDEN * (uint64_t)(pixels + m + 1));
         if ((double)(h >> 40) * 0x1p-24 < p_miss[b]) continue;
       }
       const double rc = rho[k], pc = phi[k], radius = r[k];

@@ -53,6 +53,7 @@ from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_stat
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
 from usvsim.task.scenario import BoatNoise, Scenario
+from usvsim.task.scene_radar import MAX_DISCS
 from usvsim.task.torch_env import compiled_substep, plant_and_filter, torch_heading_change
 from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
 from usvsim.task.torch_observations import (
@@ -207,12 +208,12 @@ class TorchOpenWaterEnv:
 
         self._table = {name: put(getattr(table, name)) for name in vars(table)}
         self._table_np = table
-        if table.statics.shape[1] + table.vessels.shape[1] > 32:
-            raise ValueError("a scene of the torch open-water env holds at most 32 discs")
+        most = int((table.statics_ok.sum(axis=1) + table.vessels_ok.sum(axis=1)).max())
+        if most > MAX_DISCS:
+            raise ValueError(f"a boat sees at most {MAX_DISCS} discs, an episode has {most}")
         self._degraded = bool((table.radar > 0).any())  # the table's images need draws
         start = self.plant.initial_state(table.start_eta, table.speed_mps)
         self._table["x0"], self._table["c0"] = start.x, start.c
-        self._table["n_statics"] = self._table["statics_ok"].sum(dim=1)
         self._n_rows = table.n_episodes
 
     # ----------------------------------------------------------------------------- reset
@@ -241,9 +242,6 @@ class TorchOpenWaterEnv:
         self._min_d = torch.zeros(n, dtype=dt, device=dev)
         self._t_goal = torch.zeros(n, dtype=dt, device=dev)
         self._frame = torch.zeros(n, dtype=torch.int64, device=dev)  # radar frames this episode
-        # the most static discs of any episode started so far (a 0-d tensor): the CPU batch pads
-        # its statics to it, which numbers the vessels and so picks their missed-return draws
-        self._k_seen = torch.zeros((), dtype=torch.int64, device=dev)
         self.discs = self._discs_of(self._row)
         everyone = torch.ones(n, dtype=torch.bool, device=dev)
         obs = self._restart(everyone, self._observe(advance=None))
@@ -283,8 +281,6 @@ class TorchOpenWaterEnv:
         self._t_goal = torch.where(boats, math.inf, self._t_goal)
         self._n_dec = torch.where(boats, 0, self._n_dec)
         self._frame = torch.where(boats, 0, self._frame)
-        started_k = torch.where(boats, t["n_statics"][row], 0).amax()
-        self._k_seen = torch.maximum(self._k_seen, started_k)
         return select_rows(boats, self._observe(advance=boats), obs)
 
     def _seed_outlier_streams(self, boats: torch.Tensor, row: torch.Tensor) -> None:
@@ -321,13 +317,9 @@ class TorchOpenWaterEnv:
             keys = self._take("radar_base") + GOLDEN * (self._frame * FRAME_DRAWS)
         if advance is not None:
             self._frame = self._frame + advance
-        k, m = self.discs.static_ok.shape[1], self.discs.vessel_ok.shape[1]
-        arange = torch.arange(max(k, m), device=self.device)
-        miss_draw = torch.cat([arange[:k], self._k_seen + arange[:m]])  # the CPU's disc numbers
         image = render_scene_torch(
-            r, b, self.discs.radii_all, self.discs.ok_all, self._radar_grid, degradation, keys,
-            miss_draw=miss_draw,
-        )  # fmt: skip
+            r, b, self.discs.radii_all, self.discs.ok_all, self._radar_grid, degradation, keys
+        )
         if self.observation_kind == "radar":
             return image
         r_g, b_g = relative_polar_torch(pos, psi, goal[:, None, :])

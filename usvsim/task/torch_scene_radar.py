@@ -118,7 +118,6 @@ def render_scene_torch(
     degradation: torch.Tensor | None = None,
     keys: torch.Tensor | None = None,
     box_radius_m: float = 1.0,
-    miss_draw: torch.Tensor | None = None,
 ) -> torch.Tensor:
     """Radar images (N, 1, rows, cols) uint8 of N boats, each seeing J discs (``range_m``,
     ``bearing_rad`` relative to the heading, ``radius_m``, ``valid``: (N, J)).
@@ -126,18 +125,17 @@ def render_scene_torch(
     ``degradation`` (N, 4) float64 [p_clutter, speckle, p_missed, noise amplitude] and ``keys``
     (N,) int64 (each boat's frame key, the bits of :meth:`usvsim.task.scene_radar.RadarStreams.
     frame_keys`): with them, each boat's image is degraded as :func:`render_scene` degrades it
-    (a boat with all four zero is left clean); without, every image is clean. ``miss_draw``
-    (J,) or (N, J) int64, each below J: the index of the frame draw that decides disc j's missed
-    return (default j, as ``render_scene`` numbers the discs it is given)."""
+    (a boat with all four zero is left clean); without, every image is clean. A disc's missed
+    return is decided by the frame draw of its place among the boat's valid discs, as
+    ``render_scene`` numbers them: padding slots take no draw."""
     g = grid
     phi = torch_ssa(bearing_rad)
     n, j = range_m.shape
     pixels = g.rows * g.cols
     if degradation is not None and keys is not None:
         degraded = (degradation > 0).any(dim=1)
-        draws = frame_draws_torch(keys, pixels, j)
-        if miss_draw is not None:
-            draws = draws.gather(1, miss_draw.expand(n, j))
+        rank = torch.clamp(torch.cumsum(valid.to(torch.int64), dim=1) - 1, min=0)
+        draws = frame_draws_torch(keys, pixels, j).gather(1, rank)
         u_miss = _shr(draws, 40).to(torch.float64) * 2.0**-24
         p_miss = torch.where(degraded, degradation[:, 2].to(torch.float64), 0.0)
         valid = valid & (u_miss >= p_miss[:, None])

@@ -7,7 +7,9 @@ terminations and truncations in full and a SHA-256 digest of the observations, o
 ``info`` array and of the ``final_obs`` rows. The current env must reproduce every one of them
 bit for bit. The compiled kernels are built with ``-ffp-contract=off`` and the reference was
 recorded on x86-64 Linux (glibc libm): another libm's ``sin``/``cos`` could differ in the last
-bit; regenerate then with ``python tests/usvsim/task/test_openwater_same_numbers.py``.
+bit; regenerate then with ``python tests/usvsim/task/test_openwater_same_numbers.py``. The
+radar+goal digests were recorded again when padding slots stopped taking missed-return draws
+(``usvsim.task.scene_radar``; its rewards, terminations and truncations unchanged).
 """
 
 from __future__ import annotations
