@@ -32,6 +32,16 @@ setup                          observation  action       network
 ``rl-categorical-radar-ow-cont``  radar+goal  categorical  the same for rl-categorical-radar-ow
 =============================  ===========  ===========  =====================================
 
+Setups in traffic with the rules of the road (issue 41; ``-colreg``): the open-water family
+with half of its episodes drawn from the COLREG encounter members
+(:data:`usvsim.task.colreg_family.COLREG_FAMILY`, :attr:`RLSetup.colreg_share`) and the
+per-decision COLREG reward terms added (:mod:`usvsim.task.colreg_reward`,
+:attr:`RLSetup.colreg_reward`: the terms on, ``"all"`` or names; ``""`` off).
+``rl-gaussian-radar-colreg`` is rl-gaussian-radar-ow's recipe so trained;
+``-colreg-noreward`` the same family and budget with the study's reward alone (the ablation's
+baseline); ``-colreg-ft`` starts from the shipped ``rl-gaussian-radar-ow``;
+``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
+
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
 policy and observation normaliser (:func:`learning.experiments.checkpoint.starting_policy`, any
 setup's of the same observation and action kinds, e.g. a GAIL run's) with a new critic: RL
@@ -99,6 +109,8 @@ from learning.algorithms.ppo import PPOConfig
 from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
+from usvsim.task.colreg_family import COLREG_FAMILY
+from usvsim.task.colreg_reward import COLREG_TERMS, ColregRewardWeights
 from usvsim.task.observations import ObservationKind
 from usvsim.task.openwater_env import (
     OPEN_WATER_FAMILY,
@@ -207,8 +219,19 @@ class RLSetup:
     # harshest level (usvsim.task.openwater_env.harsh_radar_family, crowded or not as above);
     # 0: the family's own radar draws
     harsh_radar_share: float = 0.0
+    # open-water: the share of training episodes drawn from the COLREG encounter members
+    # (usvsim.task.colreg_family.COLREG_FAMILY), mixed in after the crowded share; 0: none
+    colreg_share: float = 0.0
+    # open-water: the COLREG reward terms on (usvsim.task.colreg_reward.COLREG_TERMS, comma
+    # separated, with their documented weights), "all", or "" (off: the study's reward alone)
+    colreg_reward: str = ""
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.colreg_share < 1.0:
+            raise ValueError(f"RLSetup.colreg_share must be in [0, 1), got {self.colreg_share!r}")
+        if (self.colreg_share or self.colreg_reward) and self.task != "open-water":
+            raise ValueError("RLSetup.colreg_share and colreg_reward need task='open-water'")
+        self.colreg_weights  # noqa: B018 -- raises ValueError for an unknown term
         if self.task not in TASKS:
             raise ValueError(f"RLSetup.task must be one of {TASKS}, got {self.task!r}")
         if not 0.0 <= self.crowded_share < 1.0:
@@ -229,12 +252,32 @@ class RLSetup:
             )
 
     @property
+    def colreg_weights(self) -> ColregRewardWeights | None:
+        """The COLREG reward's weights (:attr:`colreg_reward`'s terms on, the others 0), or None
+        when it is off."""
+        if not self.colreg_reward:
+            return None
+        on = COLREG_TERMS if self.colreg_reward == "all" else tuple(
+            t.strip() for t in self.colreg_reward.split(",") if t.strip()
+        )  # fmt: skip
+        unknown = [t for t in on if t not in COLREG_TERMS]
+        if unknown:
+            raise ValueError(
+                f"RLSetup.colreg_reward: unknown term {unknown[0]!r}; use 'all' or names from "
+                f"{', '.join(COLREG_TERMS)}"
+            )
+        return ColregRewardWeights().without(*(t for t in COLREG_TERMS if t not in on))
+
+    @property
     def training_family(self) -> ScenarioMixture:
         """The open-water training distribution (:attr:`crowded_share`, then
-        :attr:`harsh_radar_share` of that mixture at the harshest radar)."""
+        :attr:`colreg_share` of the COLREG members, then :attr:`harsh_radar_share` of that
+        mixture at the harshest radar)."""
         family = OPEN_WATER_FAMILY
         if self.crowded_share:
             family = mix_families(family, crowded_family(), self.crowded_share)
+        if self.colreg_share:
+            family = mix_families(family, COLREG_FAMILY, self.colreg_share, prefix="colreg-")
         if self.harsh_radar_share:
             harsh = harsh_radar_family(family)
             family = mix_families(family, harsh, self.harsh_radar_share, prefix="harsh-")
@@ -256,6 +299,7 @@ class RLSetup:
         run's γ (module docstring); the open-water family for ``task="open-water"``."""
         if self.task == "open-water":
             env_kwargs.setdefault("family", self.training_family)
+            env_kwargs.setdefault("colreg_reward", self.colreg_weights)
             return OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,
@@ -283,6 +327,17 @@ class RLSetup:
         """A copy with some fields changed (unknown names raise ``TypeError``)."""
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
+
+# half of the episodes COLREG encounters, the COLREG reward on; rl-gaussian-radar-ow's recipe
+COLREG_RADAR = RLSetup(
+    "rl-gaussian-radar-colreg", "radar+goal", "gaussian", OW_RADAR_TRPO, task="open-water",
+    harsh_radar_share=0.3, colreg_share=0.5, colreg_reward="all",
+)  # fmt: skip
+
+COLREG_SCENE = COLREG_RADAR.replace(
+    name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
+    harsh_radar_share=0.0,
+)  # fmt: skip
 
 SETUPS: dict[str, RLSetup] = {
     s.name: s
@@ -359,6 +414,11 @@ SETUPS: dict[str, RLSetup] = {
             task="open-water",
             init_policy="rl-categorical-radar-ow",
         ),
+        # in traffic with the rules of the road (issue 41; module docstring)
+        COLREG_RADAR,
+        COLREG_RADAR.replace(name=COLREG_RADAR.name + "-noreward", colreg_reward=""),
+        COLREG_RADAR.replace(name=COLREG_RADAR.name + "-ft", init_policy="rl-gaussian-radar-ow"),
+        COLREG_SCENE,
     )
 }
 

@@ -1,0 +1,183 @@
+"""Reward-term ablation of the COLREG reward (issue 41): each term's effect on compliance and
+success, every variant on the same setup, family, budget and seeds.
+
+Variants (``--variants``; :data:`usvsim.task.colreg_reward.COLREG_TERMS`): ``all`` (every term,
+``rl-gaussian-radar-colreg``), ``none`` (the study's reward alone on the same family:
+``rl-gaussian-radar-colreg-noreward``) and ``no-<term>`` (every term but that one). Each variant
+and seed is one training run (``learning.experiments.train_rl.train_rl``, its files in
+``OUT/<variant>/seed<k>/``) of ``--iterations`` iterations, with no early stop (``stop_after=0``):
+the same budget for all.
+
+Selection and reporting (the honest-comparison rules, issue 37): each run's ``best.pt`` and
+``latest.pt`` are scored on the COLREG suite's VALIDATION split (``--val-episodes`` per set,
+inside :func:`usvsim.common.splits.selection_mode`, so a test draw there fails) and the one with
+the higher validation score (success rate × compliance rate, pooled over the sets) is chosen;
+only the chosen file is then scored on the TEST split (``--test-episodes`` per set) and
+reported. Targets hold course and speed (as Imazu's problems are defined; ``--reactive-targets``
+for vo-steered ones). Writes ``OUT/ablation.json`` and ``OUT/ablation.md`` (atomic)::
+
+    nice python benchmarks/colreg_reward_ablation.py --iterations 300 --seeds 0,1,2 \\
+        --out usvsim-results/colreg-ablation
+    python benchmarks/colreg_reward_ablation.py --score-only --out usvsim-results/colreg-ablation
+    python benchmarks/colreg_reward_ablation.py --iterations 3 --variants all,none \\
+        --val-episodes 1 --test-episodes 1 --sets imazu-01,imazu-02 --out /tmp/abl  # a smoke run
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from learning.experiments.setups import get_setup
+from learning.experiments.train_rl import train_rl
+from usvsim.common.fileio import atomic_write_text
+from usvsim.common.splits import selection_mode
+from usvsim.evaluation.colreg_suite import run_colreg, select_colreg_sets
+from usvsim.evaluation.stats import proportion
+from usvsim.helm.registry import load_checkpoint_helmsman
+from usvsim.task.colreg_reward import COLREG_TERMS
+
+SETUP = "rl-gaussian-radar-colreg"
+VARIANTS = ("all", "none", *(f"no-{t}" for t in COLREG_TERMS))
+
+
+def variant_setup(variant: str, base: str = SETUP) -> Any:
+    """The setup a variant trains: ``base`` with the COLREG terms of ``variant`` on."""
+    setup = get_setup(base)
+    if variant == "all":
+        return setup.replace(colreg_reward="all")
+    if variant == "none":
+        return setup.replace(colreg_reward="")
+    term = variant.removeprefix("no-")
+    if not variant.startswith("no-") or term not in COLREG_TERMS:
+        raise SystemExit(f"unknown variant {variant!r}; choose from {', '.join(VARIANTS)}")
+    return setup.replace(colreg_reward=",".join(t for t in COLREG_TERMS if t != term))
+
+
+def pooled(result: Any) -> dict[str, Any]:
+    """Success and compliance of the one helmsman of a suite run, pooled over its sets (Wilson
+    95 % intervals), and its collisions."""
+    rows = result.rows
+    s = proportion(sum(r.success.successes for r in rows), sum(r.success.n for r in rows))
+    enc = sum(r.compliance.n for r in rows)
+    c = proportion(sum(r.compliance.successes for r in rows), enc) if enc else None
+    return {
+        "episodes": s.n,
+        "success_rate": s.rate,
+        "success_ci95": [s.lower, s.upper],
+        "encounters": enc,
+        "compliance_rate": None if c is None else c.rate,
+        "compliance_ci95": None if c is None else [c.lower, c.upper],
+        "collisions": sum(r.collisions for r in rows),
+        "per_set": [r.flat() for r in rows],
+    }
+
+
+def score(path: Path, args: argparse.Namespace, split: str, n: int) -> dict[str, Any]:
+    """A checkpoint on the COLREG sets of ``args`` (``n`` episodes per set, ``split``)."""
+    sets = select_colreg_sets([s for s in args.sets.split(",") if s])
+    factory = {path.stem: partial(load_checkpoint_helmsman, str(path))}
+    result = run_colreg(factory, sets, n, split=split,  # type: ignore[arg-type]
+                        reactive_targets=args.reactive_targets, progress=False)  # fmt: skip
+    return pooled(result)
+
+
+def _value(p: dict[str, Any]) -> float:
+    """The validation score that chooses: success rate × compliance rate (0 without)."""
+    return float(p["success_rate"]) * float(p["compliance_rate"] or 0.0)
+
+
+def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
+    """Train (unless ``--score-only``), choose on validation, report on test."""
+    out = Path(args.out) / variant / f"seed{seed}"
+    setup = variant_setup(variant, args.setup)
+    wall = None
+    if not args.score_only:
+        t0 = time.perf_counter()
+        train_rl(setup, out, seed=seed, iterations=args.iterations, stop_after=0,
+                 validate_every=args.validate_every, time_budget_s=args.time_budget_s,
+                 command=f"benchmarks/colreg_reward_ablation.py {variant} seed {seed}")  # fmt: skip
+        wall = time.perf_counter() - t0
+    files = [p for p in (out / "best.pt", out / "latest.pt") if p.is_file()]
+    if not files:
+        raise SystemExit(f"{out}: no best.pt or latest.pt (train first, without --score-only)")
+    with selection_mode("colreg_reward_ablation"):  # validation chooses: no test episode here
+        val = {p.name: score(p, args, "validation", args.val_episodes) for p in files}
+    chosen = max(files, key=lambda p: _value(val[p.name]))
+    test = score(chosen, args, "test", args.test_episodes)
+    return {"variant": variant, "seed": seed, "colreg_reward": setup.colreg_reward,
+            "train_wall_s": wall, "chosen": chosen.name, "validation": val,
+            "test": test}  # fmt: skip
+
+
+def _fmt(rate: float | None, ci: list[float] | None) -> str:
+    if rate is None or ci is None:
+        return "–"
+    return f"{100 * rate:.0f} % [{100 * ci[0]:.0f}, {100 * ci[1]:.0f}]"
+
+
+def markdown(runs: list[dict[str, Any]], args: argparse.Namespace) -> str:
+    """The ablation table: one row per variant and seed, test split figures."""
+    lines = [
+        f"COLREG reward ablation: {args.setup}, {args.iterations} iterations per run, "
+        f"test split {args.test_episodes} episodes per set (chosen on validation, "
+        f"{args.val_episodes} per set)",
+        "",
+        "| variant | seed | terms on | file | success | compliance | collisions | train s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in runs:
+        t = r["test"]
+        wall = "–" if r["train_wall_s"] is None else f"{r['train_wall_s']:.0f}"
+        lines.append(
+            f"| {r['variant']} | {r['seed']} | {r['colreg_reward'] or '(none)'} | {r['chosen']} "
+            f"| {_fmt(t['success_rate'], t['success_ci95'])} "
+            f"| {_fmt(t['compliance_rate'], t['compliance_ci95'])} | {t['collisions']} | {wall} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def parse(argv: list[str] | None = None) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--setup", default=SETUP, help="the RL setup the variants change")
+    ap.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated")
+    ap.add_argument("--seeds", default="0", help="comma-separated training seeds")
+    ap.add_argument("--iterations", type=int, default=300, help="per run, no early stop")
+    ap.add_argument("--validate-every", type=int, default=0, help="0: the setup's")
+    ap.add_argument("--time-budget-s", type=float, default=0.0, help="per run; 0: none")
+    ap.add_argument("--sets", default="", help="COLREG sets, comma-separated; empty: all")
+    ap.add_argument("--val-episodes", type=int, default=5, help="per set, validation split")
+    ap.add_argument("--test-episodes", type=int, default=10, help="per set, test split")
+    ap.add_argument("--reactive-targets", action="store_true", help="targets steered by vo")
+    ap.add_argument("--score-only", action="store_true", help="score the runs in --out")
+    ap.add_argument("--out", default="usvsim-results/colreg-ablation")
+    args = ap.parse_args(argv)
+    for v in args.variants.split(","):
+        variant_setup(v, args.setup)  # unknown variants fail before anything runs
+    if args.iterations < 1 or args.val_episodes < 1 or args.test_episodes < 1:
+        raise SystemExit("--iterations, --val-episodes and --test-episodes must be >= 1")
+    return args
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse(argv)
+    runs = []
+    for variant in args.variants.split(","):
+        for seed in (int(s) for s in args.seeds.split(",")):
+            runs.append(run_one(variant, seed, args))
+            print(f"{variant} seed {seed}: test {runs[-1]['test']['success_rate']:.2f} success, "
+                  f"{runs[-1]['test']['compliance_rate']} compliance", flush=True)  # fmt: skip
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "ablation.json", json.dumps({"args": vars(args), "runs": runs},
+                                                        indent=1, default=str))  # fmt: skip
+    atomic_write_text(out / "ablation.md", markdown(runs, args))
+    print(markdown(runs, args))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,83 @@
+"""What the COLREG reward terms (issue 41, :mod:`usvsim.task.colreg_reward`) cost per decision,
+against the open-water env's step in the same run.
+
+Two :class:`usvsim.task.openwater_env.OpenWaterVectorEnv` of ``--n`` boats on the training
+family of ``rl-gaussian-radar-colreg`` (the open-water family with half COLREG encounters,
+:func:`usvsim.task.colreg_family.colreg_training_family`), the same seed and actions, one with
+the COLREG reward and one without, stepped in alternating blocks; reported: CPU time
+(``time.process_time``) per step of each, the reward terms' own time (inside the env with the
+reward) and their share of its step, with the machine's load (``os.getloadavg``)::
+
+    nice python benchmarks/colreg_reward_cost.py --n 256 --steps 100 --observation radar+goal
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from typing import Any
+
+import numpy as np
+
+from usvsim.task.colreg_family import colreg_training_family
+from usvsim.task.colreg_reward import ColregRewardWeights
+from usvsim.task.openwater_env import OpenWaterVectorEnv
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--n", type=int, default=256, help="boats")
+    ap.add_argument("--steps", type=int, default=100, help="timed steps per env")
+    ap.add_argument("--block", type=int, default=10, help="steps per alternating block")
+    ap.add_argument("--observation", default="radar+goal")
+    args = ap.parse_args()
+    family = colreg_training_family()
+    envs = {
+        "off": OpenWaterVectorEnv(args.n, observation=args.observation, family=family),
+        "on": OpenWaterVectorEnv(
+            args.n, observation=args.observation, family=family, colreg_reward=ColregRewardWeights()
+        ),
+    }
+    terms_s = [0.0]
+    on: Any = envs["on"]
+    inner = on.colreg.from_batch
+
+    def timed(*a: Any) -> Any:
+        t = time.process_time()
+        out = inner(*a)
+        terms_s[0] += time.process_time() - t
+        return out
+
+    on.colreg.from_batch = timed
+    rngs = {k: np.random.default_rng(1) for k in envs}
+    for env in envs.values():
+        env.reset(seed=0)
+    cpu = dict.fromkeys(envs, 0.0)
+    load0 = os.getloadavg()[0]
+    for block in range(-1, args.steps // args.block):  # block -1: warm-up, not timed
+        for key, env in envs.items():
+            if block == 0 and key == "on":
+                terms_s[0] = 0.0
+            t = time.process_time()
+            for _ in range(args.block):
+                env.step(rngs[key].uniform(-1, 1, (args.n, 1)))
+            if block >= 0:
+                cpu[key] += time.process_time() - t
+    steps = args.block * (args.steps // args.block)
+    out = {
+        "n": args.n,
+        "observation": args.observation,
+        "steps": steps,
+        "step_off_ms": 1e3 * cpu["off"] / steps,
+        "step_on_ms": 1e3 * cpu["on"] / steps,
+        "terms_ms": 1e3 * terms_s[0] / steps,
+        "terms_share_of_step": terms_s[0] / cpu["on"],
+        "load_1min": [load0, os.getloadavg()[0]],
+    }
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()

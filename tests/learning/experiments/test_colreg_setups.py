@@ -1,0 +1,59 @@
+"""The RL setups in traffic with the COLREG reward (issue 41, learning.experiments.setups)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from learning.experiments.setups import RLSetup, get_setup, setup_from_params, setup_params
+from usvsim.task.colreg_reward import COLREG_TERMS, ColregRewardWeights
+
+NAMES = (
+    "rl-gaussian-radar-colreg",
+    "rl-gaussian-radar-colreg-noreward",
+    "rl-gaussian-radar-colreg-ft",
+    "rl-gaussian-scene-colreg",
+)
+
+
+def test_the_colreg_setup_builds_its_env_with_the_colreg_reward_on() -> None:
+    setup = get_setup("rl-gaussian-radar-colreg")
+    env = setup.make_vector_env(4)
+    assert env.colreg is not None and env.colreg.weights == ColregRewardWeights()
+    assert {"colreg-imazu", "colreg-trafficgen"} <= set(env.family.names)
+    colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in env.family.names]
+    np.testing.assert_allclose(env.family.probabilities[colreg].sum(), 0.5)
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(np.zeros((4, 1)))
+    assert {f"reward_colreg_{t}" for t in COLREG_TERMS} <= set(info)
+    assert np.all(np.isfinite(reward))
+
+
+def test_the_ablation_baseline_has_the_same_family_and_budget_without_the_reward() -> None:
+    on, off = get_setup(NAMES[0]), get_setup(NAMES[1])
+    assert off.colreg_weights is None and off.make_vector_env(2).colreg is None
+    assert off.training_family == on.training_family
+    assert off.algorithm_config == on.algorithm_config
+    assert get_setup(NAMES[2]).init_policy == "rl-gaussian-radar-ow"
+    assert get_setup(NAMES[3]).observation == "scene"
+
+
+def test_colreg_reward_names_the_terms_on() -> None:
+    setup = get_setup(NAMES[0]).replace(colreg_reward="cpa, starboard")
+    w, full = setup.colreg_weights, ColregRewardWeights()
+    assert w is not None
+    assert (w.cpa, w.starboard) == (full.cpa, full.starboard)
+    assert all(getattr(w, t) == 0.0 for t in COLREG_TERMS if t not in ("cpa", "starboard"))
+    with pytest.raises(ValueError, match="unknown term 'speed'"):
+        get_setup(NAMES[0]).replace(colreg_reward="speed")
+    with pytest.raises(ValueError, match="task='open-water'"):
+        RLSetup("x", "positional", "gaussian", colreg_reward="all")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_colreg_setups_round_trip_through_a_checkpoint(name: str) -> None:
+    setup = get_setup(name)
+    back = setup_from_params(get_setup("rl-gaussian-radar-ow"), setup_params(setup))
+    assert back == dataclasses.replace(setup)
