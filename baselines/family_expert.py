@@ -25,6 +25,9 @@ hand                     an Ornstein-Uhlenbeck wobble on the heading to steer, s
                          :attr:`ExpertParams.max_turn_rate_radps` (the study expert's hand)
 =======================  =====================================================================
 
+The judgement is a part of its own (:class:`Judgement`): :class:`VOJudgement` is the family
+expert's; :mod:`baselines.sbmpc_expert` puts ``sb-mpc``'s in its place, with the same eyes and hand.
+
 :func:`run_family_expert` drives N family episodes in one simulator batch
 (:class:`usvsim.task.openwater_batch.OpenWaterBatch` with the heading reference updated every
 ``tick_s`` instead of every 2 s: plant, autopilot, navigation filter, currents and sensor faults
@@ -38,6 +41,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,6 +58,8 @@ __all__ = [
     "FamilyExpertParams",
     "FamilyExpertRun",
     "FamilyExpertTraits",
+    "Judgement",
+    "VOJudgement",
     "draw_family_traits",
     "run_family_expert",
 ]
@@ -137,22 +143,57 @@ class _Eyes:
         return seen, before, lag
 
 
+class Judgement(Protocol):
+    """The helmsman's choice of course over ground, from what it perceives (module table)."""
+
+    def reset(self, n_boats: int) -> None:
+        """Forget every earlier choice; ``n_boats`` runs follow."""
+
+    def course(self, observation: FloatArray, caution_m: FloatArray, tick: int) -> FloatArray:
+        """Course over ground θ* (N,) rad relative to the heading, from the perceived ``scene``
+        observations (N, 4 + 6 k) of tick ``tick`` (every ``ExpertParams.tick_s``) and each
+        run's ``caution_m`` (N,) m."""
+        ...
+
+
+@dataclass
+class VOJudgement:
+    """The family expert's judgement: ``vo``'s course every tick, with its hysteresis (the
+    previous choice kept relative to the goal's bearing while avoiding)."""
+
+    config: VOConfig
+
+    def reset(self, n_boats: int) -> None:
+        self._from_goal = np.full(n_boats, np.nan)  # rad, last choice − goal bearing (NaN: none)
+
+    def course(self, observation: FloatArray, caution_m: FloatArray, tick: int) -> FloatArray:
+        goal = observation[:, 1]
+        previous = np.where(np.isnan(self._from_goal), np.nan, ssa(self._from_goal + goal))
+        course, avoiding = vo_course(self.config, observation, previous, caution_m)
+        self._from_goal = np.where(avoiding, ssa(course - goal), np.nan)
+        return course
+
+
 def run_family_expert(
     episodes: Sequence[OpenWaterEpisode],
     *,
     seed: int,
     params: FamilyExpertParams | None = None,
+    judgement: Judgement | None = None,
 ) -> list[FamilyExpertRun]:
     """Run the family expert on every episode in one batch (module docstring).
 
-    The traits, perception noise and wobble come from ``numpy.random.default_rng(seed)``; each
+    ``judgement`` chooses the course (default: :class:`VOJudgement` with ``params.vo``). The
+    traits, perception noise and wobble come from ``numpy.random.default_rng(seed)``; each
     episode's sensor noise and disturbances from the episode itself. Returns one
     :class:`FamilyExpertRun` per episode, cut at the end of its episode.
     """
     p = params or FamilyExpertParams()
     h = p.human
+    judge = judgement if judgement is not None else VOJudgement(p.vo)
     rng = np.random.default_rng(seed)
     n = len(episodes)
+    judge.reset(n)
     fine = Scenario(decision_period_s=h.tick_s, max_heading_change_rad=h.max_change_per_tick_rad)
     sim = OpenWaterBatch(n, observation="scene", action="gaussian", scenario=fine)
     sim.reset(None, list(episodes))
@@ -161,7 +202,6 @@ def run_family_expert(
     wobble = rng.normal(0.0, h.wobble_sigma_rad, n)
     a = math.exp(-h.tick_s / h.wobble_tau_s)
     hand = h.max_turn_rate_radps * h.tick_s  # rad per tick, the most the hand swings
-    prev_from_goal = np.full(n, np.nan)
     cmd = sim.inner.state.eta[:, 2].copy()
     steps = fine.steps_per_decision
     ticks = math.ceil(max(e.time_limit_s for e in episodes) / h.tick_s - 1e-9)
@@ -181,9 +221,7 @@ def run_family_expert(
         slots = obs[:, 4:].reshape(n, -1, 6)
         obs[:, 1] += rng.normal(0.0, h.bearing_noise_rad, n)
         slots[..., 1] += rng.normal(0.0, h.bearing_noise_rad, slots.shape[:2]) * slots[..., 5]
-        previous = np.where(np.isnan(prev_from_goal), np.nan, ssa(prev_from_goal + obs[:, 1]))
-        course, avoiding = vo_course(p.vo, obs, previous, traits.caution_m)
-        prev_from_goal = np.where(avoiding, ssa(course - obs[:, 1]), np.nan)
+        course = judge.course(obs, traits.caution_m, k)
         crab = np.where(np.hypot(obs[:, 2], obs[:, 3]) > 0.3, np.arctan2(obs[:, 3], obs[:, 2]), 0.0)
         wobble = a * wobble + math.sqrt(1 - a * a) * rng.normal(0.0, h.wobble_sigma_rad, n)
         target = seen[:, 2] + ssa(course - crab) + wobble
