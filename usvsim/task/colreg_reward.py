@@ -21,8 +21,10 @@ last second of the period, the terms (each summed over vessels; weights
     head_on_side     −w · clip(y_cpa / r_pref, 0, 1)    head-on, open: the target's predicted
                      position at the CPA to starboard of the own course (y_cpa > 0, m) is a
                      starboard-to-starboard passing (rule 14(a): pass port to port)
-    head_on_port     −w · clip(−δ / δ_min, 0, 1)        head-on, open: altered to port (rule 14(a):
-                     each alters to starboard; δ_min = starboard_min_rad, 10°)
+    head_on_port     −w · clip(−δ / δ_min, 0, 1)        head-on, open, before a starboard
+                     alteration of δ_min: altered to port (rule 14(a): each alters to
+                     starboard; δ_min = starboard_min_rad, 10°; as the scorer, the first
+                     alteration decides, so resuming the course after it is not charged)
     crossing_ahead   −w   (once)                        give-way (crossing or overtaking): the
                      own ship crosses the target's course line ahead of its bow, within
                      ahead_range_m (rule 15: avoid crossing ahead; 13 for overtaking)
@@ -150,6 +152,7 @@ class ColregReward:
         self.prev_y: FloatArray = np.zeros((n_boats, 0))  # m, own side of the target's track
         self.prev_dev: FloatArray = np.zeros((n_boats, 0))  # rad, δ at the previous decision
         self.age_s: FloatArray = np.zeros((n_boats, 0))  # s, since the encounter began
+        self.max_dev: FloatArray = np.zeros((n_boats, 0))  # rad, largest δ so far (starboard)
 
     def _resize(self, k: int) -> None:
         """Grow to ``k`` vessel slots (new slots empty: role NONE)."""
@@ -157,6 +160,7 @@ class ColregReward:
         self.role = np.pad(self.role, pad)
         self.chi0, self.prev_y = np.pad(self.chi0, pad), np.pad(self.prev_y, pad)
         self.prev_dev, self.age_s = np.pad(self.prev_dev, pad), np.pad(self.age_s, pad)
+        self.max_dev = np.pad(self.max_dev, pad)
 
     def reset(self, boats: NDArray[np.intp]) -> None:
         """Forget the encounters of ``boats`` (they start new episodes)."""
@@ -199,7 +203,9 @@ class ColregReward:
         d_cpa = vessel_ne - own_ne[:, None] + rel_v * kin.tcpa_s[..., None]
         y_cpa = -np.sin(chi) * d_cpa[..., 0] + np.cos(chi) * d_cpa[..., 1]
         side = np.where(head_on, np.clip(y_cpa / p.preferred_cpa_m, 0.0, 1.0), 0.0)
-        port = np.where(head_on, np.clip(-dev / p.starboard_min_rad, 0.0, 1.0), 0.0)
+        max_dev = np.where(new, 0.0, np.maximum(self.max_dev[:, :k], np.where(open_, dev, 0.0)))
+        first = head_on & (max_dev < p.starboard_min_rad)  # no starboard alteration yet
+        port = np.where(first, np.clip(-dev / p.starboard_min_rad, 0.0, 1.0), 0.0)
         # rules 13, 15: crossed the target's course line (its y changed sign) ahead of its bow
         flip = np.sign(kin.y_t_m) != np.sign(prev_y)
         ahead = (engaged & _AHEAD_ROLES[role] & flip & (kin.x_t_m > 0.0)
@@ -223,6 +229,7 @@ class ColregReward:
         self.prev_y[:, :k] = kin.y_t_m
         self.prev_dev[:, :k] = np.where(engaged, np.where(open_, dev, prev_dev), 0.0)
         self.age_s[:, :k] = age
+        self.max_dev[:, :k] = max_dev
         return ColregTerms(
             head_on_side=-w.head_on_side * side.sum(axis=1),
             head_on_port=-w.head_on_port * port.sum(axis=1),

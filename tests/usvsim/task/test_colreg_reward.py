@@ -80,6 +80,15 @@ def test_head_on_turn_to_port_is_charged_and_to_starboard_is_paid() -> None:
     assert stbd["head_on_port"] == 0.0 and stbd["head_on_side"] == 0.0
 
 
+def test_head_on_resuming_the_course_after_a_starboard_alteration_is_not_charged() -> None:
+    rew = ColregReward(W, 1)
+    _call(rew, (0.0, 0.0), 0.0, [(300.0, -5.0, -3.0, 0.0)])
+    _call(rew, (6.0, 0.0), 12.0, [(294.0, -5.0, -3.0, 0.0)])  # 12° to starboard first
+    back = _values(_call(rew, (12.0, 0.5), -5.0, [(288.0, -5.0, -3.0, 0.0)]))
+    assert back["head_on_port"] == 0.0
+    assert back["starboard"] == pytest.approx(-W.starboard * 12 / 30)  # the alteration given back
+
+
 def test_starboard_alteration_is_paid_once_up_to_a_readily_apparent_one() -> None:
     rew = ColregReward(W, 1)
     paid = [_values(_call(rew, (0.0, 0.0), c, [GIVE_WAY]))["starboard"] for c in (0, 20, 40, 50)]
