@@ -16,8 +16,10 @@ decisions); :meth:`NavigatedPlant.step` takes and updates a
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ParamSpec, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -43,6 +45,22 @@ from usvsim.vessel.weather_plant import NWI, NWS, WeatherPlant, sensed_offsets_e
 __all__ = ["PACKED", "NavigatedPlant", "PackedLayout"]
 
 FloatArray = NDArray[np.float64]
+P = ParamSpec("P")
+R = TypeVar("R")
+
+
+def _arguments_of(source: Callable[P, object]) -> Callable[[Callable[..., R]], Callable[P, R]]:
+    """Give a method that passes ``*args, **kwargs`` on to ``source`` the parameters of
+    ``source`` for type checkers and ``help()``: they are written once, on ``source``."""
+
+    def use(method: Callable[..., R]) -> Callable[P, R]:
+        returns = inspect.signature(method).return_annotation
+        method.__signature__ = inspect.signature(source).replace(  # type: ignore[attr-defined]
+            return_annotation=returns
+        )
+        return method
+
+    return use
 
 
 @dataclass(frozen=True)
@@ -217,7 +235,7 @@ class NavigatedPlant:
             )
         return GatheredSteps(normals, index, factor)
 
-    def run(
+    def _inputs(
         self,
         s0: FloatArray,
         psi_ref_rad: FloatArray,
@@ -229,41 +247,9 @@ class NavigatedPlant:
         gnss_available: NDArray[np.bool_] | None = None,
         weather_inputs: FloatArray | None = None,
         weather_normals: FloatArray | None = None,
-    ) -> FloatArray:
-        """Advance packed states ``s0`` (N, 28) = [x, c, n] ``n_steps`` plant steps.
-
-        With weather (:attr:`weather`): ``s0`` is (N, :attr:`layout`.size) = [x, c, m, n],
-        ``weather_inputs`` (N, 33) each boat's per-episode weather
-        (:attr:`usvsim.vessel.weather_plant.WeatherPlantState.inputs`) and ``weather_normals``
-        (N, 3 n_steps) its next standard normals (gust, wave motion ×2 per step).
-
-        ``psi_ref_rad`` (N,) rad and ``speed_ref_mps`` (m/s, all boats or (N,)) are held over
-        the steps; ``normals`` (N, :meth:`draws_needed`) are each boat's next standard normals,
-        in :meth:`Navigator.step` order. ``current`` (N, 2): [speed m/s, direction rad] per boat
-        (default: the plant's, for all); ``gnss_available`` (N, n_steps) bool: False silences a
-        boat's GNSS fix at that step (a dropout; default: every scheduled fix arrives). Returns
-        the packed states after each step, (N, T, 28).
-        """
-        args = self._inputs(
-            s0, psi_ref_rad, speed_ref_mps, n_steps, first_step_index, normals, current,
-            gnss_available, weather_inputs, weather_normals,
-        )  # fmt: skip
-        return self._stepper.run(*args)
-
-    def _inputs(
-        self,
-        s0: FloatArray,
-        psi_ref_rad: FloatArray,
-        speed_ref_mps: float | FloatArray,
-        n_steps: int,
-        first_step_index: int,
-        normals: FloatArray,
-        current: FloatArray | None,
-        gnss_available: NDArray[np.bool_] | None,
-        weather_inputs: FloatArray | None,
-        weather_normals: FloatArray | None,
     ) -> tuple[FloatArray, FloatArray, FloatArray, int, GatheredSteps]:
-        """:meth:`run`'s arguments checked, as the stepper's (s0, w, gains, n_steps, noise)."""
+        """:meth:`run`'s arguments (documented there) checked, as the stepper's (s0, w, gains,
+        n_steps, noise)."""
         psi_ref = np.asarray(psi_ref_rad, dtype=float)
         if not (np.all(np.isfinite(psi_ref)) and np.all(np.isfinite(speed_ref_mps))):
             raise ValueError("psi_ref_rad / speed_ref_mps contain NaN or inf")
@@ -286,26 +272,32 @@ class NavigatedPlant:
             raise ValueError("weather_inputs / weather_normals given to a calm NavigatedPlant")
         return s0, w, self.plant.gains, n_steps, noise
 
-    def run_recorded(
-        self,
-        s0: FloatArray,
-        psi_ref_rad: FloatArray,
-        speed_ref_mps: float | FloatArray,
-        n_steps: int,
-        first_step_index: int,
-        normals: FloatArray,
-        current: FloatArray | None = None,
-        gnss_available: NDArray[np.bool_] | None = None,
-        weather_inputs: FloatArray | None = None,
-        weather_normals: FloatArray | None = None,
-    ) -> tuple[FloatArray, FloatArray]:
-        """As :meth:`run` (the same numbers), writing only ``[x, c]`` per step: the closed-loop
-        trajectory (N, T, 13) and the last packed state (N, :attr:`layout`.size)."""
-        args = self._inputs(
-            s0, psi_ref_rad, speed_ref_mps, n_steps, first_step_index, normals, current,
-            gnss_available, weather_inputs, weather_normals,
-        )  # fmt: skip
-        return self._stepper.run_recorded(*args, NS)
+    @_arguments_of(_inputs)
+    def run(self, *args: Any, **kwargs: Any) -> FloatArray:
+        """Advance packed states ``s0`` (N, 28) = [x, c, n] ``n_steps`` plant steps.
+
+        Arguments ``(s0, psi_ref_rad, speed_ref_mps, n_steps, first_step_index, normals,
+        current=None, gnss_available=None, weather_inputs=None, weather_normals=None)``.
+        With weather (:attr:`weather`): ``s0`` is (N, :attr:`layout`.size) = [x, c, m, n],
+        ``weather_inputs`` (N, 33) each boat's per-episode weather
+        (:attr:`usvsim.vessel.weather_plant.WeatherPlantState.inputs`) and ``weather_normals``
+        (N, 3 n_steps) its next standard normals (gust, wave motion ×2 per step).
+
+        ``psi_ref_rad`` (N,) rad and ``speed_ref_mps`` (m/s, all boats or (N,)) are held over
+        the steps; ``normals`` (N, :meth:`draws_needed`) are each boat's next standard normals,
+        in :meth:`Navigator.step` order. ``current`` (N, 2): [speed m/s, direction rad] per boat
+        (default: the plant's, for all); ``gnss_available`` (N, n_steps) bool: False silences a
+        boat's GNSS fix at that step (a dropout; default: every scheduled fix arrives). Returns
+        the packed states after each step, (N, T, 28).
+        """
+        return self._stepper.run(*self._inputs(*args, **kwargs))
+
+    @_arguments_of(_inputs)
+    def run_recorded(self, *args: Any, **kwargs: Any) -> tuple[FloatArray, FloatArray]:
+        """As :meth:`run` (the same arguments, the same numbers), writing only ``[x, c]`` per
+        step: the closed-loop trajectory (N, T, 13) and the last packed state
+        (N, :attr:`layout`.size)."""
+        return self._stepper.run_recorded(*self._inputs(*args, **kwargs), NS)
 
     def step(
         self,

@@ -335,7 +335,7 @@ class BatchStepper:
         """Trajectory (N, n_sub, ns) from states s0 (N, ns), inputs (N, na), shared (ng,) and,
         for a four-input ``fn``, per-step inputs (N, n_sub, nps), their :class:`GatheredSteps`
         or :class:`Pcg64Uniforms`."""
-        return self._run(s0, per_boat, shared, n_sub, per_step, self.ns, final=False)[0]
+        return self.run_recorded(s0, per_boat, shared, n_sub, per_step, self.ns, final=False)[0]
 
     def run_recorded(
         self,
@@ -345,23 +345,13 @@ class BatchStepper:
         n_sub: int,
         per_step: PerStep | None,
         record: int,
+        *,
+        final: bool = True,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """As :meth:`run`, recording only the first ``record`` states of each sub-step: the
         trajectory (N, n_sub, record) and the final state (N, ns) (the same numbers as
-        :meth:`run`'s, fewer bytes written)."""
-        return self._run(s0, per_boat, shared, n_sub, per_step, record, final=True)
-
-    def _run(
-        self,
-        s0: NDArray[np.float64],
-        per_boat: NDArray[np.float64],
-        shared: NDArray[np.float64],
-        n_sub: int,
-        per_step: PerStep | None,
-        record: int,
-        final: bool,
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """:meth:`run_recorded`; the final state is an empty array unless ``final``."""
+        :meth:`run`'s, fewer bytes written). ``final=False`` (:meth:`run`'s call): the
+        compiled kernel writes no final state and returns an empty (0, ns) array for it."""
         s0 = np.ascontiguousarray(s0, dtype=np.float64)
         per_boat = np.ascontiguousarray(per_boat, dtype=np.float64)
         shared = np.ascontiguousarray(shared, dtype=np.float64)
