@@ -45,6 +45,7 @@ import os
 import platform
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -279,6 +280,8 @@ def stage_bench(
 ENV_BOATS, ENV_DECISIONS = 16, 40
 # float64 bars of the env against torch-cpu (the CPU suite's, tests/usvsim/task/test_torch_env.py)
 ENV_TOL_M, ENV_TOL_RAD, ENV_TOL_REWARD = 1e-6, 1e-7, 1e-8
+ENV_BARS = {"max_range_diff_m": ENV_TOL_M, "max_bearing_diff_rad": ENV_TOL_RAD,
+            "max_reward_diff": ENV_TOL_REWARD}  # fmt: skip
 
 
 def env_run(device: str, dtype: str) -> dict[str, np.ndarray]:
@@ -333,18 +336,31 @@ def stage_env_equality(device: str, dtypes: list[str]) -> None:
             "flag_agreement": float(1.0 - differs.mean()),
             "episodes_ended": int((ref["terminated"] | ref["truncated"]).sum()),
         }
-        within = None
-        if dtype == "float64":
-            within = (
-                flags_equal
-                and fields["max_range_diff_m"] <= ENV_TOL_M
-                and fields["max_bearing_diff_rad"] <= ENV_TOL_RAD
-                and fields["max_reward_diff"] <= ENV_TOL_REWARD
-            )
-        record(
-            "env_equality", device=device, dtype=dtype, boats=ENV_BOATS, decisions=ENV_DECISIONS,
-            seconds=round(time.perf_counter() - t0, 2), within_tolerance=within, **fields,
-        )  # fmt: skip
+        boats_decisions = (ENV_BOATS, ENV_DECISIONS)
+        record_equality("env_equality", device, dtype, boats_decisions, t0, fields, ENV_BARS)
+
+
+def record_equality(
+    stage: str,
+    device: str,
+    dtype: str,
+    boats_decisions: tuple[int, int],
+    t0: float,
+    fields: dict[str, Any],
+    bars: dict[str, float],
+) -> None:
+    """One equality line of a torch env against torch-cpu float64: ``fields`` (the largest
+    differences and ``flags_equal``), the boats and decisions, the seconds since ``t0`` and, in
+    float64, ``within_tolerance`` (the flags equal and each of ``bars``' fields at most its bar;
+    None for float32, whose tolerance is stated elsewhere)."""
+    within = None
+    if dtype == "float64":
+        within = bool(fields["flags_equal"] and all(fields[k] <= bar for k, bar in bars.items()))
+    boats, decisions = boats_decisions
+    record(
+        stage, device=device, dtype=dtype, boats=boats, decisions=decisions,
+        seconds=round(time.perf_counter() - t0, 2), within_tolerance=within, **fields,
+    )  # fmt: skip
 
 
 def stage_env_bench(
@@ -356,47 +372,71 @@ def stage_env_bench(
     backend: str,
     observation: str = "positional",
 ) -> None:
+    from usvsim.task.torch_env import TorchPoleAvoidanceEnv
+    from usvsim.task.torch_env_speed import measure_env_steps
+
+    def make_env(n: int) -> Any:
+        return TorchPoleAvoidanceEnv(
+            n, device=device, dtype=dtype, observation=observation,
+            compile=mode == "compile", compile_backend=backend,
+        )  # fmt: skip
+
+    fields = dict(device=device, dtype=dtype, mode=mode, observation=observation,
+                  backend=backend if mode == "compile" else None)  # fmt: skip
+    bench_sizes("env_bench", sizes, make_env, lambda env: measure_env_steps(env, seconds), fields)
+
+
+def bench_sizes(
+    stage: str,
+    sizes: list[int],
+    make_env: Callable[[int], Any],
+    measure: Callable[[Any], float],
+    fields: dict[str, Any],
+    names: tuple[str, str] = ("first_step_s", "env_steps_per_s"),
+    peak_memory: bool = False,
+) -> None:
+    """A torch env's bench stage, one ``record(stage, **fields, n=…)`` line a size of ``sizes``
+    boats: the seconds to build it (``make_env(n)``), reset it and take its first step of zero
+    actions (torch.compile compiles then; ``names[0]``), at the first size whether a step waits
+    for the device, ``measure(env)`` (steps/s; ``names[1]``) and with ``peak_memory`` the GPU's
+    peak (GiB). A size that runs out of GPU memory records the error and ends the stage."""
     import torch
 
-    from usvsim.task.torch_env import TorchPoleAvoidanceEnv, measure_env_steps
-
+    cuda = fields["device"].startswith("cuda")
     for n in sizes:
         try:
             t0 = time.perf_counter()
-            env = TorchPoleAvoidanceEnv(
-                n, device=device, dtype=dtype, observation=observation,
-                compile=mode == "compile", compile_backend=backend,
-            )  # fmt: skip
+            env = make_env(n)
             env.reset(seed=0)
-            env.step(torch.zeros((n, 1), device=env.device))  # compiles on the first call
+            zeros = torch.zeros((n, 1), device=env.device, dtype=env.dtype)
+            env.step(zeros)  # compiles on the first call
             _sync(env.device)
             first_s = time.perf_counter() - t0
-            syncs = _step_syncs(env, n) if n == sizes[0] else None
-            rate = measure_env_steps(env, seconds)
+            syncs = step_syncs(env, zeros) if n == sizes[0] else None
+            rate = measure(env)
         except torch.cuda.OutOfMemoryError as err:
-            record(
-                "env_bench", device=device, dtype=dtype, mode=mode, observation=observation,
-                n=n, error=str(err)[:200],
-            )  # fmt: skip
+            record(stage, **fields, n=n, error=str(err)[:200])
             break
-        record(
-            "env_bench", device=device, dtype=dtype, mode=mode, observation=observation,
-            backend=backend if mode == "compile" else None, n=n,
-            first_step_s=round(first_s, 2), env_steps_per_s=round(rate), step_syncs=syncs,
-        )  # fmt: skip
+        peak = {}
+        if peak_memory:
+            gib = torch.cuda.max_memory_allocated() / 2**30 if env.device.type == "cuda" else None
+            peak["peak_gib"] = None if gib is None else round(gib, 2)
+        rates = {names[0]: round(first_s, 2), names[1]: round(rate)}
+        record(stage, **fields, n=n, **rates, step_syncs=syncs, **peak)
         del env
-        if device.startswith("cuda"):
+        if cuda:
             torch.cuda.empty_cache()
+            if peak_memory:
+                torch.cuda.reset_peak_memory_stats()
 
 
-def _step_syncs(env: Any, n: int) -> str | None:
-    """On a GPU: whether a step waits for the device (torch's sync debug mode raises on every
-    synchronising call): "none" or the error's first line; None elsewhere."""
+def step_syncs(env: Any, actions: Any) -> str | None:
+    """On a GPU: whether a step of ``actions`` waits for the device (torch's sync debug mode
+    raises on every synchronising call): "none" or the error's first line; None elsewhere."""
     import torch
 
     if env.device.type != "cuda":
         return None
-    actions = torch.zeros((n, 1), device=env.device)
     torch.cuda.set_sync_debug_mode("error")
     try:
         for _ in range(3):
@@ -557,33 +597,37 @@ def _env_line(grouped: dict[str, list[dict[str, Any]]]) -> str:
     )
 
 
+def add_equality_stage(sub: Any, name: str) -> None:
+    """An equality stage's command: ``--device``, ``--dtypes`` (comma-separated)."""
+    eq = sub.add_parser(name)
+    eq.add_argument("--device", default="cuda")
+    eq.add_argument("--dtypes", default="float64,float32")
+
+
+def add_bench_stage(sub: Any, name: str, sizes: str, observations: list[str] | None = None) -> None:
+    """A bench stage's command: ``--device``, ``--dtype``, ``--mode``, ``--sizes`` (default
+    ``sizes``), ``--seconds``, ``--backend`` (torch.compile's) and, with ``observations``,
+    ``--observation`` (default the first)."""
+    bench = sub.add_parser(name)
+    bench.add_argument("--device", default="cuda")
+    bench.add_argument("--dtype", default="float32", choices=["float32", "float64"])
+    bench.add_argument("--mode", default="eager", choices=["eager", "compile"])
+    bench.add_argument("--sizes", default=sizes)
+    bench.add_argument("--seconds", type=float, default=1.0)
+    bench.add_argument("--backend", default="inductor")  # torch.compile backend
+    if observations:
+        bench.add_argument("--observation", default=observations[0], choices=observations)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="stage", required=True)
     sub.add_parser("env")
-    eq = sub.add_parser("equality")
-    eq.add_argument("--device", default="cuda")
-    eq.add_argument("--dtypes", default="float64,float32")
-    bench = sub.add_parser("bench")
-    bench.add_argument("--device", default="cuda")
-    bench.add_argument("--dtype", default="float32", choices=["float32", "float64"])
-    bench.add_argument("--mode", default="eager", choices=["eager", "compile"])
-    bench.add_argument("--sizes", default="1000,10000,100000,1000000,10000000")
-    bench.add_argument("--seconds", type=float, default=1.0)
-    bench.add_argument("--backend", default="inductor")  # torch.compile backend
-    env_eq = sub.add_parser("env-equality")
-    env_eq.add_argument("--device", default="cuda")
-    env_eq.add_argument("--dtypes", default="float64,float32")
-    env_bench = sub.add_parser("env-bench")
-    env_bench.add_argument("--device", default="cuda")
-    env_bench.add_argument("--dtype", default="float32", choices=["float32", "float64"])
-    env_bench.add_argument("--mode", default="eager", choices=["eager", "compile"])
-    env_bench.add_argument("--sizes", default="1000,10000,100000,1000000")
-    env_bench.add_argument("--seconds", type=float, default=1.0)
-    env_bench.add_argument("--backend", default="inductor")
-    env_bench.add_argument(
-        "--observation", default="positional", choices=["positional", "radar", "radar+goal"]
-    )
+    add_equality_stage(sub, "equality")
+    add_bench_stage(sub, "bench", "1000,10000,100000,1000000,10000000")
+    add_equality_stage(sub, "env-equality")
+    add_bench_stage(sub, "env-bench", "1000,10000,100000,1000000",
+                    ["positional", "radar", "radar+goal"])  # fmt: skip
     sub.add_parser("report")
     args = parser.parse_args()
     if args.stage == "env":

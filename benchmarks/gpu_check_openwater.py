@@ -24,8 +24,6 @@ episode is table row (8 i + k) mod 1,024 (the table cycles).
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
 import time
 from pathlib import Path
@@ -35,6 +33,15 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "benchmarks"))
+
+from gpu_check import (  # noqa: E402  (results.jsonl of the same run)
+    add_bench_stage,
+    add_equality_stage,
+    bench_sizes,
+    record,
+    record_equality,
+)
 
 TABLE = REPO / "benchmarks" / "data" / "openwater-table.npz"
 TABLE_BOATS, PER_BOAT = 128, 8
@@ -42,16 +49,8 @@ EQ_BOATS, EQ_DECISIONS = 16, 40
 # float64 on the device against torch-cpu float64: the same operations, another library's
 # last bits (cuda's sin/cos), amplified by the closed loop as between the CPU backends
 POSITION_TOL_M, HEADING_TOL_RAD, REWARD_TOL = 1e-6, 1e-8, 1e-8
-
-
-def record(stage: str, **fields: Any) -> None:
-    """Append one line to ``$OUT/results.jsonl`` (flushed at once)."""
-    out = Path(os.environ.get("OUT", "./gpu-out"))
-    out.mkdir(parents=True, exist_ok=True)
-    line = json.dumps({"stage": stage, "time": time.time(), **fields})
-    with open(out / "results.jsonl", "a") as f:
-        f.write(line + "\n")
-    print(line, flush=True)
+BARS = {"max_position_diff_m": POSITION_TOL_M, "max_heading_diff_rad": HEADING_TOL_RAD,
+        "max_reward_diff": REWARD_TOL}  # fmt: skip
 
 
 def make_table() -> None:
@@ -136,37 +135,7 @@ def stage_equality(device: str, dtypes: list[str]) -> None:
             "flags_equal": bool(same_done),
             "episodes_ended": int(ref["done"].any(axis=1).sum()),
         }
-        within = None
-        if dtype == "float64":
-            within = bool(
-                same_done
-                and fields["max_position_diff_m"] <= POSITION_TOL_M
-                and fields["max_heading_diff_rad"] <= HEADING_TOL_RAD
-                and fields["max_reward_diff"] <= REWARD_TOL
-            )
-        record(
-            "ow_equality", device=device, dtype=dtype, boats=EQ_BOATS, decisions=EQ_DECISIONS,
-            seconds=round(time.perf_counter() - t0, 2), within_tolerance=within, **fields,
-        )  # fmt: skip
-
-
-def _step_syncs(env: Any) -> str | None:
-    """On a GPU: "none" if three steps run under CUDA's sync debug mode "error", else the error."""
-    import torch
-
-    if env.device.type != "cuda":
-        return None
-    actions = torch.zeros((env.num_envs, 1), device=env.device, dtype=env.dtype)
-    torch.cuda.set_sync_debug_mode("error")
-    try:
-        for _ in range(3):
-            env.step(actions)
-        found = "none"
-    except RuntimeError as err:
-        found = str(err).splitlines()[0][:200]
-    finally:
-        torch.cuda.set_sync_debug_mode(0)
-    return found
+        record_equality("ow_equality", device, dtype, (EQ_BOATS, EQ_DECISIONS), t0, fields, BARS)
 
 
 def stage_bench(
@@ -178,40 +147,22 @@ def stage_bench(
     mode: str = "eager",
     backend: str = "inductor",
 ) -> None:
-    import torch
-
     from usvsim.task.torch_openwater import TorchOpenWaterEnv
     from usvsim.task.torch_openwater_episodes import load_table
     from usvsim.task.torch_openwater_speed import measure_openwater_steps
 
     table = load_table(TABLE)
-    for n in sizes:
-        try:
-            t0 = time.perf_counter()
-            env = TorchOpenWaterEnv(n, table=table, per_boat=PER_BOAT, device=device, dtype=dtype,
-                                    observation=observation, compile=mode == "compile",
-                                    compile_backend=backend)  # fmt: skip
-            env.reset(seed=0)
-            env.step(torch.zeros((n, 1), device=env.device, dtype=env.dtype))  # compiles here
-            if env.device.type == "cuda":
-                torch.cuda.synchronize()
-            first_s = time.perf_counter() - t0  # setup, reset and the first step
-            syncs = _step_syncs(env) if n == sizes[0] else None
-            rate = measure_openwater_steps(env, seconds)
-        except torch.cuda.OutOfMemoryError as err:
-            record("ow_bench", device=device, dtype=dtype, observation=observation, mode=mode,
-                   n=n, error=str(err)[:200])  # fmt: skip
-            break
-        peak = torch.cuda.max_memory_allocated() / 2**30 if env.device.type == "cuda" else None
-        record(
-            "ow_bench", device=device, dtype=dtype, observation=observation, mode=mode, n=n,
-            setup_s=round(first_s, 2), decision_steps_per_s=round(rate), step_syncs=syncs,
-            peak_gib=None if peak is None else round(peak, 2),
-        )  # fmt: skip
-        del env
-        if device.startswith("cuda"):
-            torch.cuda.empty_cache()
-            torch.cuda.reset_peak_memory_stats()
+
+    def make_env(n: int) -> Any:
+        return TorchOpenWaterEnv(n, table=table, per_boat=PER_BOAT, device=device, dtype=dtype,
+                                 observation=observation, compile=mode == "compile",
+                                 compile_backend=backend)  # fmt: skip
+
+    fields = dict(device=device, dtype=dtype, observation=observation, mode=mode)
+    bench_sizes(
+        "ow_bench", sizes, make_env, lambda env: measure_openwater_steps(env, seconds), fields,
+        names=("setup_s", "decision_steps_per_s"), peak_memory=True,
+    )  # fmt: skip
 
 
 def openwater_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
@@ -254,17 +205,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="stage", required=True)
     sub.add_parser("make-table")
-    eq = sub.add_parser("equality")
-    eq.add_argument("--device", default="cuda")
-    eq.add_argument("--dtypes", default="float64,float32")
-    bench = sub.add_parser("bench")
-    bench.add_argument("--device", default="cuda")
-    bench.add_argument("--dtype", default="float32", choices=["float32", "float64"])
-    bench.add_argument("--sizes", default="1000,10000,100000,1000000")
-    bench.add_argument("--seconds", type=float, default=1.0)
-    bench.add_argument("--observation", default="scene", choices=["scene", "radar+goal"])
-    bench.add_argument("--mode", default="eager", choices=["eager", "compile"])
-    bench.add_argument("--backend", default="inductor")  # torch.compile backend
+    add_equality_stage(sub, "equality")
+    add_bench_stage(sub, "bench", "1000,10000,100000,1000000", ["scene", "radar+goal"])
     args = parser.parse_args()
     if args.stage == "make-table":
         make_table()

@@ -220,7 +220,7 @@ def run_perf(args: PerfArgs) -> int:
         return _print_profile(profile_steps(max(args.seconds, 1.0)), args.json)
     result = measure(args.seconds, env=args.env, device=args.device)
     if args.env and args.device != "cpu":  # the study task's env on the torch device too
-        from usvsim.task.torch_env import torch_env_rates
+        from usvsim.task.torch_env_speed import torch_env_rates
 
         result["torch_env"] = torch_env_rates(args.device, seconds=args.seconds)
         from usvsim.task.torch_openwater_speed import torch_openwater_rates

@@ -53,15 +53,21 @@ from __future__ import annotations
 
 import functools
 import math
-import os
-import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 import torch
 
-from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_state, torch_ssa
+from usvsim.nav.torch_nav import (
+    NoiseLayout,
+    TorchNavKernel,
+    load_nav_kernel,
+    noise_layout,
+    started_nav_state,
+    torch_ssa,
+)
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
 from usvsim.task.scenario import Scenario
@@ -85,9 +91,10 @@ from usvsim.task.torch_scene import gaussian_reward_torch
 from usvsim.vessel.torch_plant import DTYPES, TorchPlant
 
 __all__ = [
+    "ClosedLoop",
     "TorchPoleAvoidanceEnv",
+    "check_options",
     "compiled_substep",
-    "measure_env_steps",
     "plant_and_filter",
     "torch_heading_change",
 ]
@@ -148,8 +155,7 @@ class TorchPoleAvoidanceEnv:
         compile: bool = False,
         compile_backend: str = "inductor",
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        check_options(num_envs, action, observation_dtype, noise)
         if observation not in TORCH_OBSERVATIONS:
             raise ValueError(
                 f"observation must be one of {TORCH_OBSERVATIONS} on torch, got {observation!r}"
@@ -158,12 +164,6 @@ class TorchPoleAvoidanceEnv:
         if self.radar.clutter_probability > 0 or self.radar.noise_amplitude > 0:
             raise ValueError("radar clutter and intensity noise are not drawn by the torch env")
         self._radar_grid: RadarGrid | None = None
-        if action not in ("gaussian", "categorical"):
-            raise ValueError(f"action must be 'gaussian' or 'categorical', got {action!r}")
-        if observation_dtype not in DTYPES:
-            raise ValueError(f"observation_dtype must be one of {list(DTYPES)}")
-        if noise not in ("device", "replay"):
-            raise ValueError(f"noise must be 'device' or 'replay', got {noise!r}")
         if noise == "replay" and episodes != "numpy":
             raise ValueError("noise='replay' replays the NumPy episodes: needs episodes='numpy'")
         self.reward = reward or GaussianReward()
@@ -173,17 +173,10 @@ class TorchPoleAvoidanceEnv:
         self.action_kind = action
         self.observation_kind = observation
         self.scenario = sc = scenario or Scenario()
-        self.plant = TorchPlant("default", dt_s=sc.dt_s, device=device, dtype=dtype)
+        loop = ClosedLoop.build(sc, nav, device, dtype)
+        self.plant, self.nav, self.T, self.layout = loop.plant, loop.nav, loop.T, loop.layout
         self.device, self.dtype = self.plant.device, self.plant.dtype
         self.observation_dtype = DTYPES[observation_dtype]
-        self.nav = load_nav_kernel(nav)
-        if abs(self.nav.dt_s - sc.dt_s) > 1e-12:
-            raise ValueError(f"NavConfig.dt_s {self.nav.dt_s} != Scenario.dt_s {sc.dt_s}")
-        self.T = sc.steps_per_decision
-        if self.T % self.nav.cycle_steps:
-            raise ValueError("a decision must span whole sensor cycles (GNSS and compass)")
-        # the CPU batch's clock: decision k covers plant steps kT + 1 .. kT + T
-        self.layout = noise_layout(self.nav, 1, self.T)
         self.episodes = TorchEpisodes(sc, n, episodes, episodes_per_boat, self.device, self.dtype)
         noise_cls = ReplayNoise if noise == "replay" else DeviceNoise
         self.noise: NoiseSource = noise_cls(n, self.device, self.dtype)
@@ -401,6 +394,47 @@ def torch_heading_change(
     return (a.to(dtype) - centre) * (max_rad / centre)
 
 
+def check_options(num_envs: int, action: str, observation_dtype: str, noise: str) -> None:
+    """The arguments every torch env takes, checked: a one-line ``ValueError`` naming the
+    argument and what it allows."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    if action not in ("gaussian", "categorical"):
+        raise ValueError(f"action must be 'gaussian' or 'categorical', got {action!r}")
+    if observation_dtype not in DTYPES:
+        raise ValueError(f"observation_dtype must be one of {list(DTYPES)}")
+    if noise not in ("device", "replay"):
+        raise ValueError(f"noise must be 'device' or 'replay', got {noise!r}")
+
+
+@dataclass(frozen=True)
+class ClosedLoop:
+    """What a torch env steps its boats with: the generated plant, the filter kernel, the plant
+    steps per decision ``T`` and the noise layout of a decision's steps (the CPU batch's clock:
+    decision k covers plant steps kT + 1 .. kT + T)."""
+
+    plant: TorchPlant
+    nav: TorchNavKernel
+    T: int
+    layout: NoiseLayout
+
+    @classmethod
+    def build(cls, scenario: Scenario, nav: Any, device: str, dtype: str) -> ClosedLoop:
+        """For ``scenario``'s plant step and decision period on ``device`` in ``dtype``; ``nav``
+        a :class:`usvsim.nav.models.NavConfig` (None: the default filter).
+
+        Raises ``ValueError`` where the filter's step is not the plant's or a decision does not
+        span whole sensor cycles."""
+        plant = TorchPlant("default", dt_s=scenario.dt_s, device=device, dtype=dtype)
+        kernel = load_nav_kernel(nav)
+        if abs(kernel.dt_s - scenario.dt_s) > 1e-12:
+            raise ValueError(f"NavConfig.dt_s {kernel.dt_s} != Scenario.dt_s {scenario.dt_s}")
+        T = scenario.steps_per_decision
+        if T % kernel.cycle_steps:
+            raise ValueError("a decision must span whole sensor cycles (GNSS and compass)")
+        return cls(plant, kernel, T, noise_layout(kernel, 1, T))
+
+
 def plant_and_filter(
     plant_step: Callable[..., Columns],
     nav_step: Callable[..., Columns],
@@ -422,59 +456,3 @@ def compiled_substep(backend: str = "inductor") -> Callable[..., tuple[Columns, 
     """:func:`plant_and_filter` through ``torch.compile`` with ``backend`` (shape-generic: one
     compilation serves every N), made once per process and backend."""
     return torch.compile(plant_and_filter, dynamic=True, backend=backend)
-
-
-def measure_env_steps(env: TorchPoleAvoidanceEnv, seconds: float = 1.0) -> float:
-    """Env steps (boat decisions) per second of ``env``: random actions drawn once, steps until
-    ``seconds`` have passed (at least 2), a GPU synchronised before each clock reading."""
-    sync = torch.cuda.synchronize if env.device.type == "cuda" else (lambda: None)
-    gen = torch.Generator(device=env.device).manual_seed(0)
-    if env.action_kind == "gaussian":
-        actions = torch.rand((env.num_envs, 1), generator=gen, device=env.device) * 2.0 - 1.0
-    else:
-        actions = torch.randint(N_CATEGORIES, (env.num_envs,), generator=gen, device=env.device)
-    env.reset(seed=0)
-    env.step(actions)  # warm-up (and torch.compile's first call)
-    sync()
-    steps, start = 0, time.perf_counter()
-    while steps < 2 or time.perf_counter() - start < seconds:
-        env.step(actions)
-        steps += 1
-        if steps % 8 == 0 or env.device.type != "cuda":
-            sync()
-    sync()
-    return env.num_envs * steps / (time.perf_counter() - start)
-
-
-def torch_env_rates(
-    device: str, sizes: tuple[int, ...] = (256, 1024), seconds: float = 1.0
-) -> dict[str, Any]:
-    """Env steps/s of the torch env on ``device`` (float64 and float32) beside the C path's
-    (:class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`) at each of ``sizes`` boats,
-    measured in the same run, interleaved; positional observation, random Gaussian actions,
-    restarts included (``usvsim perf --device``)."""
-    from usvsim.task.vector_env import PoleAvoidanceVectorEnv  # the C path (gymnasium)
-
-    rows: dict[str, dict[str, float]] = {}
-    for n in sizes:
-        cpu = PoleAvoidanceVectorEnv(n)
-        cpu.reset(seed=0)
-        actions = np.random.default_rng(0).uniform(-1.0, 1.0, (n, 1))
-        steps, start = 0, time.perf_counter()
-        while steps < 2 or time.perf_counter() - start < seconds:
-            cpu.step(actions)
-            steps += 1
-        row = {"C path": n * steps / (time.perf_counter() - start)}
-        for dtype in ("float64", "float32"):
-            env = TorchPoleAvoidanceEnv(n, device=device, dtype=dtype)
-            row[dtype] = measure_env_steps(env, seconds)
-        rows[f"N={n}"] = row
-    return {
-        "device": device,
-        "env_steps_per_s": {k: {c: round(v) for c, v in r.items()} for k, r in rows.items()},
-        "over_C_path": {
-            k: {d: round(r[d] / r["C path"], 3) for d in ("float64", "float32")}
-            for k, r in rows.items()
-        },
-        "load_average_1min": round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None,
-    }

@@ -49,12 +49,18 @@ from typing import Any, Literal
 import numpy as np
 import torch
 
-from usvsim.nav.torch_nav import load_nav_kernel, noise_layout, started_nav_state, torch_ssa
+from usvsim.nav.torch_nav import started_nav_state, torch_ssa
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
 from usvsim.task.scenario import BoatNoise, Scenario
 from usvsim.task.scene_radar import MAX_DISCS
-from usvsim.task.torch_env import compiled_substep, plant_and_filter, torch_heading_change
+from usvsim.task.torch_env import (
+    ClosedLoop,
+    check_options,
+    compiled_substep,
+    plant_and_filter,
+    torch_heading_change,
+)
 from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
 from usvsim.task.torch_observations import (
     TorchObservation,
@@ -77,7 +83,7 @@ from usvsim.task.torch_scene_radar import (
     SceneRadarGrid,
     render_scene_torch,
 )
-from usvsim.vessel.torch_plant import DTYPES, TorchPlant
+from usvsim.vessel.torch_plant import DTYPES
 
 __all__ = ["TORCH_OPENWATER_OBSERVATIONS", "TorchOpenWaterEnv"]
 
@@ -139,21 +145,14 @@ class TorchOpenWaterEnv:
         compile: bool = False,
         compile_backend: str = "inductor",
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        check_options(num_envs, action, observation_dtype, noise)
         if observation not in TORCH_OPENWATER_OBSERVATIONS:
             raise ValueError(
                 f"observation must be one of {TORCH_OPENWATER_OBSERVATIONS} on the torch "
                 f"open-water env, got {observation!r}"
             )
-        if action not in ("gaussian", "categorical"):
-            raise ValueError(f"action must be 'gaussian' or 'categorical', got {action!r}")
-        if observation_dtype not in DTYPES:
-            raise ValueError(f"observation_dtype must be one of {list(DTYPES)}")
         if reward_horizon not in ("episode", "fixed"):
             raise ValueError(f"reward_horizon must be 'episode' or 'fixed', got {reward_horizon!r}")
-        if noise not in ("device", "replay"):
-            raise ValueError(f"noise must be 'device' or 'replay', got {noise!r}")
         if family is not None and table is not None:
             raise ValueError("give family or table, not both")
         if per_boat < 1:
@@ -166,16 +165,10 @@ class TorchOpenWaterEnv:
         self.reward_horizon, self.gamma = reward_horizon, float(gamma)
         self.family, self._fixed_table, self.per_boat = family, table, per_boat
         self.scenario = sc = replace(scenario or Scenario(), area_radius_m=1e9)
-        self.plant = TorchPlant("default", dt_s=sc.dt_s, device=device, dtype=dtype)
+        loop = ClosedLoop.build(sc, None, device, dtype)
+        self.plant, self.nav, self.T, self.layout = loop.plant, loop.nav, loop.T, loop.layout
         self.device, self.dtype = self.plant.device, self.plant.dtype
         self.observation_dtype = DTYPES[observation_dtype]
-        self.nav = load_nav_kernel(None)
-        if abs(self.nav.dt_s - sc.dt_s) > 1e-12:
-            raise ValueError(f"NavConfig.dt_s {self.nav.dt_s} != Scenario.dt_s {sc.dt_s}")
-        self.T = sc.steps_per_decision
-        if self.T % self.nav.cycle_steps:
-            raise ValueError("a decision must span whole sensor cycles (GNSS and compass)")
-        self.layout = noise_layout(self.nav, 1, self.T)
         # the GNSS columns of a decision's normals, step by step (the CPU batch's gnss_index)
         self._gnss_slots = [
             (j, e) for j, cols in enumerate(self.layout.index) for e in range(1, 5) if cols[e] >= 0

@@ -19,7 +19,8 @@ from usvsim.task.batch import heading_change_rad
 from usvsim.task.observations import GOAL_STANDARDIZATION, relative_polar
 from usvsim.task.radar import RadarConfig, render_radar
 from usvsim.task.scenario import BoatNoise, Scenario, draw_episode, episode_geometry
-from usvsim.task.torch_env import TorchPoleAvoidanceEnv, torch_env_rates
+from usvsim.task.torch_env import TorchPoleAvoidanceEnv
+from usvsim.task.torch_env_speed import torch_env_rates
 from usvsim.task.torch_episodes import episode_geometry_torch
 from usvsim.task.torch_observations import (
     GOAL_MEAN,
