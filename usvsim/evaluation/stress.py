@@ -1,8 +1,8 @@
 """``usvsim bench --suite stress``: every helmsman on named episode sets, each isolating one
 perturbation of the study's task, plus one with everything at once. The weather sets
 (``wind-beam``, ``gusts``, ``sea-state-3``, ``sea-state-4``; issue 38) step the boats in wind and
-waves (:mod:`usvsim.task.weather_draw`); ``everything`` draws no weather, so its published
-figures stay valid.
+waves (:mod:`usvsim.task.weather_draw`); ``everything`` the ``moderate`` one (0-8 m/s, H_s 0-1 m;
+calm before 2026-12-06).
 
 Each set is a member of the open-water family (:class:`usvsim.task.openwater.OpenWaterScenario`,
 drawn by :func:`usvsim.task.openwater.draw_open_water` from the set's own seed, the CRC-32 of its
@@ -99,6 +99,7 @@ _EVERYTHING = _s(
     radar_clutter_range=(0.0, 0.001),
     radar_speckle_range=(0.0, 0.5),
     radar_missed_range=(0.0, 0.1),
+    weather=WEATHER_SETS["moderate"],
 )
 
 STRESS_SETS: tuple[StressSet, ...] = (
@@ -194,8 +195,7 @@ STRESS_SETS: tuple[StressSet, ...] = (
     ),
     StressSet("speed-slow", "cruise 1.5-2 m/s", _s(speed_range_mps=(1.5, 2.0))),
     StressSet("speed-fast", "cruise 4-5 m/s", _s(speed_range_mps=(4.0, 5.0))),
-    # wind and waves (issue 38, usvsim.task.weather_draw.WEATHER_SETS); `everything` has none:
-    # its published figures stay valid (WEATHER_SETS["moderate"] is what it would gain)
+    # wind and waves (issue 38, usvsim.task.weather_draw.WEATHER_SETS)
     *(
         StressSet(name, description, _s(weather=WEATHER_SETS[name]))
         for name, description in (

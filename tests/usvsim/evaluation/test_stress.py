@@ -145,8 +145,11 @@ CHECKS = {
         and _all(map(_waves_off_wind, eps), 0, math.radians(30))
     ),
     "everything": lambda eps: (
-        # no weather: its published figures stay valid (issue 38)
-        all(e.disturbance.weather is None for e in eps)
+        # the moderate weather (issue 38): wind up to 8 m/s and H_s up to 1 m, calm included
+        _all((_weather(e).wind_speed_mps for e in eps), 0.0, 8.0)
+        and _all((_weather(e).hs_m for e in eps), 0.0, 1.0)
+        and max(_weather(e).wind_speed_mps for e in eps) > 4.0
+        and max(_weather(e).hs_m for e in eps) > 0.5
         and any(e.vessels for e in eps)
         and any(o[2] >= 8 for e in eps for o in e.obstacles)
         and any(e.disturbance.current_speed_mps > 0.3 for e in eps)

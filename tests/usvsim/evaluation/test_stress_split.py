@@ -145,8 +145,10 @@ def test_weather_sets_draw_weather_in_both_splits_and_different_weather(name: st
         stress_episodes(stress_set, 1, "test")
 
 
-def test_only_the_weather_sets_draw_weather() -> None:
+def test_only_the_weather_sets_and_everything_draw_weather() -> None:
     for stress_set in STRESS_SETS:
         if stress_set.scenario is not None:
             windy = stress_set.scenario.weather is not None
-            assert windy == (stress_set.name in WEATHER_SETS_NAMED), stress_set.name
+            assert windy == (stress_set.name in (*WEATHER_SETS_NAMED, "everything")), (
+                stress_set.name
+            )
