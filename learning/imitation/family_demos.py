@@ -41,6 +41,7 @@ __all__ = [
     "FAMILY_DEMO_RUNS",
     "FAMILY_DEMO_SEED",
     "record_family_demonstrations",
+    "record_runs",
 ]
 
 FAMILY_DEMO_SEED = 20261202  # seeds the family runs (episodes, expert, sensors)
@@ -95,9 +96,15 @@ def record_family_demonstrations(
     ep_seq, expert_seq, sensor_seq = np.random.SeedSequence(seed).spawn(3)
     episodes = draw_family(family, int(ep_seq.generate_state(1)[0]), n_runs)
     runs = run_family_expert(episodes, seed=int(expert_seq.generate_state(1)[0]), params=expert)
-    rng = np.random.default_rng(sensor_seq)
-    p = recorder or RecorderParams()
-    return [_record(run, k, rng, p) for k, run in enumerate(runs)]
+    return record_runs(runs, np.random.default_rng(sensor_seq), recorder or RecorderParams())
+
+
+def record_runs(
+    runs: Sequence[FamilyExpertRun], rng: np.random.Generator, recorder: RecorderParams
+) -> list[Recording]:
+    """Log expert runs on open-water episodes as ``usvsim-demo/2`` recordings (module
+    docstring), run k as ``run`` k, the sensor noise from ``rng`` in the runs' order."""
+    return [_record(run, k, rng, recorder) for k, run in enumerate(runs)]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
