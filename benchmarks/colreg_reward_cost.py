@@ -6,9 +6,12 @@ family of ``rl-gaussian-radar-colreg`` (the open-water family with half COLREG e
 :func:`usvsim.task.colreg_family.colreg_training_family`), the same seed and actions, one with
 the COLREG reward and one without, stepped in alternating blocks; reported: CPU time
 (``time.process_time``) per step of each, the reward terms' own time (inside the env with the
-reward) and their share of its step, with the machine's load (``os.getloadavg``)::
+reward) and their share of its step, with the machine's load (``os.getloadavg``).
+``--reactive``: the env with the reward also steers its targets with vo
+(:class:`usvsim.evaluation.colreg_rollout.TrainingReactiveTargets`), whose time is reported too::
 
     nice python benchmarks/colreg_reward_cost.py --n 256 --steps 100 --observation radar+goal
+    nice python benchmarks/colreg_reward_cost.py --n 64 --steps 100 --reactive
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from usvsim.evaluation.colreg_rollout import TrainingReactiveTargets
 from usvsim.task.colreg_family import colreg_training_family
 from usvsim.task.colreg_reward import ColregRewardWeights
 from usvsim.task.openwater_env import OpenWaterVectorEnv
@@ -32,12 +36,18 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=100, help="timed steps per env")
     ap.add_argument("--block", type=int, default=10, help="steps per alternating block")
     ap.add_argument("--observation", default="radar+goal")
+    ap.add_argument("--reactive", action="store_true", help="targets steered by vo, timed")
     args = ap.parse_args()
+    hook = TrainingReactiveTargets() if args.reactive else None
     family = colreg_training_family()
     envs = {
         "off": OpenWaterVectorEnv(args.n, observation=args.observation, family=family),
         "on": OpenWaterVectorEnv(
-            args.n, observation=args.observation, family=family, colreg_reward=ColregRewardWeights()
+            args.n,
+            observation=args.observation,
+            family=family,
+            colreg_reward=ColregRewardWeights(),
+            on_decision=hook,
         ),
     }
     terms_s = [0.0]
@@ -51,6 +61,17 @@ def main() -> None:
         return out
 
     on.colreg.from_batch = timed
+    hook_s = [0.0]
+    if hook is not None:
+        steer = hook.steer
+
+        def timed_steer(*a: Any) -> Any:
+            t = time.process_time()
+            out = steer(*a)
+            hook_s[0] += time.process_time() - t
+            return out
+
+        hook.steer = timed_steer  # type: ignore[method-assign, assignment]
     rngs = {k: np.random.default_rng(1) for k in envs}
     for env in envs.values():
         env.reset(seed=0)
@@ -59,7 +80,7 @@ def main() -> None:
     for block in range(-1, args.steps // args.block):  # block -1: warm-up, not timed
         for key, env in envs.items():
             if block == 0 and key == "on":
-                terms_s[0] = 0.0
+                terms_s[0] = hook_s[0] = 0.0
             t = time.process_time()
             for _ in range(args.block):
                 env.step(rngs[key].uniform(-1, 1, (args.n, 1)))
@@ -74,6 +95,7 @@ def main() -> None:
         "step_on_ms": 1e3 * cpu["on"] / steps,
         "terms_ms": 1e3 * terms_s[0] / steps,
         "terms_share_of_step": terms_s[0] / cpu["on"],
+        "reactive_targets_ms": 1e3 * hook_s[0] / steps if hook is not None else None,
         "load_1min": [load0, os.getloadavg()[0]],
     }
     print(json.dumps(out, indent=1))

@@ -40,6 +40,7 @@ per-decision COLREG reward terms added (:mod:`usvsim.task.colreg_reward`,
 ``rl-gaussian-radar-colreg`` is rl-gaussian-radar-ow's recipe so trained;
 ``-colreg-noreward`` the same family and budget with the study's reward alone (the ablation's
 baseline); ``-colreg-ft`` starts from the shipped ``rl-gaussian-radar-ow``;
+``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -110,7 +111,7 @@ from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
 from usvsim.task.colreg_family import COLREG_FAMILY
-from usvsim.task.colreg_reward import COLREG_TERMS, ColregRewardWeights
+from usvsim.task.colreg_reward import ColregRewardWeights, colreg_weights
 from usvsim.task.observations import ObservationKind
 from usvsim.task.openwater_env import (
     OPEN_WATER_FAMILY,
@@ -225,12 +226,18 @@ class RLSetup:
     # open-water: the COLREG reward terms on (usvsim.task.colreg_reward.COLREG_TERMS, comma
     # separated, with their documented weights), "all", or "" (off: the study's reward alone)
     colreg_reward: str = ""
+    # open-water: the target vessels steered by vo as the COLREG suite's reactive targets
+    # (the training env's on_decision hook, learning.experiments.train_rl.env_maker: the
+    # evaluation is not imported here); False: they hold course
+    reactive_targets: bool = False
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.colreg_share < 1.0:
             raise ValueError(f"RLSetup.colreg_share must be in [0, 1), got {self.colreg_share!r}")
-        if (self.colreg_share or self.colreg_reward) and self.task != "open-water":
-            raise ValueError("RLSetup.colreg_share and colreg_reward need task='open-water'")
+        if (self.colreg_share or self.colreg_reward or self.reactive_targets) and (
+            self.task != "open-water"
+        ):
+            raise ValueError("RLSetup.colreg_* and reactive_targets need task='open-water'")
         self.colreg_weights  # noqa: B018 -- raises ValueError for an unknown term
         if self.task not in TASKS:
             raise ValueError(f"RLSetup.task must be one of {TASKS}, got {self.task!r}")
@@ -253,20 +260,8 @@ class RLSetup:
 
     @property
     def colreg_weights(self) -> ColregRewardWeights | None:
-        """The COLREG reward's weights (:attr:`colreg_reward`'s terms on, the others 0), or None
-        when it is off."""
-        if not self.colreg_reward:
-            return None
-        on = COLREG_TERMS if self.colreg_reward == "all" else tuple(
-            t.strip() for t in self.colreg_reward.split(",") if t.strip()
-        )  # fmt: skip
-        unknown = [t for t in on if t not in COLREG_TERMS]
-        if unknown:
-            raise ValueError(
-                f"RLSetup.colreg_reward: unknown term {unknown[0]!r}; use 'all' or names from "
-                f"{', '.join(COLREG_TERMS)}"
-            )
-        return ColregRewardWeights().without(*(t for t in COLREG_TERMS if t not in on))
+        """The COLREG reward's weights (:attr:`colreg_reward`'s terms on), None when off."""
+        return colreg_weights(self.colreg_reward)
 
     @property
     def training_family(self) -> ScenarioMixture:
@@ -418,6 +413,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_RADAR,
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-noreward", colreg_reward=""),
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-ft", init_policy="rl-gaussian-radar-ow"),
+        COLREG_RADAR.replace(name=COLREG_RADAR.name + "-reactive", reactive_targets=True),
         COLREG_SCENE,
     )
 }

@@ -58,6 +58,7 @@ __all__ = [
     "VALIDATION_FIELDS",
     "csv_fields",
     "device_env_maker",
+    "env_maker",
     "first_policy",
     "open_water_fields",
     "train_rl",
@@ -238,6 +239,22 @@ class _Run:
         )
 
 
+def env_maker(setup: RLSetup) -> Any:
+    """The training env maker: ``setup.make_vector_env``, for a setup with
+    ``reactive_targets`` with the targets steered by vo
+    (:class:`usvsim.evaluation.colreg_rollout.TrainingReactiveTargets`, the env's
+    ``on_decision`` hook; the setups module may not import the evaluation)."""
+    if not setup.reactive_targets:
+        return setup.make_vector_env
+    from usvsim.evaluation.colreg_rollout import TrainingReactiveTargets
+
+    def make_env(num_envs: int, **env_kwargs: Any) -> Any:
+        env_kwargs.setdefault("on_decision", TrainingReactiveTargets())
+        return setup.make_vector_env(num_envs, **env_kwargs)
+
+    return make_env
+
+
 def first_policy(setup: RLSetup, init_policy: str | Path = "") -> dict[str, Any] | None:
     """The agent state a new run of ``setup`` starts from (:func:`train_rl`), or None; raises
     :class:`CheckpointError` where that file cannot start it."""
@@ -315,7 +332,7 @@ def train_rl(
         config = dataclasses.replace(config, seed=int(state["config"]["seed"]))
     start = first_policy(setup, init_policy) if state is None else None
     trainer: Any = train
-    make_env: Any = setup.make_vector_env
+    make_env: Any = env_maker(setup)
     if device != "cpu":
         from learning.algorithms.device_loop import train_on_device
 

@@ -44,7 +44,13 @@ from usvsim.common.angles import ssa
 from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
 from usvsim.task.openwater_batch import OpenWaterBatch, SceneDiscs, observe_scene
 
-__all__ = ["EncounterRun", "ReactiveTargets", "encounter_tracks", "run_encounters"]
+__all__ = [
+    "EncounterRun",
+    "ReactiveTargets",
+    "TrainingReactiveTargets",
+    "encounter_tracks",
+    "run_encounters",
+]
 
 FloatArray = NDArray[np.float64]
 OWN_RADIUS_M = 5.0  # m, the own ship as the targets see it (a 10 m hull's disc, as theirs)
@@ -151,12 +157,18 @@ class ReactiveTargets:
 
     def __call__(self, sim: OpenWaterBatch, k: int) -> Any:
         """Steer the targets at the end of decision ``k``; return the helmsman's observation."""
-        n, m = self.n, self.m
-        if m == 0:
+        if self.m == 0:
             self.schedule.append(self.schedule[-1])
             return None
-        t = (k + 1) * sim.base.decision_period_s
-        tt = np.full((n, m), t)
+        self.steer(sim, np.full((self.n, 1), (k + 1) * sim.base.decision_period_s))
+        self.schedule.append((sim.v_p0.copy(), sim.v_course.copy(), sim.v_turn.copy()))
+        return sim.observe(sim.observation_kind)
+
+    def steer(self, sim: OpenWaterBatch, t: FloatArray) -> None:
+        """Steer every target at its boat's episode time ``t`` (N, 1) s (module docstring):
+        the vessels' motion arrays of ``sim`` replaced from that time on."""
+        n, m = self.n, self.m
+        tt = np.broadcast_to(t, (n, m))
         pos, vel = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, tt)
         chi = sim.v_course + sim.v_turn * t
         obs = self._observations(sim, pos, vel, chi)
@@ -171,8 +183,23 @@ class ReactiveTargets:
         sim.v_p0 = np.where(sim.vessel_ok[..., None], pos - (sim.v_speed * t)[..., None] * u, 0.0)
         sim.v_course = new_chi
         sim.v_turn = np.zeros_like(sim.v_turn)
-        self.schedule.append((sim.v_p0.copy(), sim.v_course.copy(), sim.v_turn.copy()))
-        return sim.observe(sim.observation_kind)
+
+    def restart(self, sim: OpenWaterBatch, boats: NDArray[np.intp]) -> None:
+        """``boats`` started new episodes (training, :class:`TrainingReactiveTargets`): their
+        targets' goals from their new starts, no target giving way; the slots grow with the
+        batch's (``vo``'s per-target memory is kept: at most one stale decision per slot)."""
+        n, m = sim.vessel_ok.shape
+        if m != self.m:
+            grow = ((0, 0), (0, m - self.m))
+            self.goal_ne = np.pad(self.goal_ne, (*grow, (0, 0)))
+            self.giving_way = np.pad(self.giving_way, grow)
+            self.m = m
+            self.helmsman.reset(n * m)
+        pos0, _ = vessel_motion(sim.v_p0[boats], sim.v_course[boats], sim.v_speed[boats],
+                                sim.v_turn[boats], np.zeros((len(boats), m)))  # fmt: skip
+        u = np.stack([np.cos(sim.v_course[boats]), np.sin(sim.v_course[boats])], axis=-1)
+        self.goal_ne[boats] = pos0 + GOAL_AHEAD_M * u
+        self.giving_way[boats] = False
 
     def _observations(
         self, sim: OpenWaterBatch, pos: FloatArray, vel: FloatArray, chi: FloatArray
@@ -224,6 +251,33 @@ class ReactiveTargets:
             "scene", pos.reshape(-1, 2), chi.reshape(-1), vel.reshape(-1, 2),
             self.goal_ne.reshape(-1, 2), discs,
         )  # fmt: skip
+
+
+class TrainingReactiveTargets:
+    """Reactive targets in training: the ``on_decision`` hook of
+    :class:`usvsim.task.openwater_env.OpenWaterVectorEnv` (:class:`ReactiveTargets` at each
+    boat's own episode time, restarted per boat when it starts an episode). ``target_helmsman``:
+    what steers them (default ``vo`` from the registry)."""
+
+    def __init__(self, target_helmsman: Any = None) -> None:
+        self.target_helmsman = target_helmsman
+        self.targets: ReactiveTargets | None = None
+
+    def reset(self, sim: OpenWaterBatch, boats: NDArray[np.intp]) -> None:
+        """``boats`` of ``sim`` started new episodes."""
+        if self.targets is None:
+            from usvsim.helm.registry import make_helmsman
+
+            self.targets = ReactiveTargets(sim, self.target_helmsman or make_helmsman("vo"))
+        self.targets.restart(sim, boats)
+
+    def steer(self, sim: OpenWaterBatch, time_s: FloatArray) -> bool:
+        """Steer every target at its boat's episode time ``time_s`` (N,) s; False (nothing
+        changed) without targets."""
+        if self.targets is None or self.targets.m == 0:
+            return False
+        self.targets.steer(sim, np.asarray(time_s, dtype=float)[:, None])
+        return True
 
 
 def run_encounters(

@@ -65,7 +65,14 @@ from usvsim.task.colreg_geometry import (
 from usvsim.task.colreg_params import ColregParams
 from usvsim.task.openwater import vessel_motion
 
-__all__ = ["COLREG_TERMS", "ColregReward", "ColregRewardWeights", "ColregTerms", "own_motion"]
+__all__ = [
+    "COLREG_TERMS",
+    "ColregReward",
+    "ColregRewardWeights",
+    "ColregTerms",
+    "colreg_weights",
+    "own_motion",
+]
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -117,6 +124,22 @@ class ColregRewardWeights:
             raise ValueError(f"unknown COLREG term {unknown[0]!r}; choose from {COLREG_TERMS}")
         zero: dict[str, Any] = dict.fromkeys(terms, 0.0)
         return replace(self, **zero)
+
+
+def colreg_weights(terms: str) -> ColregRewardWeights | None:
+    """The default weights with ``terms`` on (``"all"`` or comma-separated names of
+    :data:`COLREG_TERMS`), the others 0; None for ``""`` (the reward off). ``ValueError`` names
+    an unknown term."""
+    if not terms:
+        return None
+    on = COLREG_TERMS if terms == "all" else tuple(t.strip() for t in terms.split(",") if t.strip())
+    unknown = [t for t in on if t not in COLREG_TERMS]
+    if unknown:
+        raise ValueError(
+            f"unknown COLREG reward term {unknown[0]!r}; use 'all' or names from "
+            f"{', '.join(COLREG_TERMS)}"
+        )
+    return ColregRewardWeights().without(*(t for t in COLREG_TERMS if t not in on))
 
 
 @dataclass(frozen=True)

@@ -287,7 +287,11 @@ class OpenWaterVectorEnv(VectorEnv):
     own time limit, as in :class:`usvsim.task.env.PoleAvoidanceEnv`. ``colreg_reward``
     (:class:`usvsim.task.colreg_reward.ColregRewardWeights`; default None: off) adds the
     per-decision COLREG terms of :mod:`usvsim.task.colreg_reward` (``info["reward_colreg"]``
-    and ``info["reward_colreg_<term>"]``).
+    and ``info["reward_colreg_<term>"]``). ``on_decision`` (default None): an object with
+    ``reset(sim, boats)`` (boats starting episodes) and ``steer(sim, time_s) -> bool`` (after
+    each decision's reward, at each boat's episode time; True: the scene changed, observe
+    again) that may steer the vessels, e.g. reactive targets
+    (:class:`usvsim.evaluation.colreg_rollout.TrainingReactiveTargets`).
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
@@ -329,6 +333,7 @@ class OpenWaterVectorEnv(VectorEnv):
         backend: Literal["auto", "compiled", "casadi"] = "auto",
         info_observation: ObservationKind | None = None,
         colreg_reward: ColregRewardWeights | None = None,
+        on_decision: Any = None,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -341,6 +346,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self.family = OPEN_WATER_FAMILY if family is None else family
         self.reward: RewardFunction = reward or GaussianReward()
         self.colreg = None if colreg_reward is None else ColregReward(colreg_reward, num_envs)
+        self.on_decision = on_decision
         self.sim = OpenWaterBatch(
             num_envs, observation=observation, action=action, plant=plant, radar=radar,
             backend=backend,
@@ -377,6 +383,8 @@ class OpenWaterVectorEnv(VectorEnv):
         self._decisions[boats] = 0
         if self.colreg is not None:
             self.colreg.reset(boats)
+        if self.on_decision is not None:
+            self.on_decision.reset(self.sim, boats)
         return self._observation(obs)
 
     def _observation(self, obs: Observation) -> Observation:
@@ -450,7 +458,10 @@ class OpenWaterVectorEnv(VectorEnv):
         info: dict[str, Any] = {}
         for key, value in arrays.items():
             info[key], info[f"_{key}"] = value, everyone
-        obs = self._observation(res.observation)
+        obs = res.observation
+        if self.on_decision is not None and self.on_decision.steer(self.sim, time_s):
+            obs = self.sim.observe(self.sim.observation_kind)  # the targets' new courses
+        obs = self._observation(obs)
         done = terminated | truncated
         if done.any():
             idx = np.flatnonzero(done)

@@ -15,6 +15,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-noreward",
     "rl-gaussian-radar-colreg-ft",
     "rl-gaussian-scene-colreg",
+    "rl-gaussian-radar-colreg-reactive",
 )
 
 
@@ -38,6 +39,18 @@ def test_the_ablation_baseline_has_the_same_family_and_budget_without_the_reward
     assert off.algorithm_config == on.algorithm_config
     assert get_setup(NAMES[2]).init_policy == "rl-gaussian-radar-ow"
     assert get_setup(NAMES[3]).observation == "scene"
+    assert on.make_vector_env(2).on_decision is None
+
+
+def test_the_reactive_setup_trains_with_steered_targets() -> None:
+    from learning.experiments.train_rl import env_maker
+    from usvsim.evaluation.colreg_rollout import TrainingReactiveTargets
+
+    setup = get_setup("rl-gaussian-radar-colreg-reactive")
+    env = env_maker(setup)(2)
+    assert isinstance(env.on_decision, TrainingReactiveTargets) and env.colreg is not None
+    assert env_maker(get_setup(NAMES[0]))(2).on_decision is None
+    assert setup.replace(name=NAMES[0], reactive_targets=False) == get_setup(NAMES[0])
 
 
 def test_colreg_reward_names_the_terms_on() -> None:
@@ -46,7 +59,7 @@ def test_colreg_reward_names_the_terms_on() -> None:
     assert w is not None
     assert (w.cpa, w.starboard) == (full.cpa, full.starboard)
     assert all(getattr(w, t) == 0.0 for t in COLREG_TERMS if t not in ("cpa", "starboard"))
-    with pytest.raises(ValueError, match="unknown term 'speed'"):
+    with pytest.raises(ValueError, match="unknown COLREG reward term 'speed'"):
         get_setup(NAMES[0]).replace(colreg_reward="speed")
     with pytest.raises(ValueError, match="task='open-water'"):
         RLSetup("x", "positional", "gaussian", colreg_reward="all")
