@@ -26,6 +26,19 @@ scene policies and critics with the Deep Sets encoder of the RL scene setups), t
                                                         demonstration also at the harshest radar
 ============================  ===========  ===========  ===========================================
 
+Setups on COLREG encounters (issue 41; ``-colreg``, ``task="open-water"``): GAIL on the SB-MPC
+expert's demonstrations (:mod:`learning.experiments.colreg_demos`, ``usvsim/demos/colreg``: only
+the runs that reached the goal and passed every scored encounter), trained on the encounters they
+were recorded in (:func:`learning.experiments.colreg_demos.colreg_demo_family`; ``demos`` and
+``family`` fields). The recipes are the ``-ow`` ones, not tuned for traffic:
+
+============================  ===========  ===========  ===========================================
+``il-gaussian-radar-colreg``  radar+goal   gaussian     as il-gaussian-radar-ow (D sees the true
+                                                        scene; 3 harsh-radar copies, 13 epochs)
+``il-gaussian-scene-colreg``  scene        gaussian     as il-gaussian-scene-ow: an UPPER BOUND
+                                                        (it reads the true scene, as the expert)
+============================  ===========  ===========  ===========================================
+
 Their runs are validated on the study's 15 episodes and the family set
 (:func:`learning.experiments.validation.family_validation_episodes`); ``best.pt`` is chosen by
 successes there and on the 60 selection episodes (:func:`learning.experiments.train_il.train_il`),
@@ -58,11 +71,15 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from learning.algorithms.networks import NetworkConfig
 from learning.algorithms.registry import algorithm_for
 from learning.algorithms.trpo import TRPOConfig
+from learning.experiments.colreg_demos import COLREG_DEMOS_DIR, colreg_demo_family
 from learning.experiments.setups import RL_TRPO, TASKS
+from learning.imitation.demonstrations import DEMOS_DIR
+from learning.imitation.family_demos import FAMILY_DEMOS_DIR
 from learning.imitation.gail import GAILConfig
 from usvsim.task.batch import ActionKind
 from usvsim.task.observations import ObservationKind
@@ -78,6 +95,7 @@ __all__ = [
     "IL_SETUPS",
     "IL_TRPO",
     "MAX_HARSH_RADAR_COPIES",
+    "TRAINING_FAMILIES",
     "ILSetup",
     "get_il_setup",
 ]
@@ -85,6 +103,10 @@ __all__ = [
 IL_TRPO = dataclasses.replace(RL_TRPO, iterations=120, num_envs=16)  # B = N·T = 1024
 IL_GAIL = GAILConfig(bc_epochs=50)
 MAX_HARSH_RADAR_COPIES = 8  # ILSetup.harsh_radar_copies: 8 copies = 89 % of the data harsh
+# ILSetup.family: the open-water family (issue 18) or the COLREG encounters (issue 41)
+TRAINING_FAMILIES = ("open-water", "colreg")
+# ILSetup.demos: the shipped demonstration sets (folders under usvsim/demos)
+_DEMO_SETS = {"study": DEMOS_DIR, "open-water": FAMILY_DEMOS_DIR, "colreg": COLREG_DEMOS_DIR}
 
 
 @dataclass(frozen=True)
@@ -105,10 +127,22 @@ class ILSetup:
     # of the training episodes comes from the harsh-radar family (:meth:`training_family`), so
     # the expert's and the policy's data keep the same mix; 0: neither
     harsh_radar_copies: int = 0
+    # the shipped demonstrations it learns from (a key of _DEMO_SETS; "": the task's: the
+    # study's 46 runs for "pole", the family expert's for "open-water")
+    demos: str = ""
+    family: str = "open-water"  # open-water setups: the episodes trained on (TRAINING_FAMILIES)
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
             raise ValueError(f"ILSetup.task must be one of {TASKS}, got {self.task!r}")
+        if self.demos and self.demos not in _DEMO_SETS:
+            raise ValueError(
+                f"ILSetup.demos must be one of {tuple(_DEMO_SETS)}, got {self.demos!r}"
+            )
+        if self.family not in TRAINING_FAMILIES:
+            raise ValueError(
+                f"ILSetup.family must be one of {TRAINING_FAMILIES}, got {self.family!r}"
+            )
         if not 0 <= self.harsh_radar_copies <= MAX_HARSH_RADAR_COPIES:
             raise ValueError(
                 f"ILSetup.harsh_radar_copies must be an integer in [0, {MAX_HARSH_RADAR_COPIES}], "
@@ -136,13 +170,22 @@ class ILSetup:
         return k / (k + 1)
 
     @property
+    def demos_dir(self) -> Path:
+        """The folder of the shipped demonstrations the setup learns from (:attr:`demos`)."""
+        if self.demos:
+            return _DEMO_SETS[self.demos]
+        return FAMILY_DEMOS_DIR if self.task == "open-water" else DEMOS_DIR
+
+    @property
     def training_family(self) -> ScenarioMixture:
-        """The open-water training distribution: the family, mixed with its harsh-radar form
-        (:func:`usvsim.task.openwater_env.harsh_radar_family`) at :attr:`harsh_radar_share`."""
+        """The open-water training distribution: the family (:attr:`family`), mixed with its
+        harsh-radar form (:func:`usvsim.task.openwater_env.harsh_radar_family`) at
+        :attr:`harsh_radar_share`."""
+        base = colreg_demo_family() if self.family == "colreg" else OPEN_WATER_FAMILY
         if not self.harsh_radar_copies:
-            return OPEN_WATER_FAMILY
-        harsh = harsh_radar_family()
-        return mix_families(OPEN_WATER_FAMILY, harsh, self.harsh_radar_share, prefix="harsh-")
+            return base
+        harsh = harsh_radar_family(base)
+        return mix_families(base, harsh, self.harsh_radar_share, prefix="harsh-")
 
     @property
     def algorithm(self) -> str:
@@ -282,6 +325,29 @@ IL_SETUPS: dict[str, ILSetup] = {
             _OW_RADAR_GAIL_HARSH,
             task="open-water",
             harsh_radar_copies=5,
+        ),
+        # issue 41: GAIL on the SB-MPC expert's COLREG encounters, il-gaussian-radar-ow's recipe
+        ILSetup(
+            "il-gaussian-radar-colreg",
+            "radar+goal",
+            "gaussian",
+            _OW_RADAR_TRPO,
+            _OW_RADAR_GAIL_SCENE_HARSH,
+            task="open-water",
+            harsh_radar_copies=3,
+            demos="colreg",
+            family="colreg",
+        ),
+        # the upper bound: the true scene, as the expert sees it (il-gaussian-scene-ow's recipe)
+        ILSetup(
+            "il-gaussian-scene-colreg",
+            "scene",
+            "gaussian",
+            _OW_TRPO,
+            _OW_GAIL,
+            task="open-water",
+            demos="colreg",
+            family="colreg",
         ),
     )
 }

@@ -50,13 +50,11 @@ from learning.experiments.validation import (
     validation_summary,
 )
 from learning.imitation.demonstrations import (
-    DEMOS_DIR,
     DemoFormatError,
     LoadReport,
     load_recordings,
     quality_check,
 )
-from learning.imitation.family_demos import FAMILY_DEMOS_DIR
 from learning.imitation.gail import GAILAgent, GAILStats, train_gail
 from learning.imitation.preprocess import (
     ExpertData,
@@ -328,7 +326,7 @@ def train_il(
     """
     torch.set_num_threads(max(1, threads))
     if demos_dir is None:
-        demos_dir = FAMILY_DEMOS_DIR if setup.task == "open-water" else DEMOS_DIR
+        demos_dir = setup.demos_dir
     out = Path(out_dir)
     state: dict[str, Any] | None = None
     history: list[dict[str, Any]] = []
