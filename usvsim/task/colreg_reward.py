@@ -102,13 +102,14 @@ class ColregRewardWeights:
     0.2), scaled so that one violated encounter costs about what 5-10 s next to an obstacle
     does in the study's reward."""
 
-    head_on_side: float = 0.5  # per decision and vessel, at full starboard passing; rule 14
-    head_on_port: float = 0.5  # per decision and vessel, at ≥ 10° to port; rule 14
-    crossing_ahead: float = 10.0  # per event (once per encounter in practice); rules 13, 15
-    starboard: float = 5.0  # per encounter, a ≥ 30° starboard alteration; rules 8, 16
-    stand_on: float = 0.5  # per decision and vessel, at ≥ 10° off course; rule 17
-    cpa: float = 0.3  # per decision and vessel, at a predicted CPA ≤ 30 m; Woerner safety ramp
-    stand_on_grace_s: float = 20.0  # s, the give-way vessel's time to act (usvsim's choice)
+    # reward units (r); every weight usvsim's choice (class docstring), the rule it serves:
+    head_on_side: float = 0.5  # r per decision and vessel at a full starboard passing; rule 14
+    head_on_port: float = 0.5  # r per decision and vessel at >= 10° to port; rule 14
+    crossing_ahead: float = 10.0  # r per crossing ahead (once per encounter); rules 13, 15
+    starboard: float = 5.0  # r per encounter for a >= 30° starboard alteration; rules 8, 16
+    stand_on: float = 0.5  # r per decision and vessel at >= 10° off course; rule 17
+    cpa: float = 0.3  # r per decision and vessel at a predicted CPA <= 30 m; Woerner 2019 ramp
+    stand_on_grace_s: float = 20.0  # s, the give-way vessel's time to act; rule 17(a)(ii)
     params: ColregParams = field(default_factory=ColregParams)  # ranges and sectors (scorer's)
 
     def __post_init__(self) -> None:
