@@ -287,11 +287,7 @@ class OpenWaterVectorEnv(VectorEnv):
     own time limit, as in :class:`usvsim.task.env.PoleAvoidanceEnv`. ``colreg_reward``
     (:class:`usvsim.task.colreg_reward.ColregRewardWeights`; default None: off) adds the
     per-decision COLREG terms of :mod:`usvsim.task.colreg_reward` (``info["reward_colreg"]``
-    and ``info["reward_colreg_<term>"]``). ``on_decision`` (default None): an object with
-    ``reset(sim, boats)`` (boats starting episodes) and ``steer(sim, time_s) -> bool`` (after
-    each decision's reward, at each boat's episode time; True: the scene changed, observe
-    again) that may steer the vessels, e.g. reactive targets
-    (:class:`usvsim.evaluation.colreg_rollout.TrainingReactiveTargets`).
+    and ``info["reward_colreg_<term>"]``).
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
@@ -314,7 +310,11 @@ class OpenWaterVectorEnv(VectorEnv):
     observation as ``info["observation_<kind>"]`` (N, ...) (after an autoreset the new
     episode's, as the observation; ``final_info`` does not carry it): privileged input for a
     learner that trains on more than the policy sees (a GAIL discriminator on the true scene
-    beside a radar policy).
+    beside a radar policy). ``on_decision`` (default None): an object with ``reset(sim,
+    boats)`` (boats starting episodes) and ``steer(sim, time_s) -> bool`` (after each
+    decision's reward, at each boat's episode time; True: the scene changed, observe again)
+    that may steer the vessels, e.g. reactive targets
+    (:class:`usvsim.evaluation.colreg_rollout.TrainingReactiveTargets`).
     """
 
     def __init__(
