@@ -47,6 +47,7 @@ __all__ = [
     "SeedTable",
     "bootstrap_intervals",
     "iqm",
+    "iqm_with_interval",
     "load_seed_tables",
     "original_sets",
     "pick_seed",
@@ -110,8 +111,11 @@ def bootstrap_intervals(
         np.random.set_state(saved)  # noqa: NPY002
 
 
-def _iqm_with_interval(scores: np.ndarray, reps: int) -> tuple[float, tuple[float, float]]:
-    """IQM of a (seeds, sets) array and its stratified-bootstrap 95 % interval."""
+def iqm_with_interval(
+    scores: np.ndarray, reps: int = BOOTSTRAP_REPS
+) -> tuple[float, tuple[float, float]]:
+    """IQM of a (seeds, sets) array and its stratified-bootstrap 95 % interval (rliable,
+    :func:`bootstrap_intervals`); needs rliable."""
     points, cis = bootstrap_intervals({"x": scores}, lambda x: np.array([iqm(x)]), reps)
     return float(points["x"][0]), (float(cis["x"][0][0]), float(cis["x"][1][0]))
 
@@ -301,11 +305,11 @@ def seed_table(
     scores = np.array([[tst[seed][s] for s in sets] for seed in seeds])  # (seeds, sets)
     figures = []
     for j, name in enumerate(sets):
-        point, ci = _iqm_with_interval(scores[:, j : j + 1], reps)
+        point, ci = iqm_with_interval(scores[:, j : j + 1], reps)
         figures.append(SeedFigure(name, point, ci, tuple(float(x) for x in scores[:, j])))
     cols = [j for j, s in enumerate(sets) if s in original_sets(sets)]
     means = scores[:, cols].mean(axis=1, keepdims=True)  # (seeds, 1): each seed's mean
-    point, ci = _iqm_with_interval(means, reps)
+    point, ci = iqm_with_interval(means, reps)
     return SeedTable(
         setup=setup,
         seeds=seeds,
