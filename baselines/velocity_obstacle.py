@@ -52,12 +52,15 @@ goal, course over ground on the goal's bearing (Fossen 2021, §12.4: ψ_d = χ_d
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
 from baselines.los import heading_change_to_action
+from baselines.vo_kernel import load_vo_kernel
 from usvsim.common.angles import ssa
 from usvsim.task.batch import ActionKind
 from usvsim.task.observations import SCENE_FEATURES, ObservationKind
@@ -102,6 +105,17 @@ class VOConfig:
 _ARC_FRACTIONS = np.linspace(0.0, 1.0, 6)  # samples along a turn (start ... end)
 
 
+def _turn(
+    cfg: VOConfig, speed: FloatArray, course: FloatArray, theta: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The turn from ``course`` onto each candidate ``theta`` (N, C) rad, its duration (N, C) s
+    at rate ω and the arc's signed radius U / ω (N, C) m (positive: to starboard)."""
+    turn = ssa(theta[None, :] - course[:, None])  # (N, C)
+    t_turn = np.abs(turn) / cfg.turn_rate_radps
+    sign = np.where(turn >= 0, 1.0, -1.0)
+    return turn, t_turn, speed[:, None] / cfg.turn_rate_radps * sign
+
+
 def _turn_arc(
     cfg: VOConfig, speed: FloatArray, course: FloatArray, theta: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -111,15 +125,102 @@ def _turn_arc(
     Velocity U (cos α, sin α), α = course + s ω t, so the position is
     (U / (s ω)) (sin α − sin course, cos course − cos α).
     """
-    turn = ssa(theta[None, :] - course[:, None])  # (N, C)
-    t_turn = np.abs(turn) / cfg.turn_rate_radps
-    sign = np.where(turn >= 0, 1.0, -1.0)
+    turn, t_turn, radius = _turn(cfg, speed, course, theta)
     alpha = course[:, None, None] + turn[..., None] * _ARC_FRACTIONS  # (N, C, S)
-    radius = (speed[:, None] / cfg.turn_rate_radps * sign)[..., None]
     c0 = course[:, None, None]
-    x = radius * (np.sin(alpha) - np.sin(c0))
-    y = radius * (np.cos(c0) - np.cos(alpha))
+    x = radius[..., None] * (np.sin(alpha) - np.sin(c0))
+    y = radius[..., None] * (np.cos(c0) - np.cos(alpha))
     return np.stack([x, y], axis=-1), t_turn
+
+
+@dataclass(frozen=True)
+class _Geometry:
+    """What the candidate-by-slot terms need: own speed U (N,) m/s and course over ground (N,)
+    rad (body frame), candidates θ (C,) rad; per slot (N, K): position p (N, K, 2) m and
+    velocity over ground (N, K, 2) m/s in the body frame, validity, cone radius R_safe m, disc
+    radius R m and whether the COLREG terms apply (give way)."""
+
+    speed: FloatArray
+    course: FloatArray
+    theta: FloatArray
+    p: FloatArray
+    v_obs: FloatArray
+    valid: NDArray[np.bool_]
+    r_safe: FloatArray
+    radius: FloatArray
+    give_way: NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class _SlotTerms:
+    """Per boat, candidate and slot (N, C, K): the VO cost term [θ ∈ VO] (1.1 − t_hit/τ), the
+    COLREG flag, [θ ∈ VO], the starboard-pass flag and the shortfall (the last three None
+    unless asked for)."""
+
+    vo: FloatArray
+    colreg: NDArray[np.bool_]
+    in_vo: NDArray[np.bool_] | None = None
+    starboard: NDArray[np.bool_] | None = None
+    shortfall: FloatArray | None = None
+
+
+def _slot_terms_numpy(cfg: VOConfig, g: _Geometry) -> _SlotTerms:
+    """The terms with (N, C, S, K, 2) arrays (the reference; module docstring)."""
+    p, v_obs, valid, r_safe = g.p, g.v_obs, g.valid, g.r_safe
+    cand = g.speed[:, None, None] * np.stack([np.cos(g.theta), np.sin(g.theta)], -1)[None]
+    w = cand[:, :, None, :] - v_obs[:, None, :, :]  # (N, C, K, 2)
+    # the boat first turns onto θ at rate ω (an arc), then holds it: the cone starts at the
+    # arc's end, and the arc itself must keep clear too
+    arc_pos, t_turn = _turn_arc(cfg, g.speed, g.course, g.theta)  # (N, C, S, 2), (N, C)
+    t_arc = t_turn[..., None] * _ARC_FRACTIONS  # (N, C, S)
+    obst_at = p[:, None, None] + v_obs[:, None, None] * t_arc[..., None, None]  # (N, C, S, K, 2)
+    gap = np.hypot(*np.moveaxis(obst_at - arc_pos[:, :, :, None, :], -1, 0))  # (N, C, S, K)
+    r_arc = g.radius + cfg.arc_margin_m  # the turn itself only has to stay off the obstacle
+    arc_hit = valid[:, None, None] & (gap < r_arc[:, None, None]) & (gap < gap[:, :, :1])
+    first = np.argmax(arc_hit, axis=2)  # first intruding sample
+    hit_arc = arc_hit.any(axis=2)  # (N, C, K)
+    t_arc_hit = np.take_along_axis(t_arc, first, axis=2)  # (N, C, K)
+    rel = obst_at[:, :, -1] - arc_pos[:, :, -1, None, :]  # at the arc's end (N, C, K, 2)
+    pw = np.einsum("nckd,nckd->nck", w, rel)
+    ww = np.maximum(np.einsum("nckd,nckd->nck", w, w), 1e-9)
+    t_star = np.clip(pw / ww, 0.0, cfg.horizon_s)
+    miss = rel - w * t_star[..., None]
+    d_cpa = np.hypot(miss[..., 0], miss[..., 1])
+    in_cone = valid[:, None] & (pw > 0) & (d_cpa < r_safe[:, None])
+    t_hit = np.where(hit_arc, t_arc_hit, t_turn[..., None] + t_star)
+    in_vo = hit_arc | in_cone
+    term = in_vo * (1.1 - np.minimum(t_hit, cfg.horizon_s) / cfg.horizon_s)
+    short_cone = in_cone * (1.0 - d_cpa / r_safe[:, None])
+    short_arc = hit_arc * (1.0 - gap.min(axis=2) / r_arc[:, None])
+    pw = np.einsum("nckd,nkd->nck", w, p)  # closing, from the present position (COLREG)
+    starboard = (w[..., 0] * p[:, None, :, 1] - w[..., 1] * p[:, None, :, 0]) > 0
+    colreg = g.give_way[:, None] & starboard & (pw > 0)
+    return _SlotTerms(term, colreg, in_vo, starboard, np.maximum(short_cone, short_arc))
+
+
+def _slot_terms_compiled(
+    kernel: Callable[..., None], cfg: VOConfig, g: _Geometry, more: bool
+) -> _SlotTerms:
+    """The terms from :mod:`baselines.vo_kernel` (equal to :func:`_slot_terms_numpy`'s);
+    ``more``: also [θ ∈ VO], the starboard flags and the shortfall."""
+    n, k = g.valid.shape
+    c, s = g.theta.size, _ARC_FRACTIONS.size
+    turn, t_turn, radius = _turn(cfg, g.speed, g.course, g.theta)
+    term = np.empty((n, c, k))
+    colreg = np.empty((n, c, k), dtype=np.bool_)
+    in_vo = np.empty((n, c, k), dtype=np.bool_) if more else None
+    starboard = np.empty((n, c, k), dtype=np.bool_) if more else None
+    shortfall = np.empty((n, c, k)) if more else None
+    arrays = [
+        np.ascontiguousarray(a)
+        for a in (_ARC_FRACTIONS, np.cos(g.theta), np.sin(g.theta), g.speed, g.course,
+                  np.sin(g.course), np.cos(g.course), turn, t_turn, radius, g.p, g.v_obs,
+                  g.valid, g.give_way, g.r_safe, g.radius + cfg.arc_margin_m)
+    ]  # fmt: skip
+    out = [None if a is None else a.ctypes.data for a in (in_vo, starboard, shortfall)]
+    kernel(n, c, k, s, *(a.ctypes.data for a in arrays), cfg.horizon_s, term.ctypes.data,
+           colreg.ctypes.data, *out)  # fmt: skip
+    return _SlotTerms(term, colreg, in_vo, starboard, shortfall)
 
 
 def vo_course(
@@ -127,12 +228,16 @@ def vo_course(
     observation: NDArray[np.generic],
     previous_rad: FloatArray,
     extra_margin_m: FloatArray | None = None,
+    backend: Literal["auto", "compiled", "numpy"] = "auto",
 ) -> tuple[FloatArray, NDArray[np.bool_]]:
     """The chosen course over ground θ* (N,) rad relative to the heading, and whether any
     candidate near the goal's bearing was blocked (avoiding), from ``scene`` observations.
 
     ``extra_margin_m`` (N,) m, optional: added to every obstacle's margin m_j in the cone test
     of that boat only (wider passes); the turn's own clearance (``arc_margin_m``) is unchanged.
+    ``backend``: the candidate-by-obstacle terms from the compiled kernel of
+    :mod:`baselines.vo_kernel` where it builds (``"auto"``; the same numbers, bit for bit), or
+    from NumPy (``"numpy"``, the reference).
     """
     obs = np.asarray(observation, dtype=np.float64)
     n = obs.shape[0]
@@ -155,37 +260,7 @@ def vo_course(
             )
         r_safe = r_safe + extra[:, None]
     theta = np.linspace(-math.pi, math.pi, cfg.n_candidates, endpoint=False)  # (C,)
-    cand = speed[:, None, None] * np.stack([np.cos(theta), np.sin(theta)], -1)[None]  # (N, C, 2)
-    w = cand[:, :, None, :] - v_obs[:, None, :, :]  # (N, C, K, 2)
-    # the boat first turns onto θ at rate ω (an arc), then holds it: the cone starts at the
-    # arc's end, and the arc itself must keep clear too
     course = np.arctan2(v, u)  # present course over ground (rad, relative to the heading)
-    arc_pos, t_turn = _turn_arc(cfg, speed, course, theta)  # (N, C, S, 2), (N, C)
-    t_arc = t_turn[..., None] * _ARC_FRACTIONS  # (N, C, S)
-    obst_at = p[:, None, None] + v_obs[:, None, None] * t_arc[..., None, None]  # (N, C, S, K, 2)
-    gap = np.hypot(*np.moveaxis(obst_at - arc_pos[:, :, :, None, :], -1, 0))  # (N, C, S, K)
-    r_arc = radius + cfg.arc_margin_m  # the turn itself only has to stay off the obstacle
-    arc_hit = valid[:, None, None] & (gap < r_arc[:, None, None]) & (gap < gap[:, :, :1])
-    first = np.argmax(arc_hit, axis=2)  # first intruding sample
-    hit_arc = arc_hit.any(axis=2)  # (N, C, K)
-    t_arc_hit = np.take_along_axis(t_arc, first, axis=2)  # (N, C, K)
-    rel = obst_at[:, :, -1] - arc_pos[:, :, -1, None, :]  # at the arc's end (N, C, K, 2)
-    pw = np.einsum("nckd,nckd->nck", w, rel)
-    ww = np.maximum(np.einsum("nckd,nckd->nck", w, w), 1e-9)
-    t_star = np.clip(pw / ww, 0.0, cfg.horizon_s)
-    miss = rel - w * t_star[..., None]
-    d_cpa = np.hypot(miss[..., 0], miss[..., 1])
-    in_cone = valid[:, None] & (pw > 0) & (d_cpa < r_safe[:, None])
-    t_hit = np.where(hit_arc, t_arc_hit, t_turn[..., None] + t_star)
-    in_vo = hit_arc | in_cone
-    cost_vo = cfg.w_vo * np.sum(
-        in_vo * (1.1 - np.minimum(t_hit, cfg.horizon_s) / cfg.horizon_s), -1
-    )
-    if cfg.w_shortfall > 0:  # share of the margin a blocked candidate misses, arc or cone
-        short_cone = in_cone * (1.0 - d_cpa / r_safe[:, None])
-        short_arc = hit_arc * (1.0 - gap.min(axis=2) / r_arc[:, None])
-        cost_vo = cost_vo + cfg.w_shortfall * np.sum(np.maximum(short_cone, short_arc), -1)
-    pw = np.einsum("nckd,nkd->nck", w, p)  # closing, from the present position (COLREG)
     # COLREG 14/15 for moving obstacles: head-on, or crossing from starboard and closing
     course_rel = np.arctan2(v_obs[..., 1], v_obs[..., 0])
     closing = np.einsum("nkd,nkd->nk", p, slots[..., 3:5]) < 0
@@ -199,8 +274,20 @@ def vo_course(
     d0 = np.hypot(*np.moveaxis(p - w0 * np.clip(t0, 0.0, None)[..., None], -1, 0))
     risk = (t0 > 0) & (t0 < cfg.horizon_s) & (d0 < r_safe)
     give_way = valid & moving & risk & (head_on | crossing)
-    starboard_pass = (w[..., 0] * p[:, None, :, 1] - w[..., 1] * p[:, None, :, 0]) > 0
-    cost_colreg = cfg.w_colreg * np.sum(give_way[:, None] & starboard_pass & (pw > 0), axis=-1)
+    geometry = _Geometry(speed, course, theta, p, v_obs, valid, r_safe, radius, give_way)
+    more = cfg.w_shortfall > 0 or cfg.w_static_starboard > 0
+    kernel = load_vo_kernel() if backend != "numpy" else None
+    if backend == "compiled" and kernel is None:
+        raise ValueError("backend 'compiled': the vo kernel did not build (no C compiler?)")
+    if kernel is not None:
+        terms = _slot_terms_compiled(kernel, cfg, geometry, more)
+    else:
+        terms = _slot_terms_numpy(cfg, geometry)
+    cost_vo = cfg.w_vo * np.sum(terms.vo, -1)
+    if cfg.w_shortfall > 0 and terms.shortfall is not None:  # share of the margin a blocked
+        # candidate misses, arc or cone
+        cost_vo = cost_vo + cfg.w_shortfall * np.sum(terms.shortfall, -1)
+    cost_colreg = cfg.w_colreg * np.sum(terms.colreg, axis=-1)
     cost = (
         cfg.w_goal * np.abs(ssa(theta[None] - phi_goal[:, None]))
         + cfg.w_turn * np.abs(theta)[None]
@@ -213,9 +300,11 @@ def vo_course(
     )
     rows = np.arange(n)
     goal_c = np.argmin(np.abs(ssa(theta[None] - phi_goal[:, None])), axis=1)
-    if cfg.w_static_starboard > 0:
-        in_the_way = valid & ~moving & in_vo[rows, goal_c]  # (N, K): blocks the goal's course
-        cost = cost + cfg.w_static_starboard * np.sum(in_the_way[:, None] & starboard_pass, axis=-1)
+    if cfg.w_static_starboard > 0 and terms.in_vo is not None and terms.starboard is not None:
+        in_the_way = valid & ~moving & terms.in_vo[rows, goal_c]  # (N, K): blocks the goal
+        cost = cost + cfg.w_static_starboard * np.sum(
+            in_the_way[:, None] & terms.starboard, axis=-1
+        )
     best = np.argmin(cost, axis=1)
     return theta[best], (cost_vo[rows, goal_c] + cost_colreg[rows, goal_c]) > 0
 
@@ -228,6 +317,7 @@ class VOHelmsman:
     """
 
     config: VOConfig = field(default_factory=VOConfig)
+    backend: Literal["auto", "compiled", "numpy"] = "auto"  # vo_course's (the same numbers)
     observation: ObservationKind = field(default="scene", init=False)
     action: ActionKind = field(default="gaussian", init=False)
     last_avoiding: NDArray[np.bool_] | None = field(default=None, init=False, repr=False)
@@ -245,7 +335,10 @@ class VOHelmsman:
             )
         previous = ssa(self._prev_from_goal + obs[:, 1])  # NaN stays NaN: no previous choice
         course, avoiding = vo_course(
-            self.config, obs, np.where(np.isnan(self._prev_from_goal), np.nan, previous)
+            self.config,
+            obs,
+            np.where(np.isnan(self._prev_from_goal), np.nan, previous),
+            backend=self.backend,
         )
         self._prev_from_goal = np.where(avoiding, ssa(course - obs[:, 1]), np.nan)
         self.last_avoiding = avoiding
