@@ -39,7 +39,7 @@ def test_they_learn_from_the_sbmpc_demonstrations_in_the_colreg_encounters() -> 
 
 def test_the_scene_setup_loads_the_shipped_demonstrations() -> None:
     data, n_runs, skipped = expert_pairs(SCENE, SCENE.demos_dir, lambda _: None)
-    assert (n_runs, skipped) == (194, 0)  # 194 of the 226 pass the quality filter
+    assert (n_runs, skipped) == (201, 0)  # 201 of the 250 pass the quality filter
     assert len(data) > 10_000 and data.obs.shape[1] == 4 + 6 * 8  # type: ignore[union-attr]
 
 
