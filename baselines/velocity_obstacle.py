@@ -326,21 +326,33 @@ class VOHelmsman:
         self._prev_from_goal = np.full(n_boats, np.nan)  # θ* − φ_goal of the last decision
         self.last_avoiding = None
 
-    def act(self, observation: NDArray[np.generic]) -> NDArray[np.float32]:
-        """Gaussian actions (N, 1) from ``scene`` observations (N, 4 + 6 k)."""
+    def act(
+        self, observation: NDArray[np.generic], boats: NDArray[np.intp] | None = None
+    ) -> NDArray[np.float32]:
+        """Gaussian actions (N, 1) from ``scene`` observations (N, 4 + 6 k); ``boats`` (N,),
+        optional: which of the ``reset`` boats these are (the others' memory is kept, and
+        ``last_avoiding`` is False for them), e.g. only the vessels present."""
         obs = np.asarray(observation, dtype=np.float64)
-        if obs.shape[0] != self._prev_from_goal.size:
+        size = self._prev_from_goal.size
+        rows = np.arange(size) if boats is None else np.asarray(boats, dtype=np.intp)
+        if obs.shape[0] != rows.size or (rows.size and not 0 <= rows.min() <= rows.max() < size):
             raise ValueError(
-                f"reset({obs.shape[0]}) first: this helmsman has {self._prev_from_goal.size}"
+                f"reset({obs.shape[0]}) first, or give boats in [0, {size}) one per observation:"
+                f" this helmsman has {size}"
             )
-        previous = ssa(self._prev_from_goal + obs[:, 1])  # NaN stays NaN: no previous choice
+        prev_from_goal = self._prev_from_goal[rows]
+        previous = ssa(prev_from_goal + obs[:, 1])  # NaN stays NaN: no previous choice
         course, avoiding = vo_course(
             self.config,
             obs,
-            np.where(np.isnan(self._prev_from_goal), np.nan, previous),
+            np.where(np.isnan(prev_from_goal), np.nan, previous),
             backend=self.backend,
         )
-        self._prev_from_goal = np.where(avoiding, ssa(course - obs[:, 1]), np.nan)
-        self.last_avoiding = avoiding
+        self._prev_from_goal[rows] = np.where(avoiding, ssa(course - obs[:, 1]), np.nan)
+        if boats is None:
+            self.last_avoiding = avoiding
+        else:
+            self.last_avoiding = np.zeros(size, dtype=bool)
+            self.last_avoiding[rows] = avoiding
         crab = np.where(np.hypot(obs[:, 2], obs[:, 3]) > 0.3, np.arctan2(obs[:, 3], obs[:, 2]), 0.0)
         return heading_change_to_action(ssa(course - crab), self.config.max_heading_change_rad)

@@ -66,3 +66,20 @@ def test_no_obstacles_nothing_blocked() -> None:
     fast, avoiding = vo_course(VOConfig(), obs, np.full(4, np.nan), backend="compiled")
     np.testing.assert_array_equal(fast, vo_course(VOConfig(), obs, np.full(4, np.nan))[0])
     assert not avoiding.any()
+
+
+def test_acting_for_some_boats_equals_their_rows_and_keeps_the_others_memory() -> None:
+    obs = _scenes(300, 4)
+    full, some = VOHelmsman(), VOHelmsman()
+    full.reset(300)
+    some.reset(300)
+    rows = np.flatnonzero(np.random.default_rng(5).random(300) < 0.4)
+    for k in range(3):  # the memory (previous choice) carries between decisions
+        step = obs[np.roll(np.arange(300), 7 * k)]
+        expected = full.act(step)[rows]
+        np.testing.assert_array_equal(some.act(step[rows], rows), expected)
+    assert full.last_avoiding is not None and some.last_avoiding is not None
+    np.testing.assert_array_equal(some.last_avoiding[rows], full.last_avoiding[rows])
+    assert not some.last_avoiding[np.setdiff1d(np.arange(300), rows)].any()
+    with pytest.raises(ValueError, match="boats in"):
+        some.act(obs[:2], np.array([0, 300]))

@@ -33,6 +33,7 @@ targets' choice.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -102,6 +103,8 @@ class ReactiveTargets:
         self.n, self.m = n, m
         self.helmsman = helmsman
         self.helmsman.reset(n * m)
+        # a helmsman that can act for some of its boats is asked for the vessels present only
+        self.by_rows = "boats" in inspect.signature(helmsman.act).parameters
         pos0, _ = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, np.zeros((n, m)))
         u = np.stack([np.cos(sim.v_course), np.sin(sim.v_course)], axis=-1)
         self.goal_ne = pos0 + GOAL_AHEAD_M * u  # (N, M, 2)
@@ -171,9 +174,17 @@ class ReactiveTargets:
         tt = np.broadcast_to(t, (n, m))
         pos, vel = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn, tt)
         chi = sim.v_course + sim.v_turn * t
-        obs = self._observations(sim, pos, vel, chi)
         bound = sim.base.max_heading_change_rad
-        turn = np.asarray(self.helmsman.act(obs), dtype=np.float64).reshape(n, m) * bound
+        turn = np.zeros(n * m)
+        if self.by_rows:  # the vessels present only: empty slots' turns are discarded below
+            rows = np.flatnonzero(sim.vessel_ok.reshape(-1))
+            if rows.size:
+                obs = self._observations(sim, pos, vel, chi, rows)
+                turn[rows] = np.asarray(self.helmsman.act(obs, rows), dtype=np.float64).ravel()
+        else:
+            obs = self._observations(sim, pos, vel, chi, np.arange(n * m))
+            turn = np.asarray(self.helmsman.act(obs), dtype=np.float64).ravel()
+        turn = turn.reshape(n, m) * bound
         own_p, own_v = self._own(sim)
         aim = self._give_way(own_p, own_v, pos, vel, chi)
         turn = np.where(self.giving_way, np.clip(ssa(aim - chi), -bound, bound), turn)
@@ -202,10 +213,16 @@ class ReactiveTargets:
         self.giving_way[boats] = False
 
     def _observations(
-        self, sim: OpenWaterBatch, pos: FloatArray, vel: FloatArray, chi: FloatArray
+        self,
+        sim: OpenWaterBatch,
+        pos: FloatArray,
+        vel: FloatArray,
+        chi: FloatArray,
+        rows: NDArray[np.intp],
     ) -> NDArray[np.float32]:
-        """``scene`` observations (N·M, ...) of every target: the own ship first, then the other
-        targets of its episode, then its static obstacles."""
+        """``scene`` observations (R, ...) of the targets ``rows`` (R,) of the N·M flattened
+        slots: the own ship first, then the other targets of its episode, then its static
+        obstacles."""
         n, m = self.n, self.m
         own_p, own_v = self._own(sim)
         k_static = sim.centres.shape[1]
@@ -244,12 +261,12 @@ class ReactiveTargets:
         )
         j = valid.shape[2]
         discs = SceneDiscs(
-            centres.reshape(n * m, j, 2), radii.reshape(n * m, j), velocity.reshape(n * m, j, 2),
-            valid.reshape(n * m, j),
+            centres.reshape(n * m, j, 2)[rows], radii.reshape(n * m, j)[rows],
+            velocity.reshape(n * m, j, 2)[rows], valid.reshape(n * m, j)[rows],
         )  # fmt: skip
         return observe_scene(
-            "scene", pos.reshape(-1, 2), chi.reshape(-1), vel.reshape(-1, 2),
-            self.goal_ne.reshape(-1, 2), discs,
+            "scene", pos.reshape(-1, 2)[rows], chi.reshape(-1)[rows], vel.reshape(-1, 2)[rows],
+            self.goal_ne.reshape(-1, 2)[rows], discs,
         )  # fmt: skip
 
 
