@@ -153,12 +153,12 @@ class _Geometry:
 
 @dataclass(frozen=True)
 class _SlotTerms:
-    """Per boat, candidate and slot (N, C, K): the VO cost term [θ ∈ VO] (1.1 − t_hit/τ), the
-    COLREG flag, [θ ∈ VO], the starboard-pass flag and the shortfall (the last three None
-    unless asked for)."""
+    """Per boat, candidate and slot (N, C, K): the VO cost term [θ ∈ VO] (1.1 − t_hit/τ); per
+    boat and candidate (N, C): how many slots' COLREG terms apply; per slot, only when asked
+    for (else None): [θ ∈ VO], the starboard-pass flag and the shortfall."""
 
     vo: FloatArray
-    colreg: NDArray[np.bool_]
+    colreg: NDArray[np.int64]
     in_vo: NDArray[np.bool_] | None = None
     starboard: NDArray[np.bool_] | None = None
     shortfall: FloatArray | None = None
@@ -194,7 +194,7 @@ def _slot_terms_numpy(cfg: VOConfig, g: _Geometry) -> _SlotTerms:
     short_arc = hit_arc * (1.0 - gap.min(axis=2) / r_arc[:, None])
     pw = np.einsum("nckd,nkd->nck", w, p)  # closing, from the present position (COLREG)
     starboard = (w[..., 0] * p[:, None, :, 1] - w[..., 1] * p[:, None, :, 0]) > 0
-    colreg = g.give_way[:, None] & starboard & (pw > 0)
+    colreg = np.sum(g.give_way[:, None] & starboard & (pw > 0), axis=-1)
     return _SlotTerms(term, colreg, in_vo, starboard, np.maximum(short_cone, short_arc))
 
 
@@ -207,7 +207,7 @@ def _slot_terms_compiled(
     c, s = g.theta.size, _ARC_FRACTIONS.size
     turn, t_turn, radius = _turn(cfg, g.speed, g.course, g.theta)
     term = np.empty((n, c, k))
-    colreg = np.empty((n, c, k), dtype=np.bool_)
+    colreg = np.empty((n, c), dtype=np.int64)
     in_vo = np.empty((n, c, k), dtype=np.bool_) if more else None
     starboard = np.empty((n, c, k), dtype=np.bool_) if more else None
     shortfall = np.empty((n, c, k)) if more else None
@@ -287,9 +287,10 @@ def vo_course(
     if cfg.w_shortfall > 0 and terms.shortfall is not None:  # share of the margin a blocked
         # candidate misses, arc or cone
         cost_vo = cost_vo + cfg.w_shortfall * np.sum(terms.shortfall, -1)
-    cost_colreg = cfg.w_colreg * np.sum(terms.colreg, axis=-1)
+    cost_colreg = cfg.w_colreg * terms.colreg
+    off_goal = np.abs(ssa(theta[None] - phi_goal[:, None]))  # (N, C) rad
     cost = (
-        cfg.w_goal * np.abs(ssa(theta[None] - phi_goal[:, None]))
+        cfg.w_goal * off_goal
         + cfg.w_turn * np.abs(theta)[None]
         + cfg.w_keep
         * np.where(np.isfinite(previous_rad), 1.0, 0.0)[:, None]
@@ -299,7 +300,7 @@ def vo_course(
         + 1e-6 * (theta < 0)[None]  # ties go to starboard (COLREG rule 14)
     )
     rows = np.arange(n)
-    goal_c = np.argmin(np.abs(ssa(theta[None] - phi_goal[:, None])), axis=1)
+    goal_c = np.argmin(off_goal, axis=1)
     if cfg.w_static_starboard > 0 and terms.in_vo is not None and terms.starboard is not None:
         in_the_way = valid & ~moving & terms.in_vo[rows, goal_c]  # (N, K): blocks the goal
         cost = cost + cfg.w_static_starboard * np.sum(

@@ -11,13 +11,14 @@ skips empty slots (their terms are zero there too):
   first such sample's time;
 - cone from the arc's end: ``t* = clip(w·rel / max(w·w, 1e-9), 0, τ)``, ``d_cpa = |rel − w t*|``,
   in the cone where ``w·rel > 0`` and ``d_cpa < R_safe``;
-- outputs (N, C, K): the VO term ``[θ ∈ VO] (1.1 − min(t_hit, τ)/τ)``, the COLREG flag
-  ``give_way ∧ starboard pass ∧ w·p > 0``, and on request ``[θ ∈ VO]``, the starboard-pass flag
-  and the shortfall ``max(in_cone (1 − d_cpa/R_safe), hit_arc (1 − min_s gap / R_arc))``.
+- outputs: per candidate (N, C) the count of COLREG flags ``give_way ∧ starboard pass ∧
+  w·p > 0`` over the slots; per slot (N, C, K) the VO term ``[θ ∈ VO] (1.1 − min(t_hit, τ)/τ)``
+  and on request ``[θ ∈ VO]``, the starboard-pass flag and the shortfall
+  ``max(in_cone (1 − d_cpa/R_safe), hit_arc (1 − min_s gap / R_arc))``.
 
-The sums over slots, the cost and the argmin stay in NumPy, so the result is the NumPy path's bit
-for bit (tested): the arithmetic is its operation for operation (double, no FMA contraction),
-with transcendentals only where libm's equal NumPy's (``sin``, ``cos``, ``hypot``; the
+The VO terms' sum over slots, the cost and the argmin stay in NumPy, so the result is the NumPy
+path's bit for bit (tested): the arithmetic is its operation for operation (double, no FMA
+contraction), with transcendentals only where libm's equal NumPy's (``sin``, ``cos``, ``hypot``; the
 ``arctan2`` of the course comes from NumPy). Tests that cannot change a result are skipped:
 an arc sample farther than ``(R + arc_margin)·(1 + 1e-9)`` by its squared distance, an obstacle
 farther than ``R_arc + (U + |v|) t_turn + 1 m`` from the boat (no sample of the turn can come
@@ -44,20 +45,21 @@ VO_SOURCE = r"""
 
 /* n boats, nc candidates, k slots, ns arc samples. frac (ns); cth, sth (nc): the candidates'
    cos, sin; speed, course, sin_c0, cos_c0 (n); turn, t_turn, radius (n, nc); p, v (n, k, 2);
-   valid, give_way (n, k); r_safe, r_arc (n, k). Outputs (n, nc, k): term, colreg; in_vo,
+   valid, give_way (n, k); r_safe, r_arc (n, k). Outputs: colreg (n, nc) the count of COLREG
+   flags; (n, nc, k): term; in_vo,
    starboard, shortfall where not NULL (shortfall: every test exact, nothing skipped). */
 void usv_vo_terms(int n, int nc, int k, int ns, const double* frac, const double* cth,
                   const double* sth, const double* speed, const double* course,
                   const double* sin_c0, const double* cos_c0, const double* turn,
                   const double* t_turn, const double* radius, const double* p, const double* v,
                   const uint8_t* valid, const uint8_t* give_way, const double* r_safe,
-                  const double* r_arc, double horizon, double* term, uint8_t* colreg,
+                  const double* r_arc, double horizon, double* term, int64_t* colreg,
                   uint8_t* in_vo_out, uint8_t* starboard_out, double* shortfall) {
   const int exact = shortfall != NULL;
   for (int b = 0; b < n; ++b) {
     const long row = (long)b * nc * k;
     memset(term + row, 0, sizeof(double) * nc * k);
-    memset(colreg + row, 0, (size_t)nc * k);
+    memset(colreg + (long)b * nc, 0, sizeof(int64_t) * nc);
     if (in_vo_out) memset(in_vo_out + row, 0, (size_t)nc * k);
     if (starboard_out) memset(starboard_out + row, 0, (size_t)nc * k);
     if (shortfall) memset(shortfall + row, 0, sizeof(double) * nc * k);
@@ -131,7 +133,7 @@ void usv_vo_terms(int n, int nc, int k, int ns, const double* frac, const double
           term[o] = 1.1 - t_hit / horizon;
         }
         if (in_vo_out) in_vo_out[o] = (uint8_t)in_vo;
-        colreg[o] = (uint8_t)(give_way[bj] && stbd && (wx * px + wy * py) > 0);
+        colreg[bc] += give_way[bj] && stbd && (wx * px + wy * py) > 0;
         if (shortfall) {
           const double sc = in_cone ? 1.0 - d_cpa / rs : 0.0;
           const double sa = hit_arc ? 1.0 - min_gap / ra : 0.0;
