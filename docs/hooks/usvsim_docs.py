@@ -13,7 +13,9 @@ Generated at every build, from the code and the tools' outputs, so none of it is
 - ``notebooks/*.ipynb``: ``examples/`` executed (:mod:`gen_notebooks`), rendered by mkdocs-jupyter;
   the images on each built notebook page are counted and the build fails where a page lacks the
   plots its notebook drew (:func:`on_post_build`);
-- ``changelog.md``: the repository's ``CHANGELOG.md``.
+- ``changelog.md``: the repository's ``CHANGELOG.md``;
+- the reward weights, the traffic setups and the expert-likeness table on the "Training in
+  traffic" page (:mod:`gen_traffic`).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ import gen_envs  # noqa: E402
 import gen_notebooks  # noqa: E402
 import gen_plant  # noqa: E402
 import gen_results  # noqa: E402
+import gen_traffic  # noqa: E402
 import readme_figures  # noqa: E402
 
 log = logging.getLogger("mkdocs.hooks.usvsim")
@@ -166,6 +169,9 @@ def on_files(files: Files, config: Any) -> Files:
         "stress-summary": gen_results.stress_summary(stress),
         "model-zoo": gen_results.model_zoo(),
         "training-times": gen_results.training_times(),
+        "colreg-reward-weights": gen_traffic.reward_weights_markdown(),
+        "traffic-setups": gen_traffic.traffic_setups_markdown(),
+        "colreg-likeness": gen_traffic.likeness_table(),
     }
     _notebooks(files, config)
     return files

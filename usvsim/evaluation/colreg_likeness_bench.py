@@ -27,6 +27,7 @@ course, as it cannot steer reactive ones).
 from __future__ import annotations
 
 import math
+import os
 import time
 import zlib
 from collections.abc import Callable, Mapping, Sequence
@@ -204,6 +205,7 @@ class LikenessResult:
     split: str
     reactive_targets: bool
     wall_s: float
+    load: tuple[float, float] = (math.nan, math.nan)  # 1-min load average at start and end
 
     def to_json(self, command: str = "") -> dict[str, Any]:
         """Strict JSON (NaN written as null) that :func:`likeness_markdown` reads."""
@@ -219,6 +221,8 @@ class LikenessResult:
                 "rows": [r.to_json() for r in self.rows],
                 "groups": [g.to_json() for g in self.groups],
                 "wall_s": self.wall_s,
+                "load_1min": list(self.load),
+                "cpus": os.cpu_count(),
                 "command": command,
             }
         )
@@ -245,7 +249,7 @@ def run_likeness(
     if unknown:
         raise UserError(f"seed group member {unknown[0]!r} is not among the helmsmen")
     say = progress or (lambda message: None)
-    start = time.perf_counter()
+    start, load0 = time.perf_counter(), os.getloadavg()[0]
     episodes = [e for s in sets for e in colreg_episodes(s, n, split)]
     label = ",".join(s.name for s in sets) if len(sets) <= 3 else f"{len(sets)} sets"
     say(f"expert {expert} on {len(episodes)} episodes")
@@ -284,7 +288,7 @@ def run_likeness(
     )
     return LikenessResult(
         expert, expert_row, tuple(rows), figures, tuple(s.name for s in sets), n, split,
-        reactive_targets, time.perf_counter() - start,
+        reactive_targets, time.perf_counter() - start, (load0, os.getloadavg()[0]),
     )  # fmt: skip
 
 
@@ -319,6 +323,11 @@ def _suite_cells(row: Mapping[str, Any]) -> str:
     return f"{s} | {row['collisions']} | {c} ({row['encounters']})"
 
 
+def _set_list(sets: Sequence[str]) -> str:
+    """``"imazu-01, imazu-02"``, or ``"imazu-01 … imazu-22"`` for more than four."""
+    return ", ".join(sets) if len(sets) <= 4 else f"{sets[0]} … {sets[-1]}"
+
+
 def likeness_markdown(payload: Mapping[str, Any]) -> str:
     """The comparison as Markdown from its JSON (:meth:`LikenessResult.to_json`): a row per
     helmsman (the expert's own first), then the seeds' IQM table."""
@@ -327,7 +336,7 @@ def likeness_markdown(payload: Mapping[str, Any]) -> str:
     lines = [
         f"# Expert-likeness in traffic: against `{payload['expert']}`",
         "",
-        f"{len(sets)} COLREG sets ({', '.join(sets)}), {payload['episodes_per_set']} episodes "
+        f"{len(sets)} COLREG sets ({_set_list(sets)}), {payload['episodes_per_set']} episodes "
         f"each, {payload['split']} split, targets {targets}. Definitions: "
         "`usvsim.evaluation.colreg_likeness`.",
         "",
@@ -362,7 +371,13 @@ def likeness_markdown(payload: Mapping[str, Any]) -> str:
                 e = g["iqm"][metric]
                 cells.append(_pct(e and e["mean"], e and e["ci95"]) if unit == "%" else _metres(e))
             lines.append(f"| {g['group']} | {len(g['members'])} | {' | '.join(cells)} |")
-    lines += ["", f"Wall-clock {payload['wall_s']:.0f} s."]
+    load = payload.get("load_1min") or [None, None]
+    at = (
+        f" at load {load[0]:.1f}-{load[1]:.1f} on {payload.get('cpus')} cores (1-min average)"
+        if None not in load
+        else ""
+    )
+    lines += ["", f"Wall-clock {payload['wall_s']:.0f} s{at}."]
     if payload.get("command"):
         lines += ["", f"Command: `{payload['command']}`"]
     return "\n".join(lines) + "\n"

@@ -166,6 +166,7 @@ def test_end_to_end_sb_mpc_matches_itself_and_vo_does_not(tmp_path: Path) -> Non
     payload = json.loads((tmp_path / "likeness.json").read_text())
     rows = {r["helmsman"]: r for r in payload["rows"]}
     assert payload["expert"] == "sb-mpc" and payload["sets"] == ["imazu-01", "imazu-02"]
+    assert len(payload["load_1min"]) == 2 and payload["wall_s"] > 0.0  # the load it ran at
     sb, vo = rows["sb-mpc"], rows["vo"]
     assert sb["path_distance_m"]["mean"] == 0.0 and sb["sync_max_m"]["mean"] == 0.0
     assert sb["side_agreement"]["rate"] == 1.0 and sb["side_agreement"]["encounters"] >= 2
