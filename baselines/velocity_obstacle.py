@@ -289,12 +289,13 @@ def vo_course(
         cost_vo = cost_vo + cfg.w_shortfall * np.sum(terms.shortfall, -1)
     cost_colreg = cfg.w_colreg * terms.colreg
     off_goal = np.abs(ssa(theta[None] - phi_goal[:, None]))  # (N, C) rad
+    keep = np.zeros((n, theta.size))  # boats without a previous choice: 0, as 0 · |…| is
+    kept = np.isfinite(previous_rad)
+    keep[kept] = cfg.w_keep * 1.0 * np.abs(ssa(theta[None] - previous_rad[kept][:, None]))
     cost = (
         cfg.w_goal * off_goal
         + cfg.w_turn * np.abs(theta)[None]
-        + cfg.w_keep
-        * np.where(np.isfinite(previous_rad), 1.0, 0.0)[:, None]
-        * np.abs(ssa(theta[None] - np.nan_to_num(previous_rad)[:, None]))
+        + keep
         + cost_vo
         + cost_colreg
         + 1e-6 * (theta < 0)[None]  # ties go to starboard (COLREG rule 14)
