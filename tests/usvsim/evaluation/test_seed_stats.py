@@ -114,16 +114,25 @@ def test_table_survives_its_json(tmp_path: Path) -> None:
     assert load_seed_tables(tmp_path / "none") == {}
 
 
-def test_committed_file_agrees_with_its_per_seed_figures() -> None:
-    """``usvsim/models/seeds/il-categorical-scene-ow.json`` (docs/notes/2026-12-seeds.md)."""
-    table = load_seed_tables()["il-categorical-scene-ow"]
+@pytest.mark.parametrize(
+    ("setup", "picked", "start_short"),
+    [
+        ("il-categorical-scene-ow", 0, (0.82, 1.0, 0.83)),
+        ("il-gaussian-radar-ow", 2, (0.56, 0.56, 0.51)),
+    ],
+)
+def test_committed_file_agrees_with_its_per_seed_figures(
+    setup: str, picked: int, start_short: tuple[float, ...]
+) -> None:
+    """``usvsim/models/seeds/<setup>.json`` (docs/notes/2026-12-seeds.md)."""
+    table = load_seed_tables()[setup]
     assert table.seeds == (0, 1, 2) and table.split == "test" and len(table.sets) == 26
     for f in [*table.sets, table.original]:
         assert f.iqm == pytest.approx(np.mean(f.per_seed), abs=1e-9)
         assert min(f.per_seed) - 1e-9 <= f.ci95[0] <= f.iqm <= f.ci95[1] <= max(f.per_seed) + 1e-9
     means = table.validation_means
-    assert table.picked_seed == sorted(means, key=lambda s: (means[s], s))[1] == 0
-    assert table.figure("start-short").per_seed == (0.82, 1.0, 0.83)
+    assert table.picked_seed == sorted(means, key=lambda s: (means[s], s))[1] == picked
+    assert table.figure("start-short").per_seed == start_short
     assert table.command.startswith("python benchmarks/seed_table.py --setup")
 
 
@@ -148,15 +157,24 @@ def test_columns_only_for_shipped_models_of_a_setup_with_seeds() -> None:
 
 def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
     cards, seeds = load_cards(), load_seed_tables()
-    shipped = next(n for n, c in cards.items() if c.setup == "il-categorical-scene-ow")
+    shipped = {c.setup: n for n, c in cards.items() if c.setup in seeds}
+    assert set(shipped) == set(seeds) == {"il-categorical-scene-ow", "il-gaussian-radar-ow"}
     lines = cards_table(cards, seeds).splitlines()
     assert "stress test: IQM over N seeds [95 % CI]" in lines[0]
     with_iqm = [line for line in lines if "(3 seeds)" in line]
-    assert len(with_iqm) == 1 and with_iqm[0].startswith(shipped + " ")
-    assert "98.1 % [97.7, 98.8] (3 seeds)" in with_iqm[0]
+    assert sorted(line.split()[0] for line in with_iqm) == sorted(shipped.values())
+    for setup, name in shipped.items():
+        o = seeds[setup].original
+        figure = f"{100 * o.iqm:.1f} % [{100 * o.ci95[0]:.1f}, {100 * o.ci95[1]:.1f}] (3 seeds)"
+        assert figure in next(line for line in with_iqm if line.startswith(name + " "))
+    assert (
+        "98.0 % [97.5, 98.8] (3 seeds)"
+        in lines[[ln.split()[0] for ln in lines].index(shipped["il-categorical-scene-ow"])]
+    )
     payload = json.loads(cards_json(cards, seeds))
-    assert list(payload["across_seeds"]) == [shipped]
-    assert payload["across_seeds"][shipped]["picked_seed"] == 0
+    assert sorted(payload["across_seeds"]) == sorted(shipped.values())
+    assert payload["across_seeds"][shipped["il-categorical-scene-ow"]]["picked_seed"] == 0
+    assert payload["across_seeds"][shipped["il-gaussian-radar-ow"]]["picked_seed"] == 2
 
 
 def test_bench_stress_json_carries_the_seed_figures(
