@@ -47,9 +47,15 @@ SETUP_GROUPS: dict[str, tuple[str, ...]] = {
     # the study's four RL setups (not the PPO variants, not the open-water ``-ow`` setups)
     "rl": tuple(n for n, s in SETUPS.items() if not n.endswith("-ppo") and s.task == "pole"),
     "il": tuple(n for n, s in IL_SETUPS.items() if s.task == "pole"),
+    # the open-water family's setups; those trained in traffic with the COLREG terms (issue 41)
+    # form their own group
     "open-water": (
-        *(n for n, s in SETUPS.items() if s.task == "open-water"),
-        *(n for n, s in IL_SETUPS.items() if s.task == "open-water"),
+        *(n for n, s in SETUPS.items() if s.task == "open-water" and "-colreg" not in n),
+        *(n for n, s in IL_SETUPS.items() if s.task == "open-water" and "-colreg" not in n),
+    ),
+    "colreg": (
+        *(n for n in SETUPS if "-colreg" in n),
+        *(n for n in IL_SETUPS if "-colreg" in n),
     ),
 }
 # fields of a setup that name it rather than tune it

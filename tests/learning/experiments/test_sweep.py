@@ -87,6 +87,9 @@ def test_seeds_groups_and_trial_count() -> None:
     assert not any("-ow" in s for s in expand_setups(["rl", "radar", "positional"]))
     ow = expand_setups(["open-water"])
     assert all("-ow" in s for s in ow) and len(ow) == 13  # 4 RL, 4 IL, 3 fine-tuned, 2 continued
+    colreg = expand_setups(["colreg"])
+    assert all("-colreg" in s for s in colreg) and not set(colreg) & set(ow)
+    assert {"rl-gaussian-radar-colreg", "il-gaussian-radar-colreg"} <= set(colreg)
 
 
 def test_spec_round_trip_and_refusals() -> None:
