@@ -48,7 +48,7 @@ _SPEC_OPTIONS = (
 class SweepArgs:
     """Train setups x seeds x hyperparameters on Ray Tune; across-seed statistics (rliable)."""
 
-    setups: str = "positional"  # setups or groups (positional, radar, rl, il, open-water, colreg), comma-separated
+    setups: str = "positional"  # setups or groups, a,b: positional radar rl il open-water colreg
     seeds: str = "0-4"  # a range 0-4 or a list 0,2,7
     name: str = ""  # sweep name; default <setups>-seeds<seeds>
     config: str = ""  # JSON file with the sweep's fields (SweepSpec); then no definition flags
