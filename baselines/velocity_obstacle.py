@@ -247,7 +247,7 @@ def vo_course(
     obs = np.asarray(observation, dtype=np.float64)
     n = obs.shape[0]
     phi_goal, u, v = obs[:, 1], obs[:, 2], obs[:, 3]
-    slots = obs[:, 4:].reshape(n, -1, SCENE_FEATURES)
+    slots = obs[:, 4:].reshape(n, (obs.shape[1] - 4) // SCENE_FEATURES, SCENE_FEATURES)
     used = np.flatnonzero((slots[..., 5] > 0.5).any(axis=0))  # slots fill from the first
     slots = slots[:, : (used[-1] + 1 if used.size else 0)]
     r, phi, radius = slots[..., 0], slots[..., 1], slots[..., 2]

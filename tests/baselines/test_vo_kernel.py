@@ -83,3 +83,10 @@ def test_acting_for_some_boats_equals_their_rows_and_keeps_the_others_memory() -
     assert not some.last_avoiding[np.setdiff1d(np.arange(300), rows)].any()
     with pytest.raises(ValueError, match="boats in"):
         some.act(obs[:2], np.array([0, 300]))
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_an_empty_batch_gives_empty_courses(backend: str) -> None:
+    obs = np.zeros((0, 4 + SCENE_K * SCENE_FEATURES))
+    course, avoiding = vo_course(VOConfig(), obs, np.zeros(0), backend=backend)  # type: ignore[arg-type]
+    assert course.shape == avoiding.shape == (0,)
