@@ -14,17 +14,10 @@ first sample where the range is below ``entry_range_m`` and a risk of collision 
 predicted from the present velocities is below ``risk_cpa_m`` and comes within ``risk_tcpa_s``
 (or the range is already below ``risk_cpa_m``). A target that never meets both has no encounter.
 
-Classification at that sample (COLREG rules 13-15; sectors of :class:`ColregParams`; the
-geometry and the table are :mod:`usvsim.task.colreg_geometry`'s, shared with the training
-reward :mod:`usvsim.task.colreg_reward`):
-
-========================  ==============================================================
-OVERTAKING_GIVE_WAY        |α| > 112.5° (own ship abaft the target's beam), own faster (13)
-OVERTAKEN_STAND_ON         |β| > 112.5° (target abaft our beam), target faster (13, 17)
-HEAD_ON                    |β| < 13° and |α| < 13°: reciprocal courses, each dead ahead (14)
-CROSSING_GIVE_WAY          otherwise with −10° ≤ β: target on the starboard side (15, 16)
-CROSSING_STAND_ON          otherwise, β < −10°: target on the port side (15, 17)
-========================  ==============================================================
+Classification at that sample: COLREG rules 13-15 by the relative bearing β and the aspect α
+(overtaking, overtaken, head-on, crossing give-way or stand-on; sectors of :class:`ColregParams`),
+by :func:`usvsim.task.colreg_geometry.classify_encounter` (the table: that module's docstring); the
+training reward :mod:`usvsim.task.colreg_reward` uses the same function.
 
 Score (after Woerner et al. 2019 and the evaluator of NTNU's colav-simulator; weights in
 :class:`ColregParams`). The encounter runs from its start to the CPA (manoeuvres) and on until the
