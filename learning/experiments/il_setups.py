@@ -262,6 +262,25 @@ _OW_RADAR_GAIL_SCENE_HARSH = dataclasses.replace(_OW_RADAR_GAIL_SCENE, bc_epochs
 # the cloning taking 1,360 of the 2,400 s; no copies: 28 %, 90 %, 5 and 81.4 %)
 _OW_RADAR_GAIL_HARSH = dataclasses.replace(_RADAR_GAIL, bc_epochs=8)
 
+_IL_GAUSSIAN_SCENE_OW = ILSetup(
+    "il-gaussian-scene-ow", "scene", "gaussian", _OW_TRPO, _OW_GAIL, task="open-water"
+)
+_IL_GAUSSIAN_RADAR_OW = ILSetup(
+    "il-gaussian-radar-ow",
+    "radar+goal",
+    "gaussian",
+    _OW_RADAR_TRPO,
+    _OW_RADAR_GAIL_SCENE_HARSH,
+    task="open-water",
+    harsh_radar_copies=3,
+)
+
+
+def _on_colreg(setup: ILSetup, name: str) -> ILSetup:
+    """``setup``'s recipe on the COLREG demonstrations and training family (issue 41)."""
+    return dataclasses.replace(setup, name=name, demos="colreg", family="colreg")
+
+
 IL_SETUPS: dict[str, ILSetup] = {
     s.name: s
     for s in (
@@ -302,19 +321,11 @@ IL_SETUPS: dict[str, ILSetup] = {
             study_success=0.866,
             study_iterations=5000,
         ),
-        ILSetup("il-gaussian-scene-ow", "scene", "gaussian", _OW_TRPO, _OW_GAIL, task="open-water"),
+        _IL_GAUSSIAN_SCENE_OW,
         ILSetup(
             "il-categorical-scene-ow", "scene", "categorical", _OW_TRPO, _OW_GAIL, task="open-water"
         ),
-        ILSetup(
-            "il-gaussian-radar-ow",
-            "radar+goal",
-            "gaussian",
-            _OW_RADAR_TRPO,
-            _OW_RADAR_GAIL_SCENE_HARSH,
-            task="open-water",
-            harsh_radar_copies=3,
-        ),
+        _IL_GAUSSIAN_RADAR_OW,
         # each demonstration also 5 times at the harshest radar, 5/6 of the training episodes
         # there (_OW_RADAR_GAIL_HARSH: the measurements)
         ILSetup(
@@ -327,28 +338,9 @@ IL_SETUPS: dict[str, ILSetup] = {
             harsh_radar_copies=5,
         ),
         # issue 41: GAIL on the SB-MPC expert's COLREG encounters, il-gaussian-radar-ow's recipe
-        ILSetup(
-            "il-gaussian-radar-colreg",
-            "radar+goal",
-            "gaussian",
-            _OW_RADAR_TRPO,
-            _OW_RADAR_GAIL_SCENE_HARSH,
-            task="open-water",
-            harsh_radar_copies=3,
-            demos="colreg",
-            family="colreg",
-        ),
+        _on_colreg(_IL_GAUSSIAN_RADAR_OW, "il-gaussian-radar-colreg"),
         # the upper bound: the true scene, as the expert sees it (il-gaussian-scene-ow's recipe)
-        ILSetup(
-            "il-gaussian-scene-colreg",
-            "scene",
-            "gaussian",
-            _OW_TRPO,
-            _OW_GAIL,
-            task="open-water",
-            demos="colreg",
-            family="colreg",
-        ),
+        _on_colreg(_IL_GAUSSIAN_SCENE_OW, "il-gaussian-scene-colreg"),
     )
 }
 
