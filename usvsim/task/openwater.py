@@ -405,9 +405,12 @@ def _with_weather(
     χ = atan2 of goal − start (rad)."""
     start = episode.start_ne
     course = math.atan2(episode.goal_ne[1] - start[1], episode.goal_ne[0] - start[0])
-    disturbance = episode.disturbance or EpisodeDisturbance()
     weather = draw_weather(ranges, seed, k, course)
-    return replace(episode, disturbance=replace(disturbance, weather=weather))
+    if episode.disturbance is None:
+        disturbance = EpisodeDisturbance(weather=weather)
+    else:
+        disturbance = replace(episode.disturbance, weather=weather)
+    return replace(episode, disturbance=disturbance)
 
 
 def from_pole_episodes(

@@ -98,12 +98,15 @@ class WeatherRanges:
 
 
 # Bales' table (sea states 2-8): H_s (m) and most probable T_p (s), in increasing H_s
-_BALES_HS_TP = tuple(zip(*(SEA_STATES[c][:2] for c in sorted(SEA_STATES) if c >= 2), strict=True))
+_BALES_HS, _BALES_TP = (
+    np.array(column, dtype=float)
+    for column in zip(*(SEA_STATES[c][:2] for c in sorted(SEA_STATES) if c >= 2), strict=True)
+)
 
 
 def _bales_period(hs_m: float) -> float:
     """Most probable T_p (s) of H_s: Bales' table (sea states 2-8) interpolated, clipped."""
-    return float(np.interp(hs_m, *_BALES_HS_TP))
+    return float(np.interp(hs_m, _BALES_HS, _BALES_TP))
 
 
 def draw_weather(ranges: WeatherRanges, seed: int, k: int, course_rad: float) -> Weather:
@@ -120,13 +123,14 @@ def draw_weather(ranges: WeatherRanges, seed: int, k: int, course_rad: float) ->
     hlo, hhi = ranges.hs_range_m
     hs = hlo + (hhi - hlo) * u[4]
     wave_dir = wind_dir + ranges.wave_spread_rad * (2.0 * u[5] - 1.0)
+    wind_dir, wave_dir = ssa(np.array([wind_dir, wave_dir])).tolist()
     return Weather(
         wind_speed_mps=float(speed),
-        wind_dir_rad=float(ssa(wind_dir)),
+        wind_dir_rad=wind_dir,
         gust_intensity=float(gust) if speed > 0 else 0.0,
         hs_m=float(hs),
         tp_s=_bales_period(hs) if hs > 0 else 10.0,
-        wave_dir_rad=float(ssa(wave_dir)),
+        wave_dir_rad=wave_dir,
     )
 
 

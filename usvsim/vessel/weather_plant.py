@@ -154,6 +154,9 @@ WEATHER_STATES = (
 )
 NWI, NWS = len(WEATHER_INPUTS), len(WEATHER_STATES)
 _I = {name: i for i, name in enumerate(WEATHER_INPUTS)}
+#: Column of each weather input in the per-episode rows (:attr:`WeatherPlantState.inputs`,
+#: the inputs from ``wind_mean`` on).
+_COL = {name: i - 4 for name, i in _I.items()}
 _S = {name: NS + i for i, name in enumerate(WEATHER_STATES)}
 G = 9.81  # m/s², as usvsim.vessel.weather.waves
 
@@ -331,7 +334,7 @@ def weather_inputs(
     phi, chol = wave_motion_discrete(resp, dt_s)
     a = math.exp(-dt_s / gusts.time_constant_s)
     out = np.zeros((n, NWI - 4))
-    col = {name: i - 4 for name, i in _I.items()}
+    col = _COL
     out[:, col["wind_mean"]] = cond.wind_speed_mps
     out[:, col["wind_dir"]] = cond.wind_dir_rad
     out[:, col["gust_a"]] = a
@@ -383,7 +386,7 @@ def sensed_offsets(
 ) -> NDArray[np.float64]:
     """:func:`sensed_offsets_expr` in NumPy: plant states ``x`` (..., 8), weather states ``m``
     (..., 8), weather inputs ``inputs`` (..., 33) → (..., 4)."""
-    col = {name: i - 4 for name, i in _I.items()}
+    col = _COL
     omega, beta = inputs[..., col["wave_omega"]], inputs[..., col["wave_dir"]]
     shape = inputs[..., col["yaw_gain"]] * omega**2 / G * np.sin(2.0 * (beta - x[..., 2]))
     d = omega * m[..., 1]
@@ -402,7 +405,7 @@ def wave_filter_design(state: WeatherPlantState, autopilot: AutopilotDesign | No
     """One line per boat kind: the wave filter's design for the first boat of ``state`` (the
     encounter frequency, the wave motion's damping and the observer's steady-state gains);
     with ``autopilot`` (the plant's design) a second line, its PID's natural frequency there."""
-    col = {name: i - 4 for name, i in _I.items()}
+    col = _COL
     row = state.inputs[0]
     if row[col["wave_filter"]] == 0:
         return "wave filter: off (calm sea or switched off)"

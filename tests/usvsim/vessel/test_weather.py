@@ -24,6 +24,7 @@ from usvsim.vessel.weather.waves import (
     WaterlinePolygon,
     encounter_frequency,
     jonswap,
+    jonswap_peak,
     mean_drift_force,
     sea_state_from_code,
     wave_displacement,
@@ -124,6 +125,18 @@ def test_wave_response_filter_matches_jonswap_peak_and_variance() -> None:
     assert np.trapezoid(h2, omega) == pytest.approx(1.88**2 / 16, rel=0.01)
     assert h2.max() == pytest.approx(jonswap(w0, 1.88, 8.8)[()], rel=1e-4)
     assert lam == pytest.approx(0.1024, abs=0.001)  # JONSWAP γ = 3.3
+
+
+def test_jonswap_peak_is_the_spectrum_at_its_peak_frequency() -> None:
+    """The closed form S(ω_p) equals JONSWAP evaluated at ω_p = 2π/T_p, and it is the maximum
+    of S over a fine frequency grid (the spectrum peaks at ω_p)."""
+    hs, tp = np.array([0.3, 1.0, 1.88, 4.0]), np.array([3.0, 7.5, 8.8, 12.4])
+    wp = 2 * math.pi / tp
+    np.testing.assert_allclose(jonswap_peak(hs, tp), jonswap(wp, hs, tp), rtol=1e-13)
+    np.testing.assert_allclose(jonswap_peak(hs, tp, 1.0), jonswap(wp, hs, tp, 1.0), rtol=1e-13)
+    grid = np.linspace(0.05, 6.0, 200_001)
+    top = jonswap(grid[None, :], hs[:, None], tp[:, None]).max(axis=1)
+    np.testing.assert_allclose(jonswap_peak(hs, tp), top, rtol=1e-6)
 
 
 def test_simulated_elevation_spectrum_matches_jonswap() -> None:

@@ -28,6 +28,7 @@ overshoot, no settling), as Fossen warns for notches near the bandwidth.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -77,6 +78,11 @@ def wrap_difference(angle: Any) -> Any:
     )
 
 
+#: Measurement matrix H (2, 5): the compass reads ψ + p₁, the gyro r + p₂ (module docstring).
+_H = np.array([[1.0, 0.0, 1.0, 0.0, 0.0], [0.0, 1.0, 0.0, 1.0, 0.0]])
+_H.flags.writeable = False
+
+
 def solve_filter_riccati(
     a: NDArray[np.float64],
     h: NDArray[np.float64],
@@ -100,11 +106,22 @@ def solve_filter_riccati(
     result does not depend on the other boats); raises ``RuntimeError`` if one takes more than
     ``max_iter`` doublings (not stabilisable / detectable). ``compiled``: the same iteration in
     C (:mod:`usvsim.vessel.weather.riccati_kernel`, equal to rounding) where it builds."""
-    g0 = h.T @ np.linalg.solve(r, h)
+    return _doubling(a, h.T @ np.linalg.solve(r, h), q, tol, max_iter, compiled)
+
+
+def _doubling(
+    a: NDArray[np.float64],
+    g0: NDArray[np.float64],
+    q: NDArray[np.float64],
+    tol: float,
+    max_iter: int,
+    compiled: bool,
+) -> NDArray[np.float64]:
+    """:func:`solve_filter_riccati` from G₀ = Hᵀ R⁻¹ H (n, n)."""
     fast = riccati_doubling(np.swapaxes(a, -1, -2), g0, q, tol, max_iter) if compiled else None
     if fast is not None:
         p, iters = fast
-        if np.any(iters < 0):
+        if iters.min(initial=0) < 0:
             raise RuntimeError(f"Riccati doubling did not converge in {max_iter} steps")
         return p
     size = a.shape[-1]
@@ -130,6 +147,16 @@ def solve_filter_riccati(
     raise RuntimeError(f"Riccati doubling did not converge in {max_iter} steps")
 
 
+@functools.lru_cache(maxsize=8)
+def _measurement_noise(noise: ObserverNoise) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """R (2, 2) and G₀ = Hᵀ R⁻¹ H (5, 5) of ``noise``, once per tuning (read-only arrays): an
+    episode start then builds only the per-boat A and Q."""
+    r = np.diag([noise.compass_rad**2, noise.gyro_rad_s**2])
+    g0 = _H.T @ np.linalg.solve(r, _H)
+    r.flags.writeable = g0.flags.writeable = False
+    return r, g0
+
+
 def observer_gains(
     phi: NDArray[np.float64],
     chol: NDArray[np.float64],
@@ -147,8 +174,9 @@ def observer_gains(
     All boats' Riccati equations solved together (:func:`solve_filter_riccati`).
     """
     n = phi.shape[0]
-    h = np.array([[1.0, 0.0, 1.0, 0.0, 0.0], [0.0, 1.0, 0.0, 1.0, 0.0]])
-    r = np.diag([noise.compass_rad**2, noise.gyro_rad_s**2])
+    if n == 0:
+        return np.zeros((0, 5, 2))
+    r, g0 = _measurement_noise(noise)
     a = np.zeros((n, 5, 5))
     a[:, 0:2, 0:2] = phi
     a[:, 2, 2], a[:, 2, 3] = 1.0, dt_s
@@ -156,16 +184,21 @@ def observer_gains(
     a[:, 4, 4] = 1.0
     c2 = (np.asarray(yaw_scale, dtype=float) ** 2)[:, None, None]
     q = np.zeros((n, 5, 5))
-    q[:, 0:2, 0:2] = c2 * (chol @ np.swapaxes(chol, -1, -2)) + 1e-12 * np.eye(2)  # regular DARE
+    q[:, 0:2, 0:2] = c2 * (chol @ np.swapaxes(chol, -1, -2))
+    q[:, 0, 0] += 1e-12  # a regular DARE
+    q[:, 1, 1] += 1e-12
     q[:, 2, 2] = noise.psi_rad**2
     q[:, 3, 3] = (dt_s * noise.rate_rad_s2) ** 2
     q[:, 4, 4] = noise.bias_nm_per_step**2
-    if n == 0:
-        return np.zeros((0, 5, 2))
-    p = solve_filter_riccati(a, h, q, r)
-    ph = p @ h.T
-    innovation = h @ ph + r  # (N, 2, 2), symmetric
-    return np.swapaxes(np.linalg.solve(innovation, np.swapaxes(ph, -1, -2)), -1, -2)
+    p = _doubling(a, g0, q, 1e-15, 64, True)
+    ph = p @ _H.T  # P Hᵀ (N, 5, 2)
+    s = _H @ ph + r  # the innovation covariance (N, 2, 2), symmetric
+    # L = P Hᵀ S⁻¹ with the 2 × 2 inverse written out (a batched LAPACK solve costs more here)
+    det = (s[:, 0, 0] * s[:, 1, 1] - s[:, 0, 1] * s[:, 1, 0])[:, None]
+    gains = np.empty((n, 5, 2))
+    gains[:, :, 0] = (ph[:, :, 0] * s[:, 1, 1, None] - ph[:, :, 1] * s[:, 1, 0, None]) / det
+    gains[:, :, 1] = (ph[:, :, 1] * s[:, 0, 0, None] - ph[:, :, 0] * s[:, 0, 1, None]) / det
+    return gains
 
 
 def observer_correct(

@@ -50,6 +50,7 @@ __all__ = [
     "encounter_frequency",
     "encounter_response",
     "jonswap",
+    "jonswap_peak",
     "mean_drift_force",
     "reflection_squared",
     "sea_state_from_code",
@@ -130,6 +131,15 @@ def jonswap(
     return a_gamma * pm * np.exp(r * math.log(gamma))
 
 
+def jonswap_peak(hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3) -> NDArray[np.float64]:
+    """JONSWAP's peak value S(ω_p) (m² s/rad), ω_p = 2π/T_p: :func:`jonswap` at ω = ω_p, where
+    the peak shape is γ¹ and the Pierson-Moskowitz factor (5/16) H_s² ω_p⁻¹ e^(-5/4) (an episode
+    start needs only this value; a few array operations instead of jonswap's twenty)."""
+    hs = np.asarray(hs_m, dtype=float)
+    factor = (1.0 - 0.287 * math.log(gamma)) * gamma * 5.0 / 16.0 * math.exp(-1.25)
+    return factor / (2.0 * math.pi) * hs**2 * np.asarray(tp_s, dtype=float)
+
+
 def _exp_of_negative(x: NDArray[np.float64]) -> NDArray[np.float64]:
     """exp(x) for x ≤ 0, taken as 0 below x = -700 (exp < 1e-304): NumPy's exp is 10-200x
     slower where its result underflows, and JONSWAP's tails reach x ~ -1e4."""
@@ -154,7 +164,7 @@ def wave_response(hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3) -> WaveR
     hs = np.atleast_1d(np.asarray(hs_m, dtype=float))
     tp = np.atleast_1d(np.asarray(tp_s, dtype=float))
     w0 = 2.0 * math.pi / np.where(hs > 0, tp, 10.0)  # calm: any ω₀, the gain is 0
-    sigma2 = jonswap(w0, hs, 2.0 * math.pi / w0, gamma)  # the spectrum's peak value
+    sigma2 = jonswap_peak(hs, 2.0 * math.pi / w0, gamma)
     m0 = hs**2 / 16.0
     with np.errstate(invalid="ignore", divide="ignore"):
         lam = np.where(hs > 0, m0 / (math.pi * w0 * sigma2), 0.1)
@@ -174,8 +184,8 @@ def encounter_frequency(
     return np.abs(w - w**2 * np.asarray(speed_mps, dtype=float) * np.cos(beta_rad) / G)
 
 
-def _transition(resp: WaveResponse, dt_s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Exact Φ = exp(A Δt) and stationary covariance P∞, each (N, 2, 2).
+def _transition(resp: WaveResponse, dt_s: float) -> NDArray[np.float64]:
+    """Exact Φ = exp(A Δt) (N, 2, 2).
 
     The filter is x'' + 2λω₀x' + ω₀²x = K w; w is white noise of intensity π (one-sided
     PSD 1 in ω), so y = x' has PSD |h(jω)|².
@@ -191,25 +201,28 @@ def _transition(resp: WaveResponse, dt_s: float) -> tuple[NDArray[np.float64], N
     phi[:, 0, 1] = e * s / wd
     phi[:, 1, 0] = -e * w**2 / wd * s
     phi[:, 1, 1] = e * (c - z * w / wd * s)
-    return phi, _stationary_covariance(resp)
+    return phi
 
 
-def _stationary_covariance(resp: WaveResponse) -> NDArray[np.float64]:
-    """P∞ (N, 2, 2) of the wave response filter (:func:`_transition`), diagonal."""
+def _stationary_variances(resp: WaveResponse) -> NDArray[np.float64]:
+    """The diagonal (N, 2) of the wave response filter's stationary covariance P∞
+    (:func:`_transition`; its off-diagonal is zero: x and x' are uncorrelated when stationary)."""
     w, z, k = resp.omega0, resp.damping, resp.gain
-    p = np.zeros((w.size, 2, 2))
-    p[:, 0, 0] = math.pi * k**2 / (4.0 * z * w**3)
-    p[:, 1, 1] = math.pi * k**2 / (4.0 * z * w)
-    return p
+    k2 = math.pi * k**2 / (4.0 * z * w)
+    return np.stack([k2 / w**2, k2], -1)
 
 
-def _chol2(p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Lower Cholesky factors of (N, 2, 2) covariances (0 where singular)."""
-    l = np.zeros_like(p)
-    l[:, 0, 0] = np.sqrt(np.maximum(p[:, 0, 0], 0.0))
+def _chol2(
+    p00: NDArray[np.float64], p10: NDArray[np.float64], p11: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Lower Cholesky factors (N, 2, 2) of covariances given by their entries (N,) each (0 where
+    singular)."""
+    l = np.zeros((np.size(p00), 2, 2))
+    l00 = np.sqrt(np.maximum(p00, 0.0))
+    l[:, 0, 0] = l00
     with np.errstate(invalid="ignore", divide="ignore"):
-        l[:, 1, 0] = np.where(l[:, 0, 0] > 0, p[:, 1, 0] / l[:, 0, 0], 0.0)
-    l[:, 1, 1] = np.sqrt(np.maximum(p[:, 1, 1] - l[:, 1, 0] ** 2, 0.0))
+        l[:, 1, 0] = np.where(l00 > 0, p10 / l00, 0.0)
+    l[:, 1, 1] = np.sqrt(np.maximum(p11 - l[:, 1, 0] ** 2, 0.0))
     return l
 
 
@@ -228,7 +241,7 @@ def encounter_response(
     tp = np.where(calm, 10.0, tp_s)
     wp = 2.0 * math.pi / tp
     we = np.clip(encounter_frequency(wp, speed_mps, relative_dir_rad), 0.1, 0.5 * math.pi / dt_s)
-    sigma2 = jonswap(wp, hs_m, tp)  # peak value of S
+    sigma2 = jonswap_peak(hs_m, tp)
     m0 = hs_m**2 / 16.0
     with np.errstate(invalid="ignore", divide="ignore"):
         lam = np.where(calm, 0.1, m0 / (math.pi * wp * sigma2))
@@ -240,8 +253,8 @@ def wave_motion_init(rng: np.random.Generator, resp: WaveResponse) -> NDArray[np
     """Filter states (N, 2) drawn from the stationary distribution (no start-up transient)."""
     if np.any(resp.damping >= 1.0):
         raise UserError("wave response damping λ must be < 1 (a peaked spectrum)")
-    p = _stationary_covariance(resp)
-    return np.einsum("nij,nj->ni", _chol2(p), rng.standard_normal((resp.omega0.size, 2)))
+    # P∞ is diagonal: its Cholesky factor is the standard deviations
+    return np.sqrt(_stationary_variances(resp)) * rng.standard_normal((resp.omega0.size, 2))
 
 
 def wave_motion_discrete(
@@ -249,9 +262,10 @@ def wave_motion_discrete(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Φ (N, 2, 2) and the lower Cholesky factor L (N, 2, 2) of the exact discrete model
     x' = Φ x + L ξ, L Lᵀ = P∞ - Φ P∞ Φᵀ, ξ ~ N(0, I)."""
-    phi, p = _transition(resp, dt_s)
-    qd = p - np.einsum("nij,njk,nlk->nil", phi, p, phi)
-    return phi, _chol2(qd)
+    phi = _transition(resp, dt_s)
+    v = _stationary_variances(resp)  # P∞ is diagonal: (Φ P∞ Φᵀ)_ij = Σ_k Φ_ik v_k Φ_jk
+    pp = (phi * v[:, None, :]) @ np.swapaxes(phi, -1, -2)
+    return phi, _chol2(v[:, 0] - pp[:, 0, 0], -pp[:, 1, 0], v[:, 1] - pp[:, 1, 1])
 
 
 def wave_motion_step(
