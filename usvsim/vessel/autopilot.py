@@ -57,6 +57,7 @@ __all__ = [
     "control_law",
     "design_autopilot",
     "design_report",
+    "natural_per_bandwidth",
     "sway_yaw_design_model",
     "wave_mode_gain_changes",
 ]
@@ -330,6 +331,13 @@ WAVE_BANDWIDTH_RATIO = 1.0
 WAVE_DESIGN_MIN_HS_M = 0.1
 
 
+def natural_per_bandwidth(zeta: float) -> float:
+    """ω_n / ω_b of a second-order closed loop of relative damping ``zeta``: 1 / √(1 − 2ζ² +
+    √(4ζ⁴ − 4ζ² + 2)) (Fossen 2021, §15.3; 1.55 at ζ = 1)."""
+    z2 = zeta**2
+    return 1.0 / math.sqrt(1.0 - 2.0 * z2 + math.sqrt(4.0 * z2 * z2 - 4.0 * z2 + 2.0))
+
+
 def wave_mode_gain_changes(
     design: AutopilotDesign, omega_e_rad_s: NDArray[np.float64], hs_m: NDArray[np.float64]
 ) -> NDArray[np.float64]:
@@ -350,9 +358,7 @@ def wave_mode_gain_changes(
     out = np.zeros((omega_e.size, 3))
     if c.kind != "pid":
         return out
-    z2 = c.zeta**2
-    per_bandwidth = 1.0 / math.sqrt(1.0 - 2.0 * z2 + math.sqrt(4.0 * z2 * z2 - 4.0 * z2 + 2.0))
-    wn = np.minimum(c.omega_n, WAVE_BANDWIDTH_RATIO * omega_e * per_bandwidth)
+    wn = np.minimum(c.omega_n, WAVE_BANDWIDTH_RATIO * omega_e * natural_per_bandwidth(c.zeta))
     lower = (np.asarray(hs_m, dtype=float) >= WAVE_DESIGN_MIN_HS_M) & (wn < c.omega_n)
     gains = np.stack(_pid_gains(design.nomoto.m, design.nomoto.d, wn, c.zeta), axis=-1)
     return np.where(lower[:, None], gains - [design.Kp, design.Kd, design.Ki], 0.0)

@@ -54,9 +54,12 @@ from usvsim.common.angles import ssa_casadi
 from usvsim.common.errors import UserError
 from usvsim.vessel.autopilot import (
     NG,
+    WAVE_BANDWIDTH_RATIO,
+    WAVE_DESIGN_MIN_HS_M,
     AutopilotDesign,
     AutopilotKind,
     control_law,
+    natural_per_bandwidth,
     wave_mode_gain_changes,
 )
 from usvsim.vessel.codegen import BatchStepper
@@ -80,18 +83,23 @@ from usvsim.vessel.weather.loads import (
 from usvsim.vessel.weather.observer import (
     OBSERVER_STATES,
     ObserverNoise,
+    measurement_information,
     observer_correct,
     observer_gains,
     observer_predict,
     wrap_difference,
 )
+from usvsim.vessel.weather.start_kernel import WaveStart, wave_start
 from usvsim.vessel.weather.turning import steady_turn_damping
 from usvsim.vessel.weather.waves import (
     HS_MAX_M,
+    TP_RANGE_S,
     SeaState,
     WaveResponse,
     drift_pressure,
+    drift_pressure_spline,
     encounter_response,
+    jonswap_peak_factor,
     wave_motion_discrete,
     wave_motion_init,
 )
@@ -321,17 +329,28 @@ def weather_inputs(
     yaw_model: tuple[float, float],
     yaw_gain: float = 1.0,
     autopilot: AutopilotDesign | None = None,
+    compiled: bool = True,
 ) -> tuple[NDArray[np.float64], WaveResponse]:
     """Per-boat weather inputs (N, 33) (:data:`WEATHER_INPUTS` from ``wind_mean``) and the
     wave response they were built from; ``wave_filter`` None: the filter off for every boat,
     else its tuning (calm boats keep it off: nothing to filter, and no estimator lag).
     ``autopilot``: where the filter is on, its PID takes the wave design
-    (:func:`usvsim.vessel.autopilot.wave_mode_gain_changes`); None: the calm gains."""
+    (:func:`usvsim.vessel.autopilot.wave_mode_gain_changes`); None: the calm gains.
+    ``compiled``: the wave pieces by :mod:`usvsim.vessel.weather.start_kernel` (the same
+    arithmetic in C, equal to rounding) where it builds; False: the NumPy functions."""
     n = cond.hs_m.size
-    resp = encounter_response(
-        cond.hs_m, cond.tp_s, cond.wave_dir_rad - heading_rad, speed_mps, dt_s
-    )
-    phi, chol = wave_motion_discrete(resp, dt_s)
+    relative = cond.wave_dir_rad - heading_rad
+    fast = None
+    if compiled:
+        fast = _compiled_start(cond, relative, speed_mps, dt_s, wave_filter, yaw_model, yaw_gain,
+                               autopilot)  # fmt: skip
+    if fast is not None:
+        resp = WaveResponse(fast.omega0, fast.damping, fast.gain)
+        phi, chol, drift = fast.phi, fast.chol, fast.drift
+    else:
+        resp = encounter_response(cond.hs_m, cond.tp_s, relative, speed_mps, dt_s)
+        phi, chol = wave_motion_discrete(resp, dt_s)
+        drift = np.where(cond.hs_m > 0, drift_pressure(cond.hs_m, cond.tp_s), 0)
     a = math.exp(-dt_s / gusts.time_constant_s)
     out = np.zeros((n, NWI - 4))
     col = _COL
@@ -339,32 +358,66 @@ def weather_inputs(
     out[:, col["wind_dir"]] = cond.wind_dir_rad
     out[:, col["gust_a"]] = a
     out[:, col["gust_gain"]] = cond.gust_intensity * cond.wind_speed_mps * math.sqrt(1 - a * a)
-    out[:, col["drift_pressure"]] = np.where(cond.hs_m > 0, drift_pressure(cond.hs_m, cond.tp_s), 0)
+    out[:, col["drift_pressure"]] = drift
     out[:, col["wave_dir"]] = cond.wave_dir_rad
     out[:, col["wave_omega"]] = resp.omega0
     for name, angle in (("wind", cond.wind_dir_rad), ("wave", cond.wave_dir_rad)):
         out[:, col[f"{name}_cos"]], out[:, col[f"{name}_sin"]] = np.cos(angle), np.sin(angle)
-    for name in ("phi00", "phi01", "phi10", "phi11"):  # Φ[i, j] as phi<i><j>
-        out[:, col[name]] = phi[:, int(name[3]), int(name[4])]
+    out[:, col["phi00"] : col["phi11"] + 1] = phi.reshape(n, 4)  # Φ row-major
     for name in ("l00", "l10", "l11"):
         out[:, col[name]] = chol[:, int(name[1]), int(name[2])]
     out[:, col["yaw_gain"]] = yaw_gain
-    if wave_filter is not None:
-        # only boats in waves get a filter (their Riccati equations alone: each boat's gains
-        # do not depend on the others, observer.solve_filter_riccati); calm ones keep zeros
-        wavy = cond.hs_m > 0
-        out[:, col["wave_filter"]] = wavy
-        if wavy.any():
-            rel = cond.wave_dir_rad[wavy] - heading_rad[wavy]
-            scale = yaw_gain * resp.omega0[wavy] ** 3 / G * np.sin(2.0 * rel)
-            gains = observer_gains(phi[wavy], chol[wavy], scale, *yaw_model, dt_s, wave_filter)
-            first = col[f"gain_{OBSERVER_STATES[0]}_compass"]  # the ten gains, row-major
-            out[wavy, first : first + 2 * len(OBSERVER_STATES)] = gains.reshape(-1, 10)
-            if autopilot is not None:
-                out[wavy, col["pid_dkp"] : col["pid_dki"] + 1] = wave_mode_gain_changes(
-                    autopilot, resp.omega0[wavy], cond.hs_m[wavy]
-                )
+    if wave_filter is None:
+        return out, resp
+    # only boats in waves get a filter (their Riccati equations alone: each boat's gains
+    # do not depend on the others, observer.solve_filter_riccati); calm ones keep zeros
+    wavy = cond.hs_m > 0
+    out[:, col["wave_filter"]] = wavy
+    first = col[f"gain_{OBSERVER_STATES[0]}_compass"]  # the ten gains, row-major
+    gains = slice(first, first + 2 * len(OBSERVER_STATES))
+    pid = slice(col["pid_dkp"], col["pid_dki"] + 1)
+    if fast is not None:
+        out[:, gains], out[:, pid] = fast.gains, fast.pid
+    elif wavy.any():
+        scale = yaw_gain * resp.omega0[wavy] ** 3 / G * np.sin(2.0 * relative[wavy])
+        l = observer_gains(phi[wavy], chol[wavy], scale, *yaw_model, dt_s, wave_filter)
+        out[wavy, gains] = l.reshape(-1, 10)
+        if autopilot is not None:
+            out[wavy, pid] = wave_mode_gain_changes(autopilot, resp.omega0[wavy], cond.hs_m[wavy])
     return out, resp
+
+
+def _compiled_start(
+    cond: SeaConditions,
+    relative_dir_rad: NDArray[np.float64],
+    speed_mps: NDArray[np.float64],
+    dt_s: float,
+    wave_filter: ObserverNoise | None,
+    yaw_model: tuple[float, float],
+    yaw_gain: float,
+    autopilot: AutopilotDesign | None,
+) -> WaveStart | None:
+    """:func:`weather_inputs`' wave pieces from the C kernel, or None (no compiler, or a peak
+    period outside the drift pressure spline's range: the NumPy path integrates those)."""
+    tp_lo, tp_hi = TP_RANGE_S
+    if (((cond.tp_s < tp_lo) | (cond.tp_s > tp_hi)) & (cond.hs_m > 0)).any():
+        return None
+    noise = wave_filter or ObserverNoise()
+    r, g0 = measurement_information(noise)
+    pid = autopilot is not None and autopilot.config.kind == "pid"
+    c = autopilot.config if autopilot is not None else None
+    nomoto = autopilot.nomoto if autopilot is not None else None
+    scalars = np.array([
+        dt_s, G, jonswap_peak_factor(), 0.5 * math.pi / dt_s, wave_filter is not None, yaw_gain,
+        *yaw_model, r[0, 0], r[1, 1], noise.psi_rad**2, (dt_s * noise.rate_rad_s2) ** 2,
+        noise.bias_nm_per_step**2, 1e-15, 64,
+        pid, c.omega_n if c else 0.0, c.zeta if c else 0.0,
+        natural_per_bandwidth(c.zeta) if c else 0.0, WAVE_BANDWIDTH_RATIO, WAVE_DESIGN_MIN_HS_M,
+        *((autopilot.Kp, autopilot.Kd, autopilot.Ki) if autopilot is not None else (0, 0, 0)),
+        *((nomoto.m, nomoto.d) if nomoto is not None else (1.0, 0.0)),
+    ], dtype=float)  # fmt: skip
+    knots, coef = drift_pressure_spline()
+    return wave_start(cond.hs_m, cond.tp_s, relative_dir_rad, speed_mps, scalars, g0, knots, coef)
 
 
 def sensed_offsets_expr(s: ca.SX, w: ca.SX) -> ca.SX:

@@ -42,6 +42,7 @@ from usvsim.vessel.weather.riccati_kernel import riccati_doubling
 __all__ = [
     "OBSERVER_STATES",
     "ObserverNoise",
+    "measurement_information",
     "observer_correct",
     "observer_gains",
     "observer_predict",
@@ -148,7 +149,9 @@ def _doubling(
 
 
 @functools.lru_cache(maxsize=8)
-def _measurement_noise(noise: ObserverNoise) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def measurement_information(
+    noise: ObserverNoise,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """R (2, 2) and G₀ = Hᵀ R⁻¹ H (5, 5) of ``noise``, once per tuning (read-only arrays): an
     episode start then builds only the per-boat A and Q."""
     r = np.diag([noise.compass_rad**2, noise.gyro_rad_s**2])
@@ -176,7 +179,7 @@ def observer_gains(
     n = phi.shape[0]
     if n == 0:
         return np.zeros((0, 5, 2))
-    r, g0 = _measurement_noise(noise)
+    r, g0 = measurement_information(noise)
     a = np.zeros((n, 5, 5))
     a[:, 0:2, 0:2] = phi
     a[:, 2, 2], a[:, 2, 3] = 1.0, dt_s

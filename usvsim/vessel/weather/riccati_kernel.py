@@ -25,12 +25,14 @@ from numpy.typing import NDArray
 
 from usvsim.common.cbuild import load_function
 
-__all__ = ["MAX_SIZE", "riccati_doubling"]
+__all__ = ["HELPERS", "MAX_SIZE", "riccati_doubling"]
 
 #: Largest state size the C kernel takes (the wave filter has 5).
 MAX_SIZE = 8
 
-_SOURCE = r"""
+#: The shared C helpers: small matrix products, an LU solve and one boat's doubling
+#: (:mod:`usvsim.vessel.weather.start_kernel` builds on them).
+HELPERS = r"""
 #include <math.h>
 #include <string.h>
 #define MS 8
@@ -76,54 +78,63 @@ static int solve(int d, int r, double* w, double* rhs) {
     }
   return 1;
 }
-/* per boat b: a_c (d x d, the control-form A = Aᵀ of the filter), g0 (d x d, Hᵀ R⁻¹ H, shared),
-   q (d x d) -> p (d x d) and iters[b] = doublings used, -1 if not converged in max_iter, -2 if
-   a W was singular */
+/* one boat's doubling: a_c (d x d, the control-form A = Aᵀ of the filter), g0 (d x d,
+   Hᵀ R⁻¹ H), q (d x d) -> p (d x d); returns the doublings used, -1 if not converged in
+   max_iter, -2 if a W was singular */
+static int doubling(int d, const double* a_c, const double* g0, const double* q, double tol,
+                    int max_iter, double* p) {
+  double ak[MS * MS], gk[MS * MS], qk[MS * MS], w[MS * MS], x[MS * 2 * MS];
+  double wa[MS * MS], wg[MS * MS], akt[MS * MS], t1[MS * MS], step[MS * MS], t2[MS * MS];
+  int dd = d * d, status = -1;
+  memcpy(ak, a_c, sizeof(double) * dd);
+  memcpy(gk, g0, sizeof(double) * dd);
+  memcpy(qk, q, sizeof(double) * dd);
+  for (int it = 0; it < max_iter; ++it) {
+    mm(d, gk, qk, w);
+    for (int i = 0; i < d; ++i) w[i * d + i] += 1.0;
+    for (int i = 0; i < d; ++i)
+      for (int j = 0; j < d; ++j) {
+        x[i * 2 * d + j] = ak[i * d + j];
+        x[i * 2 * d + d + j] = gk[i * d + j];
+      }
+    if (!solve(d, 2 * d, w, x)) { status = -2; break; }
+    for (int i = 0; i < d; ++i)
+      for (int j = 0; j < d; ++j) {
+        wa[i * d + j] = x[i * 2 * d + j];
+        wg[i * d + j] = x[i * 2 * d + d + j];
+      }
+    for (int i = 0; i < d; ++i)
+      for (int j = 0; j < d; ++j) akt[i * d + j] = ak[j * d + i];
+    mm(d, akt, qk, t1);
+    mm(d, t1, wa, step);
+    double big = 0.0, change = 0.0;
+    for (int i = 0; i < dd; ++i) {
+      qk[i] += step[i];
+      if (fabs(qk[i]) > big) big = fabs(qk[i]);
+      if (fabs(step[i]) > change) change = fabs(step[i]);
+    }
+    mm(d, ak, wg, t1);
+    mm(d, t1, akt, t2);
+    for (int i = 0; i < dd; ++i) gk[i] += t2[i];
+    mm(d, ak, wa, t1);
+    memcpy(ak, t1, sizeof(double) * dd);
+    if (change <= tol * big) { status = it + 1; break; }
+  }
+  for (int i = 0; i < d; ++i)
+    for (int j = 0; j < d; ++j) p[i * d + j] = 0.5 * (qk[i * d + j] + qk[j * d + i]);
+  return status;
+}
+"""
+
+_ENTRY = r"""
+/* per boat b: a_c, q (d x d each, boat b's) and the shared g0 -> p (d x d) and iters[b] (as
+   doubling's return) */
 void usv_riccati_doubling(int n, int d, const double* a_c, const double* g0, const double* q,
                           double tol, int max_iter, double* p, int* iters) {
   #pragma omp parallel for schedule(static) if(n >= 256)
   for (int b = 0; b < n; ++b) {
-    double ak[MS * MS], gk[MS * MS], qk[MS * MS], w[MS * MS], x[MS * 2 * MS];
-    double wa[MS * MS], wg[MS * MS], akt[MS * MS], t1[MS * MS], step[MS * MS], t2[MS * MS];
-    int dd = d * d, status = -1;
-    memcpy(ak, a_c + (long)b * dd, sizeof(double) * dd);
-    memcpy(gk, g0, sizeof(double) * dd);
-    memcpy(qk, q + (long)b * dd, sizeof(double) * dd);
-    for (int it = 0; it < max_iter; ++it) {
-      mm(d, gk, qk, w);
-      for (int i = 0; i < d; ++i) w[i * d + i] += 1.0;
-      for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) {
-          x[i * 2 * d + j] = ak[i * d + j];
-          x[i * 2 * d + d + j] = gk[i * d + j];
-        }
-      if (!solve(d, 2 * d, w, x)) { status = -2; break; }
-      for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) {
-          wa[i * d + j] = x[i * 2 * d + j];
-          wg[i * d + j] = x[i * 2 * d + d + j];
-        }
-      for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) akt[i * d + j] = ak[j * d + i];
-      mm(d, akt, qk, t1);
-      mm(d, t1, wa, step);
-      double big = 0.0, change = 0.0;
-      for (int i = 0; i < dd; ++i) {
-        qk[i] += step[i];
-        if (fabs(qk[i]) > big) big = fabs(qk[i]);
-        if (fabs(step[i]) > change) change = fabs(step[i]);
-      }
-      mm(d, ak, wg, t1);
-      mm(d, t1, akt, t2);
-      for (int i = 0; i < dd; ++i) gk[i] += t2[i];
-      mm(d, ak, wa, t1);
-      memcpy(ak, t1, sizeof(double) * dd);
-      if (change <= tol * big) { status = it + 1; break; }
-    }
-    for (int i = 0; i < d; ++i)
-      for (int j = 0; j < d; ++j)
-        p[(long)b * dd + i * d + j] = 0.5 * (qk[i * d + j] + qk[j * d + i]);
-    iters[b] = status;
+    long o = (long)b * d * d;
+    iters[b] = doubling(d, a_c + o, g0, q + o, tol, max_iter, p + o);
   }
 }
 """
@@ -133,7 +144,7 @@ void usv_riccati_doubling(int n, int d, const double* a_c, const double* g0, con
 def _kernel() -> Any | None:
     ptr, int_ = ctypes.c_void_p, ctypes.c_int
     argtypes = [int_, int_, ptr, ptr, ptr, ctypes.c_double, int_, ptr, ptr]
-    return load_function(_SOURCE, "usv_riccati_doubling", argtypes, prefix="riccati")
+    return load_function(HELPERS + _ENTRY, "usv_riccati_doubling", argtypes, prefix="riccati")
 
 
 def riccati_doubling(

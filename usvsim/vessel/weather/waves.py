@@ -46,11 +46,13 @@ __all__ = [
     "WaveResponse",
     "drift_pressure",
     "drift_pressure_direct",
+    "drift_pressure_spline",
     "drift_table",
     "encounter_frequency",
     "encounter_response",
     "jonswap",
     "jonswap_peak",
+    "jonswap_peak_factor",
     "mean_drift_force",
     "reflection_squared",
     "sea_state_from_code",
@@ -136,8 +138,12 @@ def jonswap_peak(hs_m: ArrayLike, tp_s: ArrayLike, gamma: float = 3.3) -> NDArra
     the peak shape is γ¹ and the Pierson-Moskowitz factor (5/16) H_s² ω_p⁻¹ e^(-5/4) (an episode
     start needs only this value; a few array operations instead of jonswap's twenty)."""
     hs = np.asarray(hs_m, dtype=float)
-    factor = (1.0 - 0.287 * math.log(gamma)) * gamma * 5.0 / 16.0 * math.exp(-1.25)
-    return factor / (2.0 * math.pi) * hs**2 * np.asarray(tp_s, dtype=float)
+    return jonswap_peak_factor(gamma) * hs**2 * np.asarray(tp_s, dtype=float)
+
+
+def jonswap_peak_factor(gamma: float = 3.3) -> float:
+    """S(ω_p) / (H_s² T_p) (rad⁻¹) of :func:`jonswap_peak`: a_γ γ (5/16) e^(-5/4) / (2π)."""
+    return (1.0 - 0.287 * math.log(gamma)) * gamma * 5.0 / 16.0 * math.exp(-1.25) / (2.0 * math.pi)
 
 
 def _exp_of_negative(x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -361,6 +367,17 @@ def _drift_pressure_spline(draft_m: float, gamma: float) -> CubicSpline:
         [drift_pressure_direct(np.ones(c.size), c, draft_m, gamma) for c in np.array_split(tp, 4)]
     )
     return CubicSpline(np.log(tp), np.log(unit))
+
+
+def drift_pressure_spline(
+    draft_m: float = USV105_WATERLINE.draft_m, gamma: float = 3.3
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The spline :func:`drift_pressure` evaluates, as scipy's piecewise cubic: breakpoints
+    ln T_p (M,) and coefficients (4, M - 1), highest power first (read-only arrays)."""
+    spline = _drift_pressure_spline(float(draft_m), float(gamma))
+    knots, coef = spline.x.view(), spline.c.view()
+    knots.flags.writeable = coef.flags.writeable = False
+    return knots, coef
 
 
 def drift_pressure(
