@@ -20,6 +20,9 @@ the new run must equal the table's (the same episodes; otherwise the merge stops
 
     usvsim bench --suite colreg --helmsmen sb-mpc,sb-mpc-radar --colreg-episodes 20 --json >new.json
     python benchmarks/colreg_table.py new.json --merge docs/guide/colreg-suite.md
+
+``--replace`` is ``--merge`` where a helmsman in both takes the new run's row (a shipped file
+replaced by another seed's: same name, new weights); the note says which rows were replaced.
 """
 
 from __future__ import annotations
@@ -170,11 +173,14 @@ def _anchor(name: str, present: list[str], order: list[str]) -> str | None:
     return next((h for h in reversed(before) if h in present), None)
 
 
-def merge_block(old: str, new: str, note: str, order: list[str], columns: bool = False) -> str:
+def merge_block(
+    old: str, new: str, note: str, order: list[str], columns: bool = False, replace: bool = False
+) -> str:
     """``old`` (a generated block: text, one Markdown table, text) with the helmsmen of ``new``
     (the same kind of block from another run) merged in (module docstring): rows keyed by their
     first cell, or with ``columns`` columns keyed by their header cell, each placed after the
-    helmsman before it in ``order``. ``SystemExit`` where a helmsman in both differs."""
+    helmsman before it in ``order``. ``SystemExit`` where a helmsman in both differs, unless
+    ``replace``: then its row takes the new run's."""
     old_lines = old.splitlines()
     table = [i for i, ln in enumerate(old_lines) if ln.startswith("|")]
     rows = [_cells(old_lines[i]) for i in table]
@@ -192,7 +198,12 @@ def merge_block(old: str, new: str, note: str, order: list[str], columns: bool =
             continue
         if key in keys:
             if rows[keys.index(key)] != r:
-                raise SystemExit(f"colreg_table: {key}: the new run's row differs from the file's")
+                if not replace:
+                    raise SystemExit(
+                        f"colreg_table: {key}: the new run's row differs from the file's"
+                    )
+                rows[keys.index(key)] = r
+                added.append(f"`{key}`")
             continue
         anchor = _anchor(key, keys, order)
         at = keys.index(anchor) + 1 if anchor else len(rows)
@@ -209,12 +220,20 @@ def merge_block(old: str, new: str, note: str, order: list[str], columns: bool =
     return "\n".join(out) + "\n"
 
 
-def _note(payload: dict[str, Any]) -> str:
+def _note(payload: dict[str, Any], replace: bool = False) -> str:
     helmsmen = ", ".join(f"`{h}`" for h in payload["helmsmen"])
+    run = (
+        f"{helmsmen}, {payload['episodes_per_set']} episodes per set, {payload['split']} split, "
+        f"run time {payload['wall_s']:.0f} s"
+    )
+    if replace:
+        return (
+            "{} replaced (`benchmarks/colreg_table.py --replace`; a new shipped file) by a "
+            f"later run of {run}."
+        )
     return (
         "{} merged in (`benchmarks/colreg_table.py --merge`) from a later run of "
-        f"{helmsmen}, {payload['episodes_per_set']} episodes per set, {payload['split']} split, "
-        f"run time {payload['wall_s']:.0f} s; the rows of a helmsman in both runs are equal."
+        f"{run}; the rows of a helmsman in both runs are equal."
     )
 
 
@@ -233,9 +252,11 @@ def _block(text: str, marker: str) -> str:
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) not in (1, 3) or (len(argv) == 3 and argv[1] not in ("--write", "--merge")):
+    modes = ("--write", "--merge", "--replace")
+    if len(argv) not in (1, 3) or (len(argv) == 3 and argv[1] not in modes):
         print(
-            "usage: python benchmarks/colreg_table.py COLREG_JSON [--write DOC | --merge DOC]",
+            "usage: python benchmarks/colreg_table.py COLREG_JSON [--write DOC | --merge DOC | "
+            "--replace DOC]",
             file=sys.stderr,
         )
         return 2
@@ -255,10 +276,12 @@ def main(argv: list[str]) -> int:
     doc = Path(argv[2])
     text = doc.read_text()
     for marker, body in tables.items():
-        if argv[1] == "--merge":
+        if argv[1] in ("--merge", "--replace"):
             columns = marker == "colreg-overtaking"
             order = list(BASELINES) if columns else list(available_helmsmen())
-            body = merge_block(_block(text, marker), body, _note(payload), order, columns)
+            replace = argv[1] == "--replace"
+            note = _note(payload, replace)
+            body = merge_block(_block(text, marker), body, note, order, columns, replace)
         text = _replace(text, marker, body)
     from usvsim.common.fileio import atomic_write_text
 

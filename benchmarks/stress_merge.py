@@ -23,6 +23,16 @@ gaining weather) for every helmsman of the file, from a new run of those sets on
 The new run must hold each named set for every helmsman of the file (a model named in the file
 by a former name is matched through the registry's aliases), the same split and episodes per
 set; the file records the replacement under ``replaced`` (sets, wall-clock).
+
+``--replace-helmsmen a,b`` replaces every row of the named helmsmen (a shipped file replaced by
+another seed's: same name, new weights) from a new run of them on the file's sets::
+
+    usvsim bench --suite stress --helmsmen radar-gaussian-gail-openwater --json > new.json
+    python benchmarks/stress_merge.py --replace-helmsmen radar-gaussian-gail-openwater \
+        docs/data/stress.json new.json
+
+The new run must hold each named helmsman on every set of the file, the same split and episodes
+per set; the file records it under ``replaced`` (helmsmen, wall-clock).
 """
 
 from __future__ import annotations
@@ -104,13 +114,48 @@ def replace_sets(
     base["replaced"] = [*base.get("replaced", []), {"sets": sets, "wall_s": new.get("wall_s")}]
 
 
+def replace_helmsmen(base: dict[str, Any], new: dict[str, Any], helmsmen: list[str]) -> None:
+    """Replace, in place, every row of ``helmsmen`` in ``base`` by ``new``'s (module docstring).
+    ``SystemExit`` where a helmsman is not in the file, ``new`` lacks one of its rows, or the
+    runs differ in kind."""
+    for key in ("suite", "split", "episodes_per_set"):
+        if base.get(key) != new.get(key):
+            raise SystemExit(
+                f"stress_merge: the runs differ in {key} ({base.get(key)!r}, {new.get(key)!r})"
+            )
+    unknown = [h for h in helmsmen if h not in base["helmsmen"]]
+    if unknown:
+        raise SystemExit(f"stress_merge: {unknown} are not helmsmen of the file")
+    fresh = {(r["episode_set"], r["helmsman"]): r for r in new["rows"]}
+    rows = []
+    for r in base["rows"]:
+        if r["helmsman"] in helmsmen:
+            row = fresh.get((r["episode_set"], r["helmsman"]))
+            if row is None:
+                raise SystemExit(
+                    f"stress_merge: the new run has no row for {r['helmsman']} on "
+                    f"{r['episode_set']}"
+                )
+            r = row
+        rows.append(r)
+    base["rows"] = rows
+    base["replaced"] = [
+        *base.get("replaced", []),
+        {"helmsmen": helmsmen, "wall_s": new.get("wall_s")},
+    ]
+
+
 def main(argv: list[str]) -> int:
     sets: list[str] = []
+    helmsmen: list[str] = []
     if argv[:1] == ["--replace-sets"] and len(argv) > 1:
         sets, argv = [s for s in argv[1].split(",") if s], argv[2:]
+    elif argv[:1] == ["--replace-helmsmen"] and len(argv) > 1:
+        helmsmen, argv = [h for h in argv[1].split(",") if h], argv[2:]
     if len(argv) != 2:
         print(
-            "usage: python benchmarks/stress_merge.py [--replace-sets A,B] STRESS_JSON NEW_JSON",
+            "usage: python benchmarks/stress_merge.py [--replace-sets A,B | --replace-helmsmen "
+            "A,B] STRESS_JSON NEW_JSON",
             file=sys.stderr,
         )
         return 2
@@ -119,6 +164,11 @@ def main(argv: list[str]) -> int:
 
     path = Path(argv[0])
     base, new = json.loads(path.read_text()), json.loads(Path(argv[1]).read_text())
+    if helmsmen:
+        replace_helmsmen(base, new, helmsmen)
+        atomic_write_text(path, json.dumps(base, indent=2) + "\n")
+        print(f"replaced the rows of {', '.join(helmsmen)} in {path}")
+        return 0
     if sets:
         replace_sets(base, new, sets, dict(model_aliases()))
         atomic_write_text(path, json.dumps(base, indent=2) + "\n")

@@ -68,6 +68,23 @@ def test_stress_merge_replace_sets_swaps_one_sets_rows_for_every_helmsman() -> N
         replace_sets(base, new, ["c"], {})
 
 
+def test_stress_merge_replace_helmsmen_swaps_one_helmsmans_rows_on_every_set() -> None:
+    replace_helmsmen = _script("stress_merge").replace_helmsmen
+    base = _run(["vo", "model"], [_row(h, s, 90) for s in "ab" for h in ("vo", "model")])
+    new = _run(["model"], [_row("model", "a", 70), _row("model", "b", 60)])
+    replace_helmsmen(base, new, ["model"])
+    assert [(r["episode_set"], r["helmsman"], r["successes"]) for r in base["rows"]] == [
+        ("a", "vo", 90), ("a", "model", 70), ("b", "vo", 90), ("b", "model", 60),
+    ]  # fmt: skip
+    assert base["replaced"] == [{"helmsmen": ["model"], "wall_s": 60.0}]
+    with pytest.raises(SystemExit, match="no row for vo on a"):
+        replace_helmsmen(base, new, ["vo"])
+    with pytest.raises(SystemExit, match="not helmsmen of the file"):
+        replace_helmsmen(base, new, ["other"])
+    with pytest.raises(SystemExit, match="differ in split"):
+        replace_helmsmen(base, {**new, "split": "validation"}, ["model"])
+
+
 def test_colreg_table_merge_adds_a_row_and_a_column_and_refuses_a_changed_row() -> None:
     merge_block = _script("colreg_table").merge_block
     old = "head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `vo-radar` | 2 |\n| `m` | 3 |\n"
@@ -87,6 +104,11 @@ def test_colreg_table_merge_adds_a_row_and_a_column_and_refuses_a_changed_row() 
     ]
     with pytest.raises(SystemExit, match="vo: the new run's row differs"):
         merge_block(old, new.replace("| `vo` | 1 |", "| `vo` | 7 |"), "{}", ORDER)
+    changed = "| helmsman | x |\n|---|---|\n| `m` | 9 |\n"
+    assert merge_block(old, changed, "{} replaced", ORDER, replace=True) == (
+        "head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `vo-radar` | 2 |\n| `m` | 9 |\n"
+        "\n`m` replaced\n"
+    )
 
 
 def test_committed_data_and_page_hold_the_same_sb_mpc_radar_rows() -> None:
