@@ -278,6 +278,8 @@ def main(argv: list[str]) -> int:
     for marker, body in tables.items():
         if argv[1] in ("--merge", "--replace"):
             columns = marker == "colreg-overtaking"
+            if columns and not set(payload["helmsmen"]) & set(BASELINES):
+                continue  # the overtaking table holds the baselines only: nothing of this run
             order = list(BASELINES) if columns else list(available_helmsmen())
             replace = argv[1] == "--replace"
             note = _note(payload, replace)

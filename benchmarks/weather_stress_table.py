@@ -12,7 +12,9 @@ in brackets; the last column names the sets where the helmsman falls below 95 %:
 
 ``calm-twin`` mode: the same four sets with their weather removed (the same seeds, so the same
 episodes, :mod:`usvsim.task.weather_draw`'s own stream) for the same helmsmen (the baselines and
-the recommended models), as the suite's JSON on stdout (``--episodes``, default 100).
+the recommended models, or ``--helmsmen a,b``), as the suite's JSON on stdout (``--episodes``,
+default 100). A replaced shipped file's twin rows go into the committed file with
+``benchmarks/stress_merge.py --replace-helmsmen``.
 """
 
 from __future__ import annotations
@@ -28,8 +30,9 @@ WEATHER = ("wind-beam", "gusts", "sea-state-3", "sea-state-4")
 BAR = 0.95  # the issue's "which fall below 95 %"
 
 
-def calm_twin(episodes: int) -> str:
-    """The suite's JSON for the weather sets without their weather (module docstring)."""
+def calm_twin(episodes: int, helmsmen: str = "") -> str:
+    """The suite's JSON for the weather sets without their weather (module docstring);
+    ``helmsmen`` as ``usvsim bench --helmsmen`` (empty: the baselines and recommended models)."""
     from usvsim.evaluation.bench import BenchArgs, loadable_helmsmen
     from usvsim.evaluation.stress import run_stress, select_sets, stress_json
     from usvsim.helm.registry import select_helmsmen
@@ -37,7 +40,7 @@ def calm_twin(episodes: int) -> str:
     def warn(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
-    names, explicit = BenchArgs().selection()
+    names, explicit = BenchArgs(helmsmen=helmsmen).selection()
     factories, skipped = loadable_helmsmen(select_helmsmen(names), explicit, warn)
     sets = []
     for s in select_sets(list(WEATHER)):
@@ -85,6 +88,7 @@ def main(argv: list[str]) -> int:
     sub = parser.add_subparsers(dest="mode", required=True)
     twin = sub.add_parser("calm-twin")
     twin.add_argument("--episodes", type=int, default=100)
+    twin.add_argument("--helmsmen", default="", help="comma-separated; empty: the default set")
     tab = sub.add_parser("table")
     tab.add_argument("weather_json")
     tab.add_argument("calm_json", nargs="?")
@@ -92,7 +96,7 @@ def main(argv: list[str]) -> int:
     if args.mode == "calm-twin":
         if args.episodes < 1:
             parser.error("--episodes must be >= 1")
-        print(calm_twin(args.episodes))
+        print(calm_twin(args.episodes, args.helmsmen))
         return 0
     weather = json.loads(Path(args.weather_json).read_text())
     calm = json.loads(Path(args.calm_json).read_text()) if args.calm_json else None

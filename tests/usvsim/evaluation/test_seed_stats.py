@@ -119,6 +119,7 @@ def test_table_survives_its_json(tmp_path: Path) -> None:
     [
         ("il-categorical-scene-ow", 0, (0.82, 1.0, 0.83)),
         ("il-gaussian-radar-ow", 2, (0.56, 0.56, 0.51)),
+        ("rl-categorical-scene-ow-ft", 1, (1.0, 1.0, 0.92)),
     ],
 )
 def test_committed_file_agrees_with_its_per_seed_figures(
@@ -138,7 +139,7 @@ def test_committed_file_agrees_with_its_per_seed_figures(
 
 def test_columns_only_for_shipped_models_of_a_setup_with_seeds() -> None:
     shipped = next(n for n, c in load_cards().items() if c.setup == "il-categorical-scene-ow")
-    tables = seed_tables_for([shipped, "vo", "rl-categorical-scene-ow-ft", "best"])
+    tables = seed_tables_for([shipped, "vo", "rl-gaussian-scene-ow", "best"])
     assert list(tables) == [shipped]
 
     class Row:
@@ -158,7 +159,11 @@ def test_columns_only_for_shipped_models_of_a_setup_with_seeds() -> None:
 def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
     cards, seeds = load_cards(), load_seed_tables()
     shipped = {c.setup: n for n, c in cards.items() if c.setup in seeds}
-    assert set(shipped) == set(seeds) == {"il-categorical-scene-ow", "il-gaussian-radar-ow"}
+    assert (
+        set(shipped)
+        == set(seeds)
+        == {"il-categorical-scene-ow", "il-gaussian-radar-ow", "rl-categorical-scene-ow-ft"}
+    )
     lines = cards_table(cards, seeds).splitlines()
     assert "stress test: IQM over N seeds [95 % CI]" in lines[0]
     with_iqm = [line for line in lines if "(3 seeds)" in line]
@@ -175,6 +180,7 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
     assert sorted(payload["across_seeds"]) == sorted(shipped.values())
     assert payload["across_seeds"][shipped["il-categorical-scene-ow"]]["picked_seed"] == 0
     assert payload["across_seeds"][shipped["il-gaussian-radar-ow"]]["picked_seed"] == 2
+    assert payload["across_seeds"][shipped["rl-categorical-scene-ow-ft"]]["picked_seed"] == 1
 
 
 def test_bench_stress_json_carries_the_seed_figures(
