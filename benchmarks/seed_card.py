@@ -9,9 +9,10 @@
 ``seed``, ``code_commit``, ``best_iteration`` and ``date`` come from the checkpoint
 (:func:`usvsim.helm.registry.checkpoint_facts`, the fields ``check_cards`` compares), the
 ``validation.best_pt`` record from its validation record (the fields the card held before),
-``runs`` from ``--run COMMAND=WALL_CLOCK_S`` (repeat, in the chain's order) and ``notes`` from
-``--note``. The stress figures and recommended marks are left to ``model_cards.py`` (they need
-the new file's stress runs). Bad input: one line, exit 2.
+``runs`` from ``--run COMMAND=WALL_CLOCK_S`` (repeat, in the chain's order; ``--run-note``, as
+many, gives each its note) and ``notes`` from ``--note``. The stress figures and recommended
+marks are left to ``model_cards.py`` (they need the new file's stress runs). Bad input: one
+line, exit 2.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ BEST_PT_FIELDS = (
 )  # fmt: skip
 
 
-def _run(text: str) -> TrainingRun:
+def _run(text: str, note: str = "") -> TrainingRun:
     command, sep, seconds = text.rpartition("=")
     try:
         wall = float(seconds)
@@ -42,17 +43,21 @@ def _run(text: str) -> TrainingRun:
         wall = -1.0
     if not sep or not command.strip() or not wall >= 0:
         raise UserError(f"--run must be COMMAND=WALL_CLOCK_S with seconds >= 0, got {text!r}")
-    return TrainingRun(command=command.strip(), wall_clock_s=wall)
+    return TrainingRun(command=command.strip(), wall_clock_s=wall, note=note)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("model", help="the shipped model's name (usvsim models)")
     parser.add_argument("--run", action="append", default=[], help="COMMAND=WALL_CLOCK_S")
+    parser.add_argument("--run-note", action="append", default=[], help="a run's note, in order")
     parser.add_argument("--note", required=True, help="the card's notes")
     args = parser.parse_args(argv)
     try:
-        runs = tuple(_run(r) for r in args.run)
+        if args.run_note and len(args.run_note) != len(args.run):
+            raise UserError(f"give one --run-note per --run ({len(args.run)}), or none")
+        notes = args.run_note or [""] * len(args.run)
+        runs = tuple(_run(r, n) for r, n in zip(args.run, notes, strict=True))
         if not runs:
             raise UserError("give the chain's runs with --run COMMAND=WALL_CLOCK_S")
         cards = load_cards()
