@@ -120,6 +120,7 @@ def test_table_survives_its_json(tmp_path: Path) -> None:
         ("il-categorical-scene-ow", 0, (0.82, 1.0, 0.83)),
         ("il-gaussian-radar-ow", 2, (0.56, 0.56, 0.51)),
         ("rl-categorical-scene-ow-ft", 1, (1.0, 1.0, 0.92)),
+        ("rl-gaussian-scene-ow-ft", 2, (0.76, 0.95, 1.0)),
     ],
 )
 def test_committed_file_agrees_with_its_per_seed_figures(
@@ -139,7 +140,7 @@ def test_committed_file_agrees_with_its_per_seed_figures(
 
 def test_columns_only_for_shipped_models_of_a_setup_with_seeds() -> None:
     shipped = next(n for n, c in load_cards().items() if c.setup == "il-categorical-scene-ow")
-    tables = seed_tables_for([shipped, "vo", "rl-gaussian-scene-ow", "best"])
+    tables = seed_tables_for([shipped, "vo", "rl-gaussian-scene-ow", "best"])  # no seeds there
     assert list(tables) == [shipped]
 
     class Row:
@@ -162,7 +163,12 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
     assert (
         set(shipped)
         == set(seeds)
-        == {"il-categorical-scene-ow", "il-gaussian-radar-ow", "rl-categorical-scene-ow-ft"}
+        == {
+            "il-categorical-scene-ow",
+            "il-gaussian-radar-ow",
+            "rl-categorical-scene-ow-ft",
+            "rl-gaussian-scene-ow-ft",
+        }
     )
     lines = cards_table(cards, seeds).splitlines()
     assert "stress test: IQM over N seeds [95 % CI]" in lines[0]
@@ -181,6 +187,7 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
     assert payload["across_seeds"][shipped["il-categorical-scene-ow"]]["picked_seed"] == 0
     assert payload["across_seeds"][shipped["il-gaussian-radar-ow"]]["picked_seed"] == 2
     assert payload["across_seeds"][shipped["rl-categorical-scene-ow-ft"]]["picked_seed"] == 1
+    assert payload["across_seeds"][shipped["rl-gaussian-scene-ow-ft"]]["picked_seed"] == 2
 
 
 def test_bench_stress_json_carries_the_seed_figures(
