@@ -54,12 +54,9 @@ from usvsim.common.angles import ssa_casadi
 from usvsim.common.errors import UserError
 from usvsim.vessel.autopilot import (
     NG,
-    WAVE_BANDWIDTH_RATIO,
-    WAVE_DESIGN_MIN_HS_M,
     AutopilotDesign,
     AutopilotKind,
     control_law,
-    natural_per_bandwidth,
     wave_mode_gain_changes,
 )
 from usvsim.vessel.codegen import BatchStepper
@@ -83,23 +80,19 @@ from usvsim.vessel.weather.loads import (
 from usvsim.vessel.weather.observer import (
     OBSERVER_STATES,
     ObserverNoise,
-    measurement_information,
     observer_correct,
     observer_gains,
     observer_predict,
     wrap_difference,
 )
-from usvsim.vessel.weather.start_kernel import WaveStart, wave_start
+from usvsim.vessel.weather.start_kernel import compiled_wave_start
 from usvsim.vessel.weather.turning import steady_turn_damping
 from usvsim.vessel.weather.waves import (
     HS_MAX_M,
-    TP_RANGE_S,
     SeaState,
     WaveResponse,
     drift_pressure,
-    drift_pressure_spline,
     encounter_response,
-    jonswap_peak_factor,
     wave_motion_discrete,
     wave_motion_init,
 )
@@ -342,8 +335,8 @@ def weather_inputs(
     relative = cond.wave_dir_rad - heading_rad
     fast = None
     if compiled:
-        fast = _compiled_start(cond, relative, speed_mps, dt_s, wave_filter, yaw_model, yaw_gain,
-                               autopilot)  # fmt: skip
+        fast = compiled_wave_start(cond.hs_m, cond.tp_s, relative, speed_mps, dt_s, wave_filter,
+                                   yaw_model, yaw_gain, autopilot)  # fmt: skip
     if fast is not None:
         resp = WaveResponse(fast.omega0, fast.damping, fast.gain)
         phi, chol, drift = fast.phi, fast.chol, fast.drift
@@ -385,39 +378,6 @@ def weather_inputs(
         if autopilot is not None:
             out[wavy, pid] = wave_mode_gain_changes(autopilot, resp.omega0[wavy], cond.hs_m[wavy])
     return out, resp
-
-
-def _compiled_start(
-    cond: SeaConditions,
-    relative_dir_rad: NDArray[np.float64],
-    speed_mps: NDArray[np.float64],
-    dt_s: float,
-    wave_filter: ObserverNoise | None,
-    yaw_model: tuple[float, float],
-    yaw_gain: float,
-    autopilot: AutopilotDesign | None,
-) -> WaveStart | None:
-    """:func:`weather_inputs`' wave pieces from the C kernel, or None (no compiler, or a peak
-    period outside the drift pressure spline's range: the NumPy path integrates those)."""
-    tp_lo, tp_hi = TP_RANGE_S
-    if (((cond.tp_s < tp_lo) | (cond.tp_s > tp_hi)) & (cond.hs_m > 0)).any():
-        return None
-    noise = wave_filter or ObserverNoise()
-    r, g0 = measurement_information(noise)
-    pid = autopilot is not None and autopilot.config.kind == "pid"
-    c = autopilot.config if autopilot is not None else None
-    nomoto = autopilot.nomoto if autopilot is not None else None
-    scalars = np.array([
-        dt_s, G, jonswap_peak_factor(), 0.5 * math.pi / dt_s, wave_filter is not None, yaw_gain,
-        *yaw_model, r[0, 0], r[1, 1], noise.psi_rad**2, (dt_s * noise.rate_rad_s2) ** 2,
-        noise.bias_nm_per_step**2, 1e-15, 64,
-        pid, c.omega_n if c else 0.0, c.zeta if c else 0.0,
-        natural_per_bandwidth(c.zeta) if c else 0.0, WAVE_BANDWIDTH_RATIO, WAVE_DESIGN_MIN_HS_M,
-        *((autopilot.Kp, autopilot.Kd, autopilot.Ki) if autopilot is not None else (0, 0, 0)),
-        *((nomoto.m, nomoto.d) if nomoto is not None else (1.0, 0.0)),
-    ], dtype=float)  # fmt: skip
-    knots, coef = drift_pressure_spline()
-    return wave_start(cond.hs_m, cond.tp_s, relative_dir_rad, speed_mps, scalars, g0, knots, coef)
 
 
 def sensed_offsets_expr(s: ca.SX, w: ca.SX) -> ca.SX:

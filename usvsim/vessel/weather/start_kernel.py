@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,9 +30,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usvsim.common.cbuild import load_function
+from usvsim.vessel.autopilot import (
+    WAVE_BANDWIDTH_RATIO,
+    WAVE_DESIGN_MIN_HS_M,
+    AutopilotDesign,
+    natural_per_bandwidth,
+)
+from usvsim.vessel.weather.observer import ObserverNoise, measurement_information
 from usvsim.vessel.weather.riccati_kernel import HELPERS
+from usvsim.vessel.weather.waves import (
+    TP_RANGE_S,
+    G,
+    drift_pressure_spline,
+    jonswap_peak_factor,
+)
 
-__all__ = ["WaveStart", "wave_start"]
+__all__ = ["WaveStart", "compiled_wave_start", "wave_start"]
 
 FloatArray = NDArray[np.float64]
 
@@ -230,3 +244,38 @@ def wave_start(
         parts["omega0"], parts["damping"], parts["gain"], phi, chol, parts["drift"],
         parts["gains"], parts["pid"],
     )  # fmt: skip
+
+
+def compiled_wave_start(
+    hs_m: FloatArray,
+    tp_s: FloatArray,
+    relative_dir_rad: FloatArray,
+    speed_mps: FloatArray,
+    dt_s: float,
+    wave_filter: ObserverNoise | None,
+    yaw_model: tuple[float, float],
+    yaw_gain: float,
+    autopilot: AutopilotDesign | None,
+) -> WaveStart | None:
+    """:func:`usvsim.vessel.weather_plant.weather_inputs`' wave pieces (same arguments) from the
+    kernel, its scalars packed here; None where it does not build or a boat in waves has a
+    peak period outside the drift pressure spline's range (the NumPy path integrates those)."""
+    tp_lo, tp_hi = TP_RANGE_S
+    if (((tp_s < tp_lo) | (tp_s > tp_hi)) & (hs_m > 0)).any():
+        return None
+    noise = wave_filter or ObserverNoise()
+    r, g0 = measurement_information(noise)
+    pid = autopilot is not None and autopilot.config.kind == "pid"
+    c = autopilot.config if autopilot is not None else None
+    nomoto = autopilot.nomoto if autopilot is not None else None
+    scalars = np.array([
+        dt_s, G, jonswap_peak_factor(), 0.5 * math.pi / dt_s, wave_filter is not None, yaw_gain,
+        *yaw_model, r[0, 0], r[1, 1], noise.psi_rad**2, (dt_s * noise.rate_rad_s2) ** 2,
+        noise.bias_nm_per_step**2, 1e-15, 64,
+        pid, c.omega_n if c else 0.0, c.zeta if c else 0.0,
+        natural_per_bandwidth(c.zeta) if c else 0.0, WAVE_BANDWIDTH_RATIO, WAVE_DESIGN_MIN_HS_M,
+        *((autopilot.Kp, autopilot.Kd, autopilot.Ki) if autopilot is not None else (0, 0, 0)),
+        *((nomoto.m, nomoto.d) if nomoto is not None else (1.0, 0.0)),
+    ], dtype=float)  # fmt: skip
+    knots, coef = drift_pressure_spline()
+    return wave_start(hs_m, tp_s, relative_dir_rad, speed_mps, scalars, g0, knots, coef)
