@@ -8,7 +8,8 @@ episode rows: the wave motion filter at the encounter frequency
 gains (:func:`usvsim.vessel.weather.observer.observer_gains`) and the PID's wave design
 (:func:`usvsim.vessel.autopilot.wave_mode_gain_changes`). In NumPy that is ~120 array calls
 whose overhead, not their arithmetic, is the cost at the 1-4 boats an environment step starts
-(~180 μs a start, a fifth of the calm environment's step). This is the same arithmetic boat by
+(183 μs a start against 54 μs here; `OpenWater-v0` at N = 256 starts some boats at nearly every
+step, of 2.7-3.4 ms calm: docs/guide/weather.md, *Cost*). This is the same arithmetic boat by
 boat in C, the Riccati equation by the doubling of
 :mod:`usvsim.vessel.weather.riccati_kernel` (shared source): the NumPy functions stay the
 definition, and this twin is tested equal to them to rounding
