@@ -35,14 +35,19 @@ from usvsim.vessel.vessels import VesselParams
 
 __all__ = [
     "DEFAULT_KERNEL_PATH",
+    "DEFAULT_WEATHER_KERNEL_PATH",
     "TorchUnsupportedError",
     "default_kernel_source",
+    "default_weather_kernel_source",
     "kernel_source",
     "torch_function_source",
+    "weather_kernel_source",
 ]
 
 #: Where the default plant's generated module lives (committed).
 DEFAULT_KERNEL_PATH = Path(__file__).with_name("torch_default_kernel.py")
+#: Where the default plant's generated weather step lives (committed).
+DEFAULT_WEATHER_KERNEL_PATH = Path(__file__).with_name("torch_default_weather_kernel.py")
 
 
 class TorchUnsupportedError(ValueError):
@@ -248,6 +253,8 @@ def torch_function_source(fn: ca.Function, name: str, doc: str) -> str:
     signature = ", ".join(f"{a}: Sequence[Any]" for a in args)
     body = "\n    ".join(out.lines)
     result = ", ".join(outputs) + ("," if len(outputs) == 1 else "")
+    if len(f"    return ({result})") > 100:  # as ruff format wraps it: one per line
+        result = "\n" + "".join(f"        {o},\n" for o in outputs) + "    "
     head = f"def {name}({signature}) -> tuple[torch.Tensor, ...]:"
     if len(head) > 100:  # as ruff format wraps it
         head = f"def {name}(\n    {signature}\n) -> tuple[torch.Tensor, ...]:"
@@ -343,10 +350,101 @@ def default_kernel_source() -> str:
     return kernel_source(get_vessel("default"), None, 0.1)
 
 
+_WEATHER_HEADER = '''"""GENERATED weather step (usvsim.vessel.torch_codegen): do not edit.
+
+Plant: vessel {vessel!r} (fingerprint {fingerprint}), autopilot {kind!r} ({config}), step
+{dt_s!r} s, in wind and waves. :func:`weather_step` is
+:func:`usvsim.vessel.weather_plant.build_weather_step` with standard-normal innovations
+(sensed heading and yaw rate, wave filter, autopilot on what it senses, one RK4 step with current,
+wind and wave drift, gust and wave motion advanced); :func:`sensed_offsets` is
+:func:`usvsim.vessel.weather_plant.sensed_offsets_expr` (what the GNSS position, compass and gyro
+add to the true state). One torch statement per CasADi instruction; the autopilot's yaw model
+and the observer's turn damping are in the numbers (``YAW_MODEL``, ``TURN_DAMPING``). Needs
+torch only.
+
+Why this module is long: it is generated, one statement per instruction of the CasADi plant.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import torch
+
+VESSEL = "{vessel}"
+VESSEL_FINGERPRINT = "{fingerprint}"
+AUTOPILOT = "{kind}"
+DT_S = {dt_s!r}  # s, plant step
+NWI = {nwi}  # per-boat inputs (usvsim.vessel.weather_plant.WEATHER_INPUTS)
+NWS = {nws}  # weather states after the closed loop's (WEATHER_STATES)
+YAW_MODEL = ({yaw_m!r}, {yaw_d!r})  # kg m², N m s/rad: the autopilot's design model
+TURN_DAMPING = {turn!r}  # N m s²/rad², the wave filter observer's d₂
+
+'''
+
+
+def weather_kernel_source(
+    vessel: VesselParams, autopilot: object | None = None, dt_s: float = 0.1
+) -> str:
+    """The torch module (Python source) of the weather step of ``vessel`` with ``autopilot``
+    (default the default PID) at step ``dt_s`` (s), as :class:`usvsim.task.batch.PoleAvoidanceBatch`
+    steps boats in weather (``WeatherPlant(plant, innovations="normal")``)."""
+    from usvsim.vessel.autopilot import AutopilotConfig
+    from usvsim.vessel.plant import NS, Plant
+    from usvsim.vessel.weather_plant import NWI, NWS, WeatherPlant, sensed_offsets_expr
+
+    config = AutopilotConfig() if autopilot is None else autopilot
+    if not isinstance(config, AutopilotConfig):
+        raise TypeError(f"autopilot must be an AutopilotConfig, got {type(config).__name__}")
+    weather = WeatherPlant(Plant(vessel, config, dt_s), innovations="normal")
+    s, w = ca.SX.sym("s", NS + NWS), ca.SX.sym("w", NWI)
+    offsets = ca.Function("sensed_offsets", [s, w], [sensed_offsets_expr(s, w)], ["s", "w"], ["d"])
+    header = _WEATHER_HEADER.format(
+        vessel=vessel.name,
+        fingerprint=vessel_fingerprint(vessel),
+        kind=config.kind,
+        config="the default design" if config == AutopilotConfig() else repr(config),
+        dt_s=float(dt_s),
+        yaw_m=weather.yaw_model[0],
+        yaw_d=weather.yaw_model[1],
+        turn=float(weather.turn_damping),
+        nwi=NWI,
+        nws=NWS,
+    )
+    step_doc = (
+        f"One plant step of N boats in weather: s[{NS + NWS}] (x, c, m), w[{NWI}] (psi_ref rad,\n"
+        "    U_ref m/s, V_c m/s, beta_c rad, the episode's weather inputs), g (the plant's\n"
+        "    GAINS), e[3] (standard normals: gust, wave motion x2) -> s_next; each entry (N,)\n"
+        "    or a shared number."
+    )
+    offsets_doc = (
+        "[dn m, de m, dpsi rad, dr rad/s] the sensors add to the true state, from s (x, c, m)\n"
+        "    and the weather inputs w."
+    )
+    return (
+        header
+        + "\n"
+        + torch_function_source(weather.step_function, "weather_step", step_doc)
+        + "\n\n"
+        + torch_function_source(offsets, "sensed_offsets", offsets_doc)
+    )
+
+
+def default_weather_kernel_source() -> str:
+    """The committed weather module's text: the default vessel, default autopilot, 0.1 s."""
+    from usvsim.vessel.vessels import get_vessel
+
+    return weather_kernel_source(get_vessel("default"), None, 0.1)
+
+
 def main() -> None:
-    """Rewrite :data:`DEFAULT_KERNEL_PATH` from the CasADi plant."""
+    """Rewrite :data:`DEFAULT_KERNEL_PATH` and :data:`DEFAULT_WEATHER_KERNEL_PATH` from the
+    CasADi plant."""
     DEFAULT_KERNEL_PATH.write_text(default_kernel_source())
     print(f"wrote {DEFAULT_KERNEL_PATH}")
+    DEFAULT_WEATHER_KERNEL_PATH.write_text(default_weather_kernel_source())
+    print(f"wrote {DEFAULT_WEATHER_KERNEL_PATH}")
 
 
 if __name__ == "__main__":

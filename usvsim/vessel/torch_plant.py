@@ -55,7 +55,9 @@ __all__ = [
     "TorchKernel",
     "TorchPlant",
     "TorchPlantState",
+    "TorchWeatherKernel",
     "load_kernel",
+    "load_weather_kernel",
     "make_plant",
     "torch_device",
     "vessel_fingerprint",
@@ -153,6 +155,51 @@ def load_kernel(
     source = kernel_source(vessel, autopilot, dt_s)
     exec(compile(source, f"<torch kernel of {vessel.name}>", "exec"), namespace)
     return TorchKernel.from_module(namespace, "generated")
+
+
+@dataclass(frozen=True)
+class TorchWeatherKernel:
+    """The generated torch weather step of one plant (:mod:`usvsim.vessel.weather_plant` with
+    standard-normal innovations) and the sensors' wave offsets."""
+
+    step: Callable[..., Columns]  # weather_step(s[21], w[37], g[25], e[3]) -> s_next[21]
+    sensed_offsets: Callable[..., Columns]  # sensed_offsets(s[21], w[37]) -> [dn, de, dpsi, dr]
+    nwi: int  # per-boat inputs
+    nws: int  # weather states after the closed loop's
+    origin: str  # "committed" (torch_default_weather_kernel) or "generated" (by CasADi)
+
+
+def load_weather_kernel(
+    vessel: VesselParams | str = "default", autopilot: Any = None, dt_s: float = 0.1
+) -> TorchWeatherKernel:
+    """The torch weather step of the plant, as :func:`load_kernel`: the committed module for the
+    default plant, else generated in memory (CasADi needed; else a one-line :class:`UserError`)."""
+    from usvsim.vessel import torch_default_weather_kernel as committed
+
+    vessel = get_vessel(vessel) if isinstance(vessel, str) else vessel
+    ns: dict[str, Any] = vars(committed)
+    origin = "committed"
+    if not (
+        autopilot is None
+        and dt_s == committed.DT_S
+        and vessel_fingerprint(vessel) == committed.VESSEL_FINGERPRINT
+    ):
+        try:
+            from usvsim.vessel.torch_codegen import weather_kernel_source
+        except ModuleNotFoundError as err:
+            raise UserError(
+                f"the torch weather plant of vessel {vessel.name!r} with this autopilot and step "
+                f"{dt_s:g} s is generated from the CasADi model, and {err.name} is not "
+                f"installed; without it only the default plant ({committed.VESSEL}, the default "
+                f"{committed.AUTOPILOT} autopilot, {committed.DT_S:g} s) runs in weather"
+            ) from None
+        ns = {"__name__": f"usvsim_torch_weather_kernel_{vessel.name}"}
+        source = weather_kernel_source(vessel, autopilot, dt_s)
+        exec(compile(source, f"<torch weather kernel of {vessel.name}>", "exec"), ns)
+        origin = "generated"
+    return TorchWeatherKernel(
+        ns["weather_step"], ns["sensed_offsets"], ns["NWI"], ns["NWS"], origin
+    )
 
 
 def vessel_fingerprint(vessel: VesselParams) -> str:
