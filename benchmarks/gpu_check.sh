@@ -3,7 +3,7 @@
 # torch-cpu float64, then plant boat-substeps/s (float32 and float64, eager and torch.compile,
 # N = 1e3 .. 1e7) and env steps/s (float32, N = 1e3 .. 1e6; positional eager and compiled,
 # radar+goal eager), the open-water env (equality; scene decision steps/s at N = 1e3 .. 1e6,
-# radar+goal at 1e3 .. 1e5),
+# radar+goal at 1e3 .. 1e5; equality and scene steps/s in weather),
 # then TRPO training on the device (env steps/s of whole iterations).
 #
 #   bash benchmarks/gpu_check.sh                      # on the GPU machine, from the repo root
@@ -131,6 +131,12 @@ run ow-bench-radar 60 "$PY" benchmarks/gpu_check_openwater.py bench --device "$D
 run train-bench 120 "$PY" benchmarks/gpu_check_train.py --device "$DEVICE" --sizes "$TRAIN_SIZES"
 env_bench float32 eager 45 radar+goal
 env_bench float32 compile 170  # inductor on the env's ~800-op step: minutes (420 s on 2 CPU cores)
+# the open-water env in wind and waves (the weather plant, ~1,000 more ops a plant step):
+# equality on the device (three eager runs of 16 boats x 40 decisions), scene decision steps/s
+run ow-equality-weather 75 "$PY" benchmarks/gpu_check_openwater.py equality --device "$DEVICE" \
+  --weather
+run ow-bench-weather 45 "$PY" benchmarks/gpu_check_openwater.py bench --device "$DEVICE" \
+  --sizes "$OW_SIZES" --seconds "$SECONDS_PER_POINT" --weather
 bench float32 eager 40
 bench float64 eager 40
 bench float64 compile 100

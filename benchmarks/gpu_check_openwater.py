@@ -3,11 +3,14 @@
 Needs torch and NumPy only (the repository on ``PYTHONPATH``; no CasADi, SciPy or gymnasium):
 the episodes come from a committed table (``benchmarks/data/openwater-table.npz``: 128 boats x
 8 episodes of ``OPEN_WATER_FAMILY`` from seed 0, drawn by the CPU family, written by
-``make-table`` where CasADi is installed). Results go to ``$OUT/results.jsonl`` as they come
-(stages ``ow_equality`` and ``ow_bench``; ``gpu_check.py report`` prints them)::
+``make-table`` where CasADi is installed); ``--weather`` takes
+``benchmarks/data/openwater-weather-table.npz`` instead (``weather_family()``, the same size:
+wind, gusts and waves per episode, calm ones among them; the weather plant's inputs in the
+table). Results go to ``$OUT/results.jsonl`` as they come (stages ``ow_equality`` and
+``ow_bench``; ``gpu_check.py report`` prints them)::
 
     python benchmarks/gpu_check_openwater.py make-table           # here, with CasADi
-    python benchmarks/gpu_check_openwater.py equality --device cuda
+    python benchmarks/gpu_check_openwater.py equality --device cuda [--weather]
     python benchmarks/gpu_check_openwater.py bench --device cuda --sizes 1000,10000,100000,1000000
 
 ``equality``: 16 boats x 40 decisions with the table's episodes and noise replayed, on the device
@@ -44,6 +47,7 @@ from gpu_check import (  # noqa: E402  (results.jsonl of the same run)
 )
 
 TABLE = REPO / "benchmarks" / "data" / "openwater-table.npz"
+WEATHER_TABLE = REPO / "benchmarks" / "data" / "openwater-weather-table.npz"
 TABLE_BOATS, PER_BOAT = 128, 8
 EQ_BOATS, EQ_DECISIONS = 16, 40
 # float64 on the device against torch-cpu float64: the same operations, another library's
@@ -54,12 +58,13 @@ BARS = {"max_position_diff_m": POSITION_TOL_M, "max_heading_diff_rad": HEADING_T
 
 
 def make_table() -> None:
-    from usvsim.task.openwater_env import OPEN_WATER_FAMILY
+    from usvsim.task.openwater_env import OPEN_WATER_FAMILY, weather_family
     from usvsim.task.torch_openwater_episodes import family_table
 
     TABLE.parent.mkdir(parents=True, exist_ok=True)
-    family_table(OPEN_WATER_FAMILY, 0, TABLE_BOATS, PER_BOAT).save(TABLE)
-    print(f"wrote {TABLE} ({TABLE.stat().st_size:,} bytes)")
+    for path, family in ((TABLE, OPEN_WATER_FAMILY), (WEATHER_TABLE, weather_family())):
+        family_table(family, 0, TABLE_BOATS, PER_BOAT).save(path)
+        print(f"wrote {path} ({path.stat().st_size:,} bytes)")
 
 
 def _actions(obs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -69,14 +74,16 @@ def _actions(obs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.clip(a, -1.0, 1.0)[:, None]
 
 
-def run(device: str, dtype: str, actions: list[np.ndarray] | None) -> dict[str, Any]:
+def run(
+    device: str, dtype: str, actions: list[np.ndarray] | None, table: Path = TABLE
+) -> dict[str, Any]:
     """16 boats x 40 decisions; the actions from the first run's observations (None: make them)."""
     import torch
 
     from usvsim.task.torch_openwater import TorchOpenWaterEnv
     from usvsim.task.torch_openwater_episodes import load_table
 
-    env = TorchOpenWaterEnv(EQ_BOATS, table=load_table(TABLE), per_boat=PER_BOAT, device=device,
+    env = TorchOpenWaterEnv(EQ_BOATS, table=load_table(table), per_boat=PER_BOAT, device=device,
                             dtype=dtype, noise="replay", observation_dtype="float64")  # fmt: skip
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -119,12 +126,14 @@ def radar_check(device: str) -> dict[str, Any]:
             "radar_pixels_lit": int((images[0] > 0).sum())}  # fmt: skip
 
 
-def stage_equality(device: str, dtypes: list[str]) -> None:
+def stage_equality(device: str, dtypes: list[str], weather: bool = False) -> None:
     t0 = time.perf_counter()
-    record("ow_radar", device=device, **radar_check(device))
-    ref = run("torch-cpu", "float64", None)
+    table = WEATHER_TABLE if weather else TABLE
+    if not weather:
+        record("ow_radar", device=device, **radar_check(device))
+    ref = run("torch-cpu", "float64", None, table)
     for dtype in dtypes:
-        got = run(device, dtype, ref["actions"])
+        got = run(device, dtype, ref["actions"], table)
         dpsi = np.angle(np.exp(1j * (got["x"][..., 2] - ref["x"][..., 2])))
         same_done = np.array_equal(got["done"], ref["done"])
         fields = {
@@ -134,6 +143,7 @@ def stage_equality(device: str, dtypes: list[str]) -> None:
             "max_reward_diff": float(np.abs(got["reward"] - ref["reward"]).max()),
             "flags_equal": bool(same_done),
             "episodes_ended": int(ref["done"].any(axis=1).sum()),
+            "weather": weather,
         }
         record_equality("ow_equality", device, dtype, (EQ_BOATS, EQ_DECISIONS), t0, fields, BARS)
 
@@ -146,19 +156,20 @@ def stage_bench(
     observation: str = "scene",
     mode: str = "eager",
     backend: str = "inductor",
+    weather: bool = False,
 ) -> None:
     from usvsim.task.torch_openwater import TorchOpenWaterEnv
     from usvsim.task.torch_openwater_episodes import load_table
     from usvsim.task.torch_openwater_speed import measure_openwater_steps
 
-    table = load_table(TABLE)
+    table = load_table(WEATHER_TABLE if weather else TABLE)
 
     def make_env(n: int) -> Any:
         return TorchOpenWaterEnv(n, table=table, per_boat=PER_BOAT, device=device, dtype=dtype,
                                  observation=observation, compile=mode == "compile",
                                  compile_backend=backend)  # fmt: skip
 
-    fields = dict(device=device, dtype=dtype, observation=observation, mode=mode)
+    fields = dict(device=device, dtype=dtype, observation=observation, mode=mode, weather=weather)
     bench_sizes(
         "ow_bench", sizes, make_env, lambda env: measure_openwater_steps(env, seconds), fields,
         names=("setup_s", "decision_steps_per_s"), peak_memory=True,
@@ -173,8 +184,10 @@ def openwater_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
                  "table's episodes and noise, against torch-cpu float64:"]  # fmt: skip
     for e in grouped.get("ow_equality", []):
         verdict = {True: "ok", False: "EXCEEDED", None: "stated, no bar"}[e["within_tolerance"]]
+        sea = "weather" if e.get("weather") else "calm"
         text.append(
-            f"  {e['device']:>9} {e['dtype']:>8} max |dpos| {e['max_position_diff_m']:.3g} m, "
+            f"  {sea:>7} {e['device']:>9} {e['dtype']:>8} "
+            f"max |dpos| {e['max_position_diff_m']:.3g} m, "
             f"|dpsi| {e['max_heading_diff_rad']:.3g} rad, |dobs| {e['max_obs_diff']:.3g}, "
             f"|dreward| {e['max_reward_diff']:.3g}, flags "
             f"{'equal' if e['flags_equal'] else 'differ'} ({e['episodes_ended']} episodes "
@@ -193,7 +206,8 @@ def openwater_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
             text.append(f"  {b['observation']:>10} N={b['n']:>10,} {b['dtype']}: {b['error']}")
             continue
         text.append(
-            f"  {b['observation']:>10} {b.get('mode', 'eager'):>7} N={b['n']:>10,} {b['dtype']}: "
+            f"  {b['observation']:>10} {'weather' if b.get('weather') else 'calm':>7} "
+            f"{b.get('mode', 'eager'):>7} N={b['n']:>10,} {b['dtype']}: "
             f"{b['decision_steps_per_s']:.3e} (first step {b['setup_s']} s)"
             + (f" (peak {b['peak_gib']} GiB)" if b.get("peak_gib") is not None else "")
             + (f"; host syncs in a step: {b['step_syncs']}" if b.get("step_syncs") else "")
@@ -207,16 +221,17 @@ def main() -> None:
     sub.add_parser("make-table")
     add_equality_stage(sub, "equality")
     add_bench_stage(sub, "bench", "1000,10000,100000,1000000", ["scene", "radar+goal"])
+    for name in ("equality", "bench"):
+        sub.choices[name].add_argument("--weather", action="store_true", help="the weather table")
     args = parser.parse_args()
     if args.stage == "make-table":
         make_table()
     elif args.stage == "equality":
-        stage_equality(args.device, args.dtypes.split(","))
+        stage_equality(args.device, args.dtypes.split(","), args.weather)
     else:
         sizes = [int(float(s)) for s in args.sizes.split(",")]
-        stage_bench(
-            args.device, args.dtype, sizes, args.seconds, args.observation, args.mode, args.backend
-        )
+        stage_bench(args.device, args.dtype, sizes, args.seconds, args.observation, args.mode,
+                    args.backend, args.weather)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -1,14 +1,15 @@
 """The torch open-water env (scene) against the CPU env, set by set: the figures of
 ``docs/guide/gpu.md``.
 
-For each calm open-water stress set (``usvsim.evaluation.stress``: its scenario as the family,
-fresh episodes from ``--seed``, not the test split) runs ``OpenWaterVectorEnv`` (the compiled C
-path) and ``TorchOpenWaterEnv`` on ``torch-cpu`` (the CPU env's episodes and noise replayed)
-with the same actions (to the goal, away from a near disc, plus noise) until every boat has
-finished at least one episode (at most ``--max-decisions``), and prints the largest differences
-(float32: over each boat's first episode only, since float32 is another run: after a first
-episode that ends at another step, the boats run different episodes): true position (m) and
-heading (rad), estimated position (m), the float32 observations (in float32 steps), rewards, and
+For each open-water stress set, calm and in weather (``usvsim.evaluation.stress``: its
+scenario as the family, fresh episodes from ``--seed``, not the test split) runs
+``OpenWaterVectorEnv`` (the compiled C path) and ``TorchOpenWaterEnv`` on ``torch-cpu`` (the
+CPU env's episodes and noise replayed) with the same actions (to the goal, away from a near
+disc, plus noise) until every boat has finished at least one episode (at most
+``--max-decisions``), and prints the largest differences (float32: over each boat's first
+episode only, since float32 is another run: after a first episode that ends at another step,
+the boats run different episodes): true position (m) and heading (rad), estimated position (m),
+the float32 observations (in float32 steps), rewards, and
 whether every flag and time agreed at every step (and on how many boats the first episode ended
 at the same step)::
 
@@ -37,12 +38,10 @@ FLAGS = ("reached_goal", "collision", "out_of_area", "time_limit", "is_success")
 TIMES = ("time_s", "time_to_goal_s")
 
 
-def calm_sets() -> dict[str, Any]:
-    """The open-water stress sets without weather: name → scenario."""
+def open_water_sets() -> dict[str, Any]:
+    """The open-water stress sets, calm and in weather: name → scenario."""
     return {
-        s.name: s.scenario
-        for s in STRESS_SETS
-        if s.kind == "open-water" and s.scenario is not None and s.scenario.weather is None
+        s.name: s.scenario for s in STRESS_SETS if s.kind == "open-water" and s.scenario is not None
     }
 
 
@@ -122,18 +121,18 @@ def compare(
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sets", default="", help="comma-separated names (default: all calm)")
+    parser.add_argument("--sets", default="", help="comma-separated names (default: all)")
     parser.add_argument("--boats", type=int, default=8)
     parser.add_argument("--max-decisions", type=int, default=250)
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--dtype", default="float64", choices=("float64", "float32"))
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    sets = calm_sets()
+    sets = open_water_sets()
     names = [s for s in args.sets.split(",") if s] or list(sets)
     unknown = [s for s in names if s not in sets]
     if unknown:
-        parser.error(f"unknown or weather sets {unknown}; calm open-water sets: {list(sets)}")
+        parser.error(f"unknown sets {unknown}; open-water sets: {list(sets)}")
     torch.set_num_threads(1)
     rows = {}
     for name in names:

@@ -213,6 +213,12 @@ class NoiseSource(Protocol):
         """(N, m) normals: every boat's next m draws."""
         ...
 
+    def weather_normals(self, boats: torch.Tensor, m: int) -> torch.Tensor:
+        """(N, m) normals of the weather plant for the boats ``boats`` (N,) bool (those in a
+        weather episode; the rows of the others are unused or multiplied by zero), drawn after
+        this step's other draws."""
+        ...
+
 
 class DeviceNoise:
     """``torch.randn`` on the device from a seeded generator."""
@@ -229,6 +235,9 @@ class DeviceNoise:
 
     def decision_normals(self, m: int) -> torch.Tensor:
         return torch.randn((self.n, m), generator=self._gen, dtype=self.dtype, device=self.device)
+
+    def weather_normals(self, boats: torch.Tensor, m: int) -> torch.Tensor:
+        return self.decision_normals(m)
 
 
 class ReplayNoise:
@@ -258,4 +267,14 @@ class ReplayNoise:
 
     def decision_normals(self, m: int) -> torch.Tensor:
         out = self._noise.for_boats(None).standard_normal((self.n, m))
+        return torch.as_tensor(out, dtype=self.dtype, device=self.device)
+
+    def weather_normals(self, boats: torch.Tensor, m: int) -> torch.Tensor:
+        """The next m draws of the streams of ``boats`` (as ``PoleAvoidanceBatch`` draws its
+        weather boats' innovations and start), zeros for the others (their streams untouched)."""
+        idx = np.flatnonzero(boats.cpu().numpy())
+        out = np.zeros((self.n, m))
+        if idx.size:
+            out[idx] = self._noise.for_boats(idx).standard_normal((idx.size, m))
+            self._noise.for_boats(None)
         return torch.as_tensor(out, dtype=self.dtype, device=self.device)

@@ -14,24 +14,28 @@ No host round trip and no Python loop over boats, discs or vessels per step.
 
 Episodes are the CPU family's draws, packed on the host and copied to the device
 (:mod:`usvsim.task.torch_openwater_episodes`): with the same seed the same episodes as the CPU
-env (``per_boat`` per boat, then the table cycles). Weather episodes are refused (the torch
-plant has no wind or waves).
+env (``per_boat`` per boat, then the table cycles). Where the table has weather (e.g.
+``family=weather_family()`` or a weather stress set), every boat steps in the weather plant
+(:mod:`usvsim.task.torch_weather`: wind, gusts, wave drift and first-order wave motion, the wave
+filter, the sensors displaced by the waves), as the CPU batch does once an episode brings
+weather; each episode's weather inputs are computed on the host when the table is packed.
 
 One decision step of N boats (T = 20 plant steps of 0.1 s), as ``OpenWaterBatch.step``::
 
     ψ_ref  = ssa(ψ̂ + Δψ)                          ψ̂: estimated heading
     GNSS   : normals × scale (× outlier scale where z < Φ⁻¹(p)), fix flags × (not in dropout)
-    T × [ plant step (autopilot, RK4, current) ; sensors + Kalman filter ]
+    T × [ plant step (autopilot, RK4, current; in weather: wind, waves, wave filter) ;
+          sensors (+ wave motion) + Kalman filter ]
     judge  : every disc (vessels where they are) at every plant step: collision, goal,
              pole-equivalent distances |p − c| − R + 1 m
     reward : GaussianReward at the period's end (or the first goal / collision step)
     obs    : scene, from the estimate and the discs at the period's end
     restart: boats whose episode ended take their next table row
 
-Noise: ``noise="device"`` draws the sensor normals and the outlier draws from seeded
-``torch.Generator`` s; ``noise="replay"`` (test mode) replays each episode's NumPy streams
-(its ``noise_seed`` and its disturbance's ``seed``) number for number as the CPU env draws them,
-reading the restarted boats back to the host every step.
+Noise: ``noise="device"`` draws the sensor normals, the outlier draws and the weather's
+innovations from seeded ``torch.Generator`` s; ``noise="replay"`` (test mode) replays each
+episode's NumPy streams (its ``noise_seed`` and its disturbance's ``seed``) number for number as
+the CPU env draws them, reading the restarted boats back to the host every step.
 
 Returns of :meth:`~TorchOpenWaterEnv.step`, tensors on the device: obs (N, 52) (``scene``,
 ``observation_dtype``; ``radar``: (N, 1, 50, 119) uint8; ``radar+goal``: a dict of the image and
@@ -83,7 +87,12 @@ from usvsim.task.torch_scene_radar import (
     SceneRadarGrid,
     render_scene_torch,
 )
-from usvsim.vessel.torch_plant import DTYPES
+from usvsim.task.torch_weather import (
+    compiled_weather_substep,
+    weather_start_states,
+    weather_substep,
+)
+from usvsim.vessel.torch_plant import DTYPES, load_weather_kernel
 
 __all__ = ["TORCH_OPENWATER_OBSERVATIONS", "TorchOpenWaterEnv"]
 
@@ -188,6 +197,8 @@ class TorchOpenWaterEnv:
         gains = torch.tensor(self.plant.kernel.gains, dtype=self.dtype, device=self.device)
         self._gains = tuple(gains.unbind(0))  # shared by all boats: 0-d tensors, built once
         self._substep = compiled_substep(compile_backend) if compile else plant_and_filter
+        self._compile_backend = compile_backend if compile else None
+        self._weather: Any = None  # the weather kernel, where the table has weather
         self._ready = False
 
     # ----------------------------------------------------------------------------- tables
@@ -199,7 +210,10 @@ class TorchOpenWaterEnv:
                 return torch.as_tensor(a, device=self.device)
             return torch.as_tensor(a, dtype=self.dtype, device=self.device)
 
-        self._table = {name: put(getattr(table, name)) for name in vars(table)}
+        self._table = {name: put(value) for name, value in vars(table).items() if value is not None}
+        self._weather = None
+        if table.in_weather:
+            self._weather = load_weather_kernel(self.plant.vessel, None, self.plant.dt_s)
         self._table_np = table
         most = int((table.statics_ok.sum(axis=1) + table.vessels_ok.sum(axis=1)).max())
         if most > MAX_DISCS:
@@ -227,7 +241,8 @@ class TorchOpenWaterEnv:
         self.noise.seed(seed)
         self._outlier_gen.manual_seed(int(seed) % 2**63 + 2)  # not the episodes' or sensors'
         n, dev, dt = self.num_envs, self.device, self.dtype
-        self._s = torch.zeros((self.plant.kernel.ns, n), dtype=dt, device=dev)
+        states = self.plant.kernel.ns + (0 if self._weather is None else self._weather.nws)
+        self._s = torch.zeros((states, n), dtype=dt, device=dev)
         self._n = torch.zeros((15, n), dtype=dt, device=dev)
         self._row = torch.zeros(n, dtype=torch.int64, device=dev)
         self._started = torch.zeros(n, dtype=torch.int64, device=dev)
@@ -262,9 +277,16 @@ class TorchOpenWaterEnv:
         self._row = torch.where(boats, row, self._row)
         x0, c0 = t["x0"][row].T, t["c0"][row].T
         nav = started_nav_state(self.nav, x0, self.noise.fix_normals(boats, t["noise_seed"][row]))
+        start = [x0, c0]
+        if self._weather is not None:  # after the filter's draws, as the CPU batch
+            z = self.noise.weather_normals(boats & t["windy"][row], 3)
+            w_in = t["weather"][row].T
+            start.append(
+                weather_start_states(self._weather, x0, c0, w_in, t["weather_start"][row], z)
+            )
         if self._replay:
             self._seed_outlier_streams(boats, row)
-        self._s = torch.where(boats[None, :], torch.cat([x0, c0]), self._s)
+        self._s = torch.where(boats[None, :], torch.cat(start), self._s)
         self._n = torch.where(boats[None, :], nav, self._n)
         self.discs = self.discs.where(boats, self._discs_of(row))
         zero_t = torch.zeros((self.num_envs, 1), dtype=self.dtype, device=self.device)
@@ -365,24 +387,29 @@ class TorchOpenWaterEnv:
             self.action_kind, actions, self.num_envs, sc.max_heading_change_rad, self.device,
             self.dtype,
         )  # fmt: skip
-        current = self._take("current")
-        w = (torch_ssa(self._n[8] + dpsi), self._take("speed_mps"), current[:, 0], current[:, 1])
+        cur = self._take("current")
+        w: Columns = (torch_ssa(self._n[8] + dpsi), self._take("speed_mps"), cur[:, 0], cur[:, 1])
         es = self._sensor_inputs(self.noise.decision_normals(self.layout.draws))
         s, n = tuple(self._s.unbind(0)), tuple(self._n.unbind(0))
         xs, ys = [], []
-        for j in range(T):  # the plant steps of one decision
-            s, n = self._substep(
-                self.plant.kernel.step,
-                self.nav.step,
-                self.plant.kernel.nx,
-                s,
-                n,
-                w,
-                self._gains,
-                es[j],
-            )
-            xs.append(s[0])
-            ys.append(s[1])
+        if self._weather is None:
+            for j in range(T):  # the plant steps of one decision
+                s, n = self._substep(self.plant.kernel.step, self.nav.step,
+                                     self.plant.kernel.nx, s, n, w, self._gains, es[j])  # fmt: skip
+                xs.append(s[0])
+                ys.append(s[1])
+        else:  # after the sensors' draws, as the CPU batch: gust, wave motion ×2 a step
+            k = self._weather
+            ew = self.noise.weather_normals(self._take("windy"), 3 * T).T
+            w = (*w, *self._take("weather").T.unbind(0))
+            step = (weather_substep if self._compile_backend is None
+                    else compiled_weather_substep(self._compile_backend))  # fmt: skip
+            for j in range(T):
+                e_w = (ew[3 * j], ew[3 * j + 1], ew[3 * j + 2])
+                s, n = step(k.step, k.sensed_offsets, self.nav.step, self.plant.kernel.nx, s, n,
+                            w, self._gains, e_w, es[j])  # fmt: skip
+                xs.append(s[0])
+                ys.append(s[1])
         self._s, self._n = torch.stack(s), torch.stack(n)
         x_n, y_e = torch.stack(xs, 1), torch.stack(ys, 1)
         t_s = (self._n_dec[:, None] * T + self._steps[None, :]).to(self.dtype) * sc.dt_s
@@ -462,7 +489,7 @@ class TorchOpenWaterEnv:
     @property
     def state(self) -> torch.Tensor:
         """True plant state [x, c] of all boats (N, 13) (never for observations)."""
-        return self._s.T.clone()
+        return self._s[: self.plant.kernel.ns].T.clone()
 
     @property
     def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:

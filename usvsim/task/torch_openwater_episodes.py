@@ -15,8 +15,12 @@ boat's rows (the table cycles): equal to the CPU env only within the table.
 
 Packing needs the CPU family (its module imports CasADi and SciPy); a packed table saves to and
 loads from a ``.npz`` file (:meth:`OpenWaterTable.save`, :func:`load_table`), so a GPU machine
-without CasADi runs the env on a table drawn elsewhere. Weather episodes are refused: the torch
-plant has no wind or waves.
+without CasADi runs the env on a table drawn elsewhere. Where an episode has weather, the table
+gains three fields: each episode's weather plant inputs, computed on the host as the CPU batch
+computes them at the episode's start (:func:`usvsim.vessel.weather_plant.weather_inputs`: wave
+response at the start heading and speed, filter gains, PID wave design), the scales of its
+stationary start draws and its ``windy`` flag; a table without weather has them ``None`` (the
+env then steps the calm plant, as the CPU batch does).
 
 Table fields (E episodes, K static discs and M vessels at most per episode, padded):
 
@@ -39,6 +43,13 @@ vessels           (E, M, 6)   [x0_N m, y0_E m, course rad, speed m/s, turn rad/s
 radar             (E, 4)      [p_clutter, speckle, p_missed, noise amplitude] (``RadarQuality``)
 radar_base        (E,)        ``mix64(radar_seed)`` as int64 bits: frame f's key is
                               ``base + G f 2²²`` (:class:`usvsim.task.scene_radar.RadarStreams`)
+weather           (E, 33)     the weather plant's per-episode inputs
+                              (:data:`usvsim.vessel.weather_plant.WEATHER_INPUTS` from
+                              ``wind_mean``; an episode without weather: the calm row), or None
+weather_start     (E, 3)      standard deviations of the start's gust (m/s) and wave motion
+                              states (stationary; 0 without weather), or None
+windy             (E,)        the episode has a weather (it draws the weather's normals from
+                              its noise stream, as ``BoatDisturbances.weather_active``), or None
 ================  ==========  ================================================================
 """
 
@@ -77,6 +88,14 @@ class OpenWaterTable:
     vessels_ok: NDArray[np.bool_]
     radar: FloatArray
     radar_base: NDArray[np.int64]
+    weather: FloatArray | None = None
+    weather_start: FloatArray | None = None
+    windy: NDArray[np.bool_] | None = None
+
+    @property
+    def in_weather(self) -> bool:
+        """True where the episodes step in the weather plant (some episode has weather)."""
+        return self.weather is not None
 
     @property
     def n_episodes(self) -> int:
@@ -86,14 +105,17 @@ class OpenWaterTable:
         """Write the table to ``path`` (``.npz``), atomically (a temporary file, then renamed)."""
         path = Path(path)
         tmp = path.with_name(path.name + ".tmp.npz")
-        np.savez_compressed(tmp, **{f.name: getattr(self, f.name) for f in fields(self)})
+        arrays = {f.name: getattr(self, f.name) for f in fields(self)}
+        np.savez_compressed(tmp, **{k: v for k, v in arrays.items() if v is not None})
         tmp.replace(path)
 
 
 def load_table(path: str | Path) -> OpenWaterTable:
-    """A table written by :meth:`OpenWaterTable.save`."""
+    """A table written by :meth:`OpenWaterTable.save` (a calm table has no weather fields)."""
     with np.load(Path(path)) as data:
-        return OpenWaterTable(**{f.name: data[f.name] for f in fields(OpenWaterTable)})
+        return OpenWaterTable(
+            **{f.name: data[f.name] for f in fields(OpenWaterTable) if f.name in data.files}
+        )
 
 
 def pack_episodes(
@@ -106,7 +128,8 @@ def pack_episodes(
     an episode without a disturbance at ``cruise_speed_mps`` (the scenario's) in
     ``plant_current`` (the plant's [V_c m/s, β_c rad]). Loops over episodes: host code, once.
 
-    Raises ``ValueError`` for an episode with weather (the torch plant has none)."""
+    Episodes with weather: their weather plant inputs and start scales (:func:`_weather_fields`,
+    the default plant's; CasADi needed)."""
     from scipy.special import ndtri  # the CPU batch's outlier threshold (task.disturbance)
 
     from usvsim.task.scenario import Scenario, episode_geometry
@@ -115,11 +138,6 @@ def pack_episodes(
     if not episodes:
         raise ValueError("pack_episodes needs at least one episode")
     e_n = len(episodes)
-    if any(e.disturbance is not None and e.disturbance.weather is not None for e in episodes):
-        raise ValueError(
-            "the torch open-water env steps calm water only (the torch plant has no wind or "
-            "waves): a weather episode was given; use the CPU env (device='cpu')"
-        )
     scenario = replace(Scenario(), poles_ne=tuple(e.anchor_ne for e in episodes))
     geo = episode_geometry(
         scenario, [replace(e.start, pole_index=j) for j, e in enumerate(episodes)]
@@ -170,7 +188,40 @@ def pack_episodes(
             d.gnss_dropout_start_s, d.gnss_dropout_start_s + d.gnss_dropout_duration_s, p,
         )  # fmt: skip
         t.outlier_seed[i] = d.seed
-    return t
+    weathers = [None if e.disturbance is None else e.disturbance.weather for e in episodes]
+    if all(w is None for w in weathers):
+        return t
+    heading = np.angle(np.exp(1j * t.start_eta[:, 2]))  # ssa, as Plant.initial_state
+    return replace(t, **_weather_fields(weathers, heading, t.speed_mps))
+
+
+def _weather_fields(
+    weathers: Sequence[Any], heading_rad: FloatArray, speed_mps: FloatArray
+) -> dict[str, Any]:
+    """The table's weather fields of episodes with ``weathers`` (a ``Weather`` or None each)
+    starting at ``heading_rad`` and ``speed_mps`` (E,): what
+    ``BoatDisturbances.start_weather`` computes at their start with the default plant
+    (``WeatherPlant(Plant(), innovations="normal")``, as ``PoleAvoidanceBatch``)."""
+    from usvsim.task.weather_draw import CALM, sea_conditions
+    from usvsim.vessel.plant import Plant
+    from usvsim.vessel.weather.waves import wave_motion_std
+    from usvsim.vessel.weather_plant import WeatherPlant, weather_inputs
+
+    plant = WeatherPlant(Plant(), innovations="normal")
+    cond = sea_conditions([CALM if w is None else w for w in weathers])
+    cond.check(len(weathers))
+    rows, resp = weather_inputs(
+        cond, speed_mps, heading_rad, plant.plant.dt_s, plant.gusts, plant.wave_filter,
+        plant.yaw_model, autopilot=plant.plant.design,
+    )  # fmt: skip
+    start = np.column_stack([cond.gust_intensity * cond.wind_speed_mps, wave_motion_std(resp)])
+    if not np.isfinite(start).all():
+        raise ValueError("a weather start scale is not finite (wave response of a calm sea?)")
+    return {
+        "weather": rows,
+        "weather_start": start,
+        "windy": np.array([w is not None for w in weathers], dtype=bool),
+    }
 
 
 def family_table(family: Any, seed: int, n_boats: int, per_boat: int) -> OpenWaterTable:

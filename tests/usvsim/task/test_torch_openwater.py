@@ -30,15 +30,11 @@ from usvsim.task.torch_scene import (
     vessel_motion_torch,
 )
 
-# the torch path is calm: every open-water stress set without weather, and ``everything`` with
-# its weather taken off (its geometry, disturbances and radar as the set draws them)
-CALM_SETS = {
-    s.name: replace(s.scenario, weather=None)
-    for s in STRESS_SETS
-    if s.kind == "open-water"
-    and s.scenario is not None
-    and (s.scenario.weather is None or s.name == "everything")
+# every open-water stress set, the weather sets included
+OPEN_WATER_SETS = {
+    s.name: s.scenario for s in STRESS_SETS if s.kind == "open-water" and s.scenario is not None
 }
+WEATHER_SETS = sorted(k for k, v in OPEN_WATER_SETS.items() if v.weather is not None)
 FLAGS = ("reached_goal", "collision", "out_of_area", "time_limit", "is_success")
 TIMES = ("time_s", "time_to_goal_s")
 
@@ -110,12 +106,15 @@ def _assert_equal_figures(worst: dict[str, float]) -> None:
     assert worst["obs_steps"] <= 1.0  # float32 observations: identical or one rounding apart
 
 
-def test_every_calm_set_at_once_equals_the_cpu_env() -> None:
-    """One run over a mixture of every calm open-water stress set (each boat's episodes from
-    all of them): flags and times identical, trajectories and rewards to rounding."""
-    names = sorted(CALM_SETS)
+def test_every_set_at_once_equals_the_cpu_env() -> None:
+    """One run over a mixture of every open-water stress set, calm and in weather (each boat's
+    episodes from all of them): flags and times identical, trajectories and rewards to
+    rounding."""
+    names = sorted(OPEN_WATER_SETS)
     mixture = ScenarioMixture(
-        members=tuple(CALM_SETS[k] for k in names), weights=(1.0,) * len(names), names=tuple(names)
+        members=tuple(OPEN_WATER_SETS[k] for k in names),
+        weights=(1.0,) * len(names),
+        names=tuple(names),
     )
     worst = _run_pair(mixture, 12, 220, seed=3)
     assert worst["ended"] >= 12
@@ -127,10 +126,17 @@ def test_the_training_family_equals_the_cpu_env() -> None:
     _assert_equal_figures(worst)
 
 
+def test_the_weather_family_equals_the_cpu_env() -> None:
+    """``weather_family()``: calm episodes among the windy ones (each weather stress set alone:
+    the slow test below)."""
+    assert WEATHER_SETS  # the weather sets are among OPEN_WATER_SETS
+    _assert_equal_figures(_run_pair(weather_family(), 6, 220, seed=2))
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(CALM_SETS))
-def test_each_calm_set_equals_the_cpu_env(name: str) -> None:
-    _assert_equal_figures(_run_pair(CALM_SETS[name], 8, 250, seed=7))
+@pytest.mark.parametrize("name", sorted(OPEN_WATER_SETS))
+def test_each_set_equals_the_cpu_env(name: str) -> None:
+    _assert_equal_figures(_run_pair(OPEN_WATER_SETS[name], 8, 250, seed=7))
 
 
 def test_float32_stays_near_the_cpu_env() -> None:
@@ -138,7 +144,7 @@ def test_float32_stays_near_the_cpu_env() -> None:
     the true positions stay within 0.5 m and headings within 0.02 rad of the float64 CPU env."""
     from usvsim.task.openwater_env import OpenWaterVectorEnv
 
-    fam = CALM_SETS["everything"]
+    fam = OPEN_WATER_SETS["everything"]
     cpu = OpenWaterVectorEnv(8, observation="scene", family=fam)
     dev = TorchOpenWaterEnv(8, family=fam, noise="replay", dtype="float32")
     o_cpu, _ = cpu.reset(seed=2)
@@ -216,20 +222,22 @@ def test_scene_pieces_equal_their_numpy_originals() -> None:
 def test_same_seed_same_episodes_as_the_cpu_env() -> None:
     from usvsim.task.openwater_env import OpenWaterVectorEnv
 
-    cpu = OpenWaterVectorEnv(4, observation="scene", family=CALM_SETS["moving-vessels"])
+    cpu = OpenWaterVectorEnv(4, observation="scene", family=OPEN_WATER_SETS["moving-vessels"])
     cpu.reset(seed=9)
-    table = family_table(CALM_SETS["moving-vessels"], 9, 4, 3)
+    table = family_table(OPEN_WATER_SETS["moving-vessels"], 9, 4, 3)
     np.testing.assert_array_equal(table.goal_ne[::3], cpu.sim.goal_ne)
     np.testing.assert_array_equal(table.time_limit_s[::3], cpu.sim.time_limit)
     np.testing.assert_array_equal(table.start_eta[::3, :2], cpu.sim.inner.state.x[:, :2])
 
 
-def test_a_saved_table_runs_the_same(tmp_path: object) -> None:
+@pytest.mark.parametrize("family", [OPEN_WATER_FAMILY, weather_family()], ids=["calm", "weather"])
+def test_a_saved_table_runs_the_same(tmp_path: object, family: object) -> None:
     path = tmp_path / "table.npz"  # type: ignore[operator]
-    table = family_table(OPEN_WATER_FAMILY, 4, 6, 4)
+    table = family_table(family, 4, 6, 4)
     table.save(path)
+    assert load_table(path).in_weather == (family is not OPEN_WATER_FAMILY) == table.in_weather
     runs = []
-    for env in (TorchOpenWaterEnv(6, family=OPEN_WATER_FAMILY, per_boat=4),
+    for env in (TorchOpenWaterEnv(6, family=family, per_boat=4),
                 TorchOpenWaterEnv(6, table=load_table(path), per_boat=4)):  # fmt: skip
         obs, _ = env.reset(seed=4)
         for _ in range(3):
@@ -240,7 +248,7 @@ def test_a_saved_table_runs_the_same(tmp_path: object) -> None:
 
 def test_device_runs_repeat_with_the_seed() -> None:
     def run(seed: int) -> np.ndarray:
-        env = TorchOpenWaterEnv(8, family=CALM_SETS["everything"])
+        env = TorchOpenWaterEnv(8, family=OPEN_WATER_SETS["everything"])
         obs, _ = env.reset(seed=seed)
         for _ in range(2):
             obs, *_ = env.step(torch.full((8, 1), 0.3, dtype=torch.float64))
@@ -250,15 +258,12 @@ def test_device_runs_repeat_with_the_seed() -> None:
     assert not np.array_equal(run(5), run(6))
 
 
-def test_weather_and_wrong_options_are_refused() -> None:
-    env = TorchOpenWaterEnv(2, family=weather_family())
-    with pytest.raises(ValueError, match="calm water only"):
-        env.reset(seed=0)
+def test_wrong_options_are_refused() -> None:
     with pytest.raises(ValueError, match="observation must be one of"):
         TorchOpenWaterEnv(2, observation="radar+nav")
     with pytest.raises(ValueError, match="reward_horizon"):
         TorchOpenWaterEnv(2, reward_horizon="forever")  # type: ignore[arg-type]
-    env = TorchOpenWaterEnv(2, family=CALM_SETS["two-obstacles"])
+    env = TorchOpenWaterEnv(2, family=OPEN_WATER_SETS["two-obstacles"])
     env.reset(seed=0)
     with pytest.raises(ValueError, match=r"gaussian actions must be floats of shape \(2, 1\)"):
         env.step(torch.zeros(2))
@@ -268,7 +273,7 @@ def test_fixed_horizon_equals_the_cpu_env() -> None:
     """``reward_horizon="fixed"``: the terminating steps' rewards as the CPU env's."""
     from usvsim.task.openwater_env import OpenWaterVectorEnv
 
-    fam = replace(CALM_SETS["start-short"], time_factor=1.0)
+    fam = replace(OPEN_WATER_SETS["start-short"], time_factor=1.0)
     cpu = OpenWaterVectorEnv(6, observation="scene", family=fam, reward_horizon="fixed")
     dev = TorchOpenWaterEnv(6, family=fam, noise="replay", reward_horizon="fixed")
     o_cpu, _ = cpu.reset(seed=8)
@@ -287,15 +292,17 @@ def test_fixed_horizon_equals_the_cpu_env() -> None:
     assert not math.isnan(float(r_dev.sum()))
 
 
-@pytest.mark.parametrize("observation", ["scene", "radar+goal"])
+@pytest.mark.parametrize(("observation", "weather"), [("scene", False), ("radar+goal", True)])
 def test_a_step_never_reads_a_tensor_back_to_the_host(
-    monkeypatch: pytest.MonkeyPatch, observation: str
+    monkeypatch: pytest.MonkeyPatch, observation: str, weather: bool
 ) -> None:
-    """Device noise: steps with restarts, GNSS faults and radar degradation read no tensor on
-    the host."""
-    fam = replace(CALM_SETS["start-short"], gnss_outlier_probability_range=(0.05, 0.05),
+    """Device noise: steps with restarts, GNSS faults and radar degradation (and weather) read
+    no tensor on the host."""
+    fam = replace(OPEN_WATER_SETS["start-short"], gnss_outlier_probability_range=(0.05, 0.05),
                   gnss_dropout_probability=1.0, current_speed_range_mps=(0.3, 0.6))  # fmt: skip
     fam = replace(fam, radar_clutter_range=(0.001, 0.001), radar_missed_range=(0.2, 0.2))
+    if weather:
+        fam = replace(fam, weather=OPEN_WATER_SETS["everything"].weather)
     env = TorchOpenWaterEnv(16, family=fam, observation=observation)  # at the pole: collisions
     env.reset(seed=0)
     actions = torch.zeros((16, 1), dtype=torch.float64)
@@ -330,7 +337,7 @@ def test_env_runs_from_a_table_without_casadi_scipy_or_gymnasium(tmp_path: objec
     import sys
 
     path = tmp_path / "table.npz"  # type: ignore[operator]
-    family_table(CALM_SETS["everything"], 0, 4, 2).save(path)
+    family_table(OPEN_WATER_SETS["everything"], 0, 4, 2).save(path)
     code = (
         "import sys\n"
         "sys.modules.update(casadi=None, gymnasium=None, scipy=None, control=None,\n"
@@ -359,7 +366,7 @@ def test_radar_goal_observations_equal_the_cpu_env(name: str) -> None:
     from usvsim.task.openwater_env import OpenWaterVectorEnv
     from usvsim.task.torch_observations import GOAL_STD
 
-    fam = CALM_SETS[name]
+    fam = OPEN_WATER_SETS[name]
     cpu = OpenWaterVectorEnv(6, observation="radar+goal", family=fam)
     dev = TorchOpenWaterEnv(6, family=fam, noise="replay", observation="radar+goal")
     o_cpu, _ = cpu.reset(seed=4)
@@ -415,7 +422,8 @@ def test_positional_observations_equal_the_cpu_env() -> None:
     is around): within one float32 step of the CPU env's, flags identical."""
     from usvsim.task.openwater_env import OpenWaterVectorEnv
 
-    fam = replace(CALM_SETS["moving-vessels"], n_vessels_range=(0, 2))  # some boats see nothing
+    # some boats see nothing
+    fam = replace(OPEN_WATER_SETS["moving-vessels"], n_vessels_range=(0, 2))
     cpu = OpenWaterVectorEnv(8, observation="positional", family=fam)
     dev = TorchOpenWaterEnv(8, family=fam, noise="replay", observation="positional",
                             observation_dtype="float64")  # fmt: skip

@@ -59,6 +59,7 @@ __all__ = [
     "wave_displacement",
     "wave_motion_discrete",
     "wave_motion_init",
+    "wave_motion_std",
     "wave_motion_step",
     "wave_response",
 ]
@@ -259,8 +260,13 @@ def wave_motion_init(rng: np.random.Generator, resp: WaveResponse) -> NDArray[np
     """Filter states (N, 2) drawn from the stationary distribution (no start-up transient)."""
     if np.any(resp.damping >= 1.0):
         raise UserError("wave response damping λ must be < 1 (a peaked spectrum)")
-    # P∞ is diagonal: its Cholesky factor is the standard deviations
-    return np.sqrt(_stationary_variances(resp)) * rng.standard_normal((resp.omega0.size, 2))
+    return wave_motion_std(resp) * rng.standard_normal((resp.omega0.size, 2))
+
+
+def wave_motion_std(resp: WaveResponse) -> NDArray[np.float64]:
+    """Standard deviations (N, 2) of the filter states when stationary: P∞ is diagonal, so its
+    Cholesky factor is these (:func:`wave_motion_init` scales two standard normals by them)."""
+    return np.sqrt(_stationary_variances(resp))
 
 
 def wave_motion_discrete(
