@@ -58,7 +58,7 @@ def _rollout_syncs(env: Any, agent: Any) -> str | None:
     """On a GPU: "none" if 3 rollout steps never wait for the device, else the first error."""
     import torch
 
-    from learning.algorithms.device_rollout import DeviceRolloutCollector
+    from learning.algorithms.device_rollout import DeviceNormalizer, DeviceRolloutCollector
 
     if env.device.type != "cuda":
         return None
@@ -67,7 +67,7 @@ def _rollout_syncs(env: Any, agent: Any) -> str | None:
     torch.cuda.synchronize()
     torch.cuda.set_sync_debug_mode("error")
     try:
-        collector.collect(agent.policy, None, None, 10.0, 3)
+        collector.collect(agent.policy, DeviceNormalizer(agent.normalizer, env.device), 3)
         found = "none"
     except RuntimeError as err:
         found = str(err).splitlines()[0][:200]

@@ -1,7 +1,8 @@
 """TRPO trained on a torch device (issue 40): env, rollouts, GAE and the update stay there.
 
 The twin of :func:`learning.algorithms.loop.train` for an env on a torch device
-(:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv`, ``"torch-cpu"`` or ``"cuda"``: the same
+(:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv` or
+:class:`usvsim.task.torch_openwater.TorchOpenWaterEnv`, ``"torch-cpu"`` or ``"cuda"``: the same
 code). Per iteration:
 
 1. :class:`learning.algorithms.device_rollout.DeviceRolloutCollector` rolls out π_θold for T
@@ -15,7 +16,8 @@ code). Per iteration:
 
 The agent's networks live on the device during rollouts and updates and on the CPU while the
 callback runs (validation on the CPU env, checkpoints readable anywhere). Only TRPO agents with
-vector observations (the positional setups) are supported.
+vector observations (positional, running-normalised; scene, the fixed standardisation) are
+supported.
 """
 
 from __future__ import annotations
@@ -30,8 +32,12 @@ from gymnasium import spaces
 
 from learning.algorithms.actor_critic import fit_critic
 from learning.algorithms.base import Stopwatch
-from learning.algorithms.device_rollout import DeviceBatch, DeviceRolloutCollector, device_gae
-from learning.algorithms.device_rollout import normalize as normalize_rows
+from learning.algorithms.device_rollout import (
+    DeviceBatch,
+    DeviceNormalizer,
+    DeviceRolloutCollector,
+    device_gae,
+)
 from learning.algorithms.loop import IterationStats
 from learning.algorithms.rollout import NonFiniteError
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats, trpo_step
@@ -41,27 +47,14 @@ __all__ = ["device_update", "iterate_on_device", "train_on_device"]
 VALUE_CHUNK = 1 << 20  # rows per critic pass for V(s_t), V(s'_t)
 
 
-def _normaliser_tensors(
-    agent: TRPOAgent, device: torch.device
-) -> tuple[torch.Tensor | None, torch.Tensor | None]:
-    """The normaliser's μ and sqrt(σ² + ε) on ``device`` (None, None where it is disabled)."""
-    norm = agent.normalizer
-    if not norm.enabled:
-        return None, None
-    s = norm.stats[""]
-    mean = torch.as_tensor(s.mean, dtype=torch.float64, device=device)
-    std = torch.as_tensor(np.sqrt(s.var + norm.eps), dtype=torch.float64, device=device)
-    return mean, std
-
-
 def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
     """:meth:`TRPOAgent.update` on a :class:`DeviceBatch` (module docstring, step 2)."""
     cfg: TRPOConfig = agent.config
     clock = Stopwatch()
     T, N = batch.rewards.shape
-    mean, std = _normaliser_tensors(agent, batch.obs.device)
-    obs = normalize_rows(batch.obs.reshape(T * N, -1), mean, std, cfg.obs_clip)
-    next_obs = normalize_rows(batch.next_obs.reshape(T * N, -1), mean, std, cfg.obs_clip)
+    normalise = DeviceNormalizer(agent.normalizer, batch.obs.device)
+    obs = normalise(batch.obs.reshape(T * N, -1))
+    next_obs = normalise(batch.next_obs.reshape(T * N, -1))
     with torch.no_grad():  # in chunks: a GPU batch may hold millions of rows
         both = torch.cat([obs, next_obs])
         chunks = [agent.critic(both[i : i + VALUE_CHUNK]) for i in range(0, len(both), VALUE_CHUNK)]
@@ -96,7 +89,7 @@ def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
         agent.generator,
     )
     clock.lap("critic_s")
-    if agent.normalizer.enabled and not cfg.fixed_input_stats:
+    if normalise.kind == "running" and not cfg.fixed_input_stats:
         raw = batch.obs.reshape(T * N, -1).to(torch.float64)
         moments = torch.stack([raw.mean(0), raw.var(0, unbiased=False)]).cpu().numpy()
         agent.normalizer.stats[""].merge(moments[0], moments[1], float(T * N))
@@ -134,9 +127,9 @@ def iterate_on_device(
     while agent.iteration < cfg.iterations:
         _place(agent, device)
         t0 = time.perf_counter()
-        mean, std = _normaliser_tensors(agent, device)
         agent.policy.eval()
-        batch = collector.collect(agent.policy, mean, std, cfg.obs_clip, cfg.steps_per_env)
+        normalise = DeviceNormalizer(agent.normalizer, device)
+        batch = collector.collect(agent.policy, normalise, cfg.steps_per_env)
         t1 = time.perf_counter()
         update = device_update(agent, batch)
         n, ret_sum, len_sum = batch.episode_sums.tolist()  # the iteration's one read-back
@@ -174,8 +167,8 @@ def train_on_device(
         raise ValueError(f"training on a torch device is for TRPO, not {type(config).__name__}")
     env = make_env(config.num_envs)
     agent = TRPOAgent(env.single_observation_space, env.single_action_space, config)
-    if agent.normalizer.fixed or (agent.normalizer.enabled and "" not in agent.normalizer.stats):
-        raise ValueError("training on a torch device takes running-normalised vector observations")
+    if not agent.normalizer.fixed and agent.normalizer.enabled and "" not in agent.normalizer.stats:
+        raise ValueError("training on a torch device takes vector observations (no images)")
     if state is not None:
         agent.load_state_dict(state)
     elif warm_start is not None:

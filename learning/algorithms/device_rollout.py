@@ -2,13 +2,15 @@
 
 The twin of :mod:`learning.algorithms.rollout` and :mod:`learning.algorithms.gae` for an env
 whose ``step`` takes and returns tensors on its device
-(:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv`: autoreset ``SAME_STEP``, the final
+(:class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv` or
+:class:`usvsim.task.torch_openwater.TorchOpenWaterEnv`: autoreset ``SAME_STEP``, the final
 observation of every boat in ``info["final_obs"]``). A step of
-:meth:`DeviceRolloutCollector.collect` normalises the observation with the normaliser's
-statistics (fixed within an iteration, copied to the device once), samples the policy with a
-generator on the device, steps the env, applies the study's fixed reward horizon
-(:func:`fixed_horizon`) and writes into preallocated tensors;
-nothing is read back to the host (tested: every way to read a tensor raises during a rollout).
+:meth:`DeviceRolloutCollector.collect` normalises the observation (:class:`DeviceNormalizer`:
+the agent's normaliser with its statistics fixed within an iteration, copied to the device once),
+samples the policy with a generator on the device, steps the env, applies the study's fixed
+reward horizon (:func:`fixed_horizon`; an env built with ``reward_horizon="fixed"`` applies its
+own, each episode's time limit against K_ref) and writes into preallocated tensors; nothing is
+read back to the host (tested: every way to read a tensor raises during a rollout).
 
 Shapes (T steps, N envs, F observation features):
 
@@ -31,13 +33,21 @@ Every transition is valid (``SAME_STEP``: no reset-only steps).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import torch
 from torch import Tensor
 
-__all__ = ["DeviceBatch", "DeviceRolloutCollector", "device_gae", "fixed_horizon", "normalize"]
+__all__ = [
+    "DeviceBatch",
+    "DeviceNormalizer",
+    "DeviceRolloutCollector",
+    "device_gae",
+    "fixed_horizon",
+    "normalize",
+]
 
 
 def fixed_horizon(
@@ -70,6 +80,44 @@ def normalize(x: Tensor, mean: Tensor | None, std: Tensor | None, clip: float) -
     if mean is None or std is None:
         return x.to(torch.float32)
     return torch.clamp((x.to(torch.float64) - mean) / std, -clip, clip).to(torch.float32)
+
+
+class DeviceNormalizer:
+    """:class:`learning.algorithms.normalization.ObservationNormalizer` of a vector observation
+    on a torch device, its statistics as they are now: ``running`` (:func:`normalize` with the
+    running mean and variance), ``scene`` (the fixed constants of
+    :func:`usvsim.task.observations.standardize_scene`, empty slots all zeros, then clipped) or
+    disabled (the raw values as float32). Calling it maps (..., F) raw rows to float32."""
+
+    def __init__(self, normalizer: Any, device: torch.device) -> None:
+        self.clip = float(normalizer.clip)
+        self.kind = "scene" if normalizer.fixed else "running" if normalizer.enabled else "off"
+        self.mean: Tensor | None = None
+        self.std: Tensor | None = None
+        if self.kind == "scene":
+            from usvsim.task.observations import SCENE_FEATURES, SCENE_K, SCENE_STANDARDIZATION
+
+            table = SCENE_STANDARDIZATION
+            self._slots = (SCENE_K, SCENE_FEATURES)
+            self.mean = torch.tensor(table.mean, dtype=torch.float64, device=device)
+            self.std = torch.tensor(table.std, dtype=torch.float64, device=device)
+        elif self.kind == "running":
+            stats = normalizer.stats[""]
+            self.mean = torch.as_tensor(stats.mean, dtype=torch.float64, device=device)
+            var = torch.as_tensor(stats.var, dtype=torch.float64, device=device)
+            self.std = torch.sqrt(var + normalizer.eps)
+
+    def __call__(self, x: Tensor) -> Tensor:
+        if self.kind != "scene":
+            return normalize(x, self.mean, self.std, self.clip)
+        assert self.mean is not None and self.std is not None
+        z = ((x.to(torch.float64) - self.mean) / self.std).to(torch.float32)
+        shape = (*x.shape[:-1], *self._slots)
+        valid = x[..., 4:].reshape(shape)[..., 5:6] > 0.5
+        z = torch.cat(
+            [z[..., :4], (z[..., 4:].reshape(shape) * valid).reshape(z[..., 4:].shape)], -1
+        )
+        return torch.clamp(z, -self.clip, self.clip)
 
 
 def device_gae(
@@ -134,7 +182,10 @@ class DeviceRolloutCollector:
         self.generator = torch.Generator(device=self.device).manual_seed(seed + 2)
         obs, _ = env.reset(seed=seed)
         if isinstance(obs, dict):
-            raise ValueError("the device rollout takes vector observations (positional) only")
+            raise ValueError("the device rollout takes vector observations (positional, scene)")
+        # an env on the fixed horizon applies it itself (the open-water env: each episode's own
+        # time limit); the study's env returns the episode's rewards, and the collector adds it
+        self._own_horizon = getattr(env, "reward_horizon", "episode") != "fixed"
         self.obs = obs
         self._ep_return = torch.zeros(self.n, dtype=torch.float64, device=self.device)
         self._ep_length = torch.zeros(self.n, dtype=torch.float64, device=self.device)
@@ -143,13 +194,11 @@ class DeviceRolloutCollector:
     def collect(
         self,
         policy: torch.nn.Module,
-        mean: Tensor | None,
-        std: Tensor | None,
-        clip: float,
+        normalise: Callable[[Tensor], Tensor],
         n_steps: int,
     ) -> DeviceBatch:
         """Run ``n_steps`` steps of all N envs with ``policy`` on observations normalised by
-        ``mean``/``std`` (:func:`normalize`; tensors on the device or None); T·N transitions."""
+        ``normalise`` (a :class:`DeviceNormalizer`: raw rows → float32); T·N transitions."""
         T, N, dev = n_steps, self.n, self.device
         sc = self.env.scenario
         obs_buf = torch.empty((T, *self.obs.shape), dtype=self.obs.dtype, device=dev)
@@ -162,23 +211,18 @@ class DeviceRolloutCollector:
         actions_buf: Tensor | None = None
         for t in range(T):
             obs_buf[t] = self.obs
-            dist = policy(normalize(self.obs, mean, std, clip))
+            dist = policy(normalise(self.obs))
             actions = dist.sample(self.generator)
             if actions_buf is None:
                 actions_buf = torch.empty((T, *actions.shape), dtype=actions.dtype, device=dev)
             actions_buf[t], log_probs[t] = actions, dist.log_prob(actions)
             env_actions = actions if self.bounds is None else actions.clamp(*self.bounds)
             obs, reward, term, trunc, info = self.env.step(env_actions)
-            reward, term, trunc = fixed_horizon(
-                self.gamma,
-                sc.max_decisions,
-                sc.decision_period_s,
-                reward,
-                term,
-                trunc,
-                info["out_of_area"],
-                info["time_s"],
-            )
+            if self._own_horizon:
+                args = (sc.max_decisions, sc.decision_period_s, reward, term, trunc)
+                reward, term, trunc = fixed_horizon(
+                    self.gamma, *args, info["out_of_area"], info["time_s"]
+                )
             done = term | trunc
             rewards[t], terminated[t], truncated[t] = reward, term, trunc
             next_buf[t] = torch.where(done[:, None], info["final_obs"], obs)

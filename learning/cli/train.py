@@ -69,9 +69,10 @@ checkpoints).
 ``DIR/<name of the output folder>`` (``tensorboard --logdir DIR`` shows runs side by side; tags
 and steps: :mod:`learning.experiments.run_log`; needs ``pip install "usvsim[tensorboard]"``).
 
-``--device {cpu,torch-cpu,cuda}`` (rl-gaussian-positional, rl-categorical-positional): ``cpu``
-(the default) steps the CPU env with NumPy arrays; ``torch-cpu`` and ``cuda`` train with the
-study task's torch env, rollouts, GAE and the TRPO step on that device
+``--device {cpu,torch-cpu,cuda}`` (the TRPO positional setups and the open-water scene setups
+``rl-*-scene-ow``, ``-ft``): ``cpu`` (the default) steps the CPU env with NumPy arrays;
+``torch-cpu`` and ``cuda`` train with the torch env (the study task's, or the open-water one on
+the setup's training family), rollouts, GAE and the TRPO step on that device
 (:mod:`learning.algorithms.device_loop`); validation, checkpoints and files are those of a
 ``cpu`` run. Another setup, or ``cuda`` where torch sees no GPU: one line, exit 2.
 
@@ -222,8 +223,8 @@ class TrainArgs:
         rl = SETUPS.get(self.setup)
         if rl is None:
             raise UserError(
-                f"--device {self.device} is for the TRPO positional setups "
-                f"(rl-gaussian-positional, rl-categorical-positional), not {self.setup!r}"
+                f"--device {self.device} is for the TRPO positional and open-water scene "
+                f"setups, not {self.setup!r}"
             )
         try:
             device_env_maker(rl, self.device)

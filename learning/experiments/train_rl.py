@@ -81,17 +81,52 @@ DEVICES = ("cpu", "torch-cpu", "cuda")  # where ``train_rl(device=...)`` steps t
 DEVICE_DTYPES = {"torch-cpu": "float64", "cuda": "float32"}  # the torch env's simulation type
 
 
+#: Episodes each boat of an open-water torch env draws at its reset (its table then cycles)
+#: for at most this many boats in all; at least 16 a boat (host draws: ~0.1 ms an episode).
+OPEN_WATER_TABLE_EPISODES = 1 << 16
+
+
 def device_env_maker(setup: RLSetup, device: str) -> Any:
-    """``make_env(num_envs)`` of the study task's torch env for ``setup`` on ``device``
-    (``"torch-cpu"`` or ``"cuda"``: :mod:`learning.algorithms.device_loop`); ``ValueError`` for
-    a setup that it cannot train (the open-water task, a radar observation, PPO)."""
+    """``make_env(num_envs)`` of the torch env for ``setup`` on ``device`` (``"torch-cpu"`` or
+    ``"cuda"``: :mod:`learning.algorithms.device_loop`): the study task's for the positional
+    setups, the open-water one for the scene setups (the setup's training family, drawn on the
+    host at reset as the CPU env draws it, :data:`OPEN_WATER_TABLE_EPISODES` episodes in all;
+    the fixed reward horizon with each episode's own time limit). ``ValueError`` for a setup it
+    cannot train (an image observation, PPO, the COLREG reward or reactive targets)."""
     if device not in DEVICE_DTYPES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
-    if setup.task == "open-water" or setup.observation != "positional" or setup.algorithm != "trpo":
-        raise ValueError(
-            f"--device {device} is for the TRPO positional setups "
-            f"(rl-gaussian-positional, rl-categorical-positional), not {setup.name!r}"
+    trainable = setup.algorithm == "trpo" and (
+        (setup.task != "open-water" and setup.observation == "positional")
+        or (
+            setup.task == "open-water"
+            and setup.observation == "scene"
+            and not setup.colreg_reward
+            and not setup.reactive_targets
         )
+    )
+    if not trainable:
+        raise ValueError(
+            f"--device {device} is for the TRPO positional setups (rl-gaussian-positional, "
+            "rl-categorical-positional) and open-water scene setups (rl-*-scene-ow, -ft), not "
+            f"{setup.name!r}"
+        )
+    if setup.task == "open-water":
+        from usvsim.task.torch_openwater import TorchOpenWaterEnv
+
+        def make_open_water(num_envs: int) -> Any:
+            return TorchOpenWaterEnv(
+                num_envs,
+                family=setup.training_family,
+                per_boat=max(16, OPEN_WATER_TABLE_EPISODES // num_envs),
+                device=device,
+                dtype=DEVICE_DTYPES[device],
+                action=setup.action,
+                observation=setup.observation,
+                reward_horizon="fixed",
+                gamma=setup.algorithm_config.gamma,
+            )
+
+        return make_open_water
     from usvsim.task.torch_env import TorchPoleAvoidanceEnv
 
     def make_env(num_envs: int) -> Any:

@@ -216,14 +216,8 @@ class TorchPoleAvoidanceEnv:
 
     @property
     def single_action_space(self) -> Any:
-        """The CPU env's single-boat action space (a gymnasium space: needs gymnasium; built
-        here, not by ``usvsim.task.batch.action_space``, whose module needs CasADi; tested
-        equal)."""
-        from gymnasium import spaces
-
-        if self.action_kind == "categorical":
-            return spaces.Discrete(N_CATEGORIES)
-        return spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
+        """The CPU env's single-boat action space (:func:`single_action_space`)."""
+        return single_action_space(self.action_kind)
 
     @property
     def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:
@@ -433,6 +427,17 @@ class ClosedLoop:
         if T % kernel.cycle_steps:
             raise ValueError("a decision must span whole sensor cycles (GNSS and compass)")
         return cls(plant, kernel, T, noise_layout(kernel, 1, T))
+
+
+def single_action_space(action_kind: str) -> Any:
+    """The CPU env's single-boat action space of ``action_kind`` (a gymnasium space: needs
+    gymnasium; built here, not by ``usvsim.task.batch.action_space``, whose module needs CasADi;
+    tested equal)."""
+    from gymnasium import spaces
+
+    if action_kind == "categorical":
+        return spaces.Discrete(N_CATEGORIES)
+    return spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
 
 
 def plant_and_filter(

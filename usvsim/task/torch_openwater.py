@@ -63,6 +63,7 @@ from usvsim.task.torch_env import (
     check_options,
     compiled_substep,
     plant_and_filter,
+    single_action_space,
     torch_heading_change,
 )
 from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
@@ -75,6 +76,7 @@ from usvsim.task.torch_observations import (
 from usvsim.task.torch_openwater_episodes import OpenWaterTable, family_table
 from usvsim.task.torch_scene import (
     TorchDiscs,
+    fixed_horizon_torch,
     gaussian_reward_torch,
     judge_period_torch,
     nearest_and_hits_torch,
@@ -439,9 +441,12 @@ class TorchOpenWaterEnv:
             r.pole_weight, r.pole_sigma_m, r.goal_weight, r.goal_sigma_m,
             judged.distance_to_obstacle_m, judged.distance_to_goal_m,
         )  # fmt: skip
-        reward, terminated, truncated = self._horizon(
-            pole + goal_term, terminated, truncated, out_of_area, time_s, limit
-        )
+        reward = pole + goal_term
+        if self.reward_horizon == "fixed":
+            reward, terminated, truncated = fixed_horizon_torch(
+                reward, terminated, truncated, out_of_area, time_s, limit, self._ref_decisions,
+                sc.decision_period_s, self.gamma,
+            )  # fmt: skip
         obs = self._observe(advance=torch.ones_like(terminated))
         info = {
             "final_obs": obs,
@@ -462,34 +467,22 @@ class TorchOpenWaterEnv:
         obs = self._restart(terminated | truncated, obs)
         return obs, reward, terminated, truncated, info
 
-    def _horizon(
-        self,
-        reward: torch.Tensor,
-        terminated: torch.Tensor,
-        truncated: torch.Tensor,
-        out_of_area: torch.Tensor,
-        time_s: torch.Tensor,
-        limit_s: torch.Tensor,
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """:func:`usvsim.task.horizon.apply_reward_horizon` with each episode's own number of
-        decisions K_i against K_ref (``OpenWaterVectorEnv``): a terminating step adds the
-        discounted reward of staying until K_ref, the clock advanced by K_ref − K_i."""
-        if self.reward_horizon == "episode":
-            return reward, terminated, truncated
-        dp, g = self.scenario.decision_period_s, self.gamma
-        k_i = torch.ceil(limit_s / dp - 1e-9)
-        shifted = time_s + (self._ref_decisions - k_i) * dp
-        left = out_of_area & truncated
-        terminated, truncated = terminated | left, truncated & ~left
-        m = torch.clamp(self._ref_decisions - torch.round(shifted / dp), min=0.0)
-        factor = 1.0 + g * (1.0 - g**m) / (1.0 - g)
-        return torch.where(terminated, reward * factor, reward), terminated, truncated
-
     # ----------------------------------------------------------------------------- state
     @property
     def state(self) -> torch.Tensor:
         """True plant state [x, c] of all boats (N, 13) (never for observations)."""
         return self._s[: self.plant.kernel.ns].T.clone()
+
+    @property
+    def single_observation_space(self) -> Any:
+        """The CPU env's single-boat observation space (gymnasium; see ``single_action_space``)."""
+        from usvsim.task.observations import observation_space
+
+        return observation_space(self.observation_kind)  # type: ignore[arg-type]
+
+    @property
+    def single_action_space(self) -> Any:
+        return single_action_space(self.action_kind)
 
     @property
     def estimate(self) -> tuple[torch.Tensor, torch.Tensor]:

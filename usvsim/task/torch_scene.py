@@ -36,6 +36,7 @@ __all__ = [
     "SCENE_K",
     "TorchDiscs",
     "TorchJudgement",
+    "fixed_horizon_torch",
     "gaussian_reward_torch",
     "judge_period_torch",
     "positional_torch",
@@ -287,3 +288,28 @@ def gaussian_reward_torch(
     pole = -pole_weight * torch.exp(-0.5 * (q_pole * q_pole))
     goal = goal_weight * (torch.exp(-0.5 * (q_goal * q_goal)) - 1.0)
     return pole, goal
+
+
+def fixed_horizon_torch(
+    reward: torch.Tensor,
+    terminated: torch.Tensor,
+    truncated: torch.Tensor,
+    out_of_area: torch.Tensor,
+    time_s: torch.Tensor,
+    limit_s: torch.Tensor,
+    ref_decisions: int,
+    decision_period_s: float,
+    gamma: float,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """:func:`usvsim.task.horizon.apply_reward_horizon` ``"fixed"`` with each episode's own
+    number of decisions K_i (from its time limit ``limit_s``) against ``ref_decisions`` K_ref, as
+    ``OpenWaterVectorEnv``: leaving the area terminates, and a terminating step adds the
+    discounted reward of staying until K_ref, the clock advanced by K_ref − K_i. Tensors (N,)."""
+    dp, g = decision_period_s, gamma
+    k_i = torch.ceil(limit_s / dp - 1e-9)
+    shifted = time_s + (ref_decisions - k_i) * dp
+    left = out_of_area & truncated
+    terminated, truncated = terminated | left, truncated & ~left
+    m = torch.clamp(ref_decisions - torch.round(shifted / dp), min=0.0)
+    factor = 1.0 + g * (1.0 - g**m) / (1.0 - g)
+    return torch.where(terminated, reward * factor, reward), terminated, truncated

@@ -12,6 +12,7 @@ import torch
 
 from learning.algorithms.device_loop import device_update
 from learning.algorithms.device_rollout import (
+    DeviceNormalizer,
     DeviceRolloutCollector,
     device_gae,
     fixed_horizon,
@@ -82,6 +83,25 @@ def test_device_normalisation_equals_the_normaliser() -> None:
     np.testing.assert_array_equal(normalize(torch.as_tensor(x), mean, std, 10.0).numpy(), norm(x))
 
 
+def test_device_scene_standardisation_equals_the_normaliser() -> None:
+    """``scaling="scene"``: the fixed constants, empty slots all zeros, then clipped, as the
+    NumPy normaliser (on the torch open-water env's observations, some slots empty)."""
+    from usvsim.task.torch_openwater import TorchOpenWaterEnv
+
+    env = TorchOpenWaterEnv(16, observation="scene")
+    obs, _ = env.reset(seed=1)
+    rows = [obs]
+    for _ in range(4):
+        obs, *_ = env.step(torch.zeros((16, 1), dtype=torch.float64))
+        rows.append(obs)
+    x = torch.cat(rows)
+    assert bool((x[:, 4 + 5 :: 6] == 0).any()) and bool((x[:, 4 + 5 :: 6] == 1).any())
+    norm = ObservationNormalizer(env.single_observation_space, scaling="scene")
+    got = DeviceNormalizer(norm, torch.device("cpu"))
+    assert got.kind == "scene"
+    np.testing.assert_array_equal(got(x).numpy(), norm(x.numpy()))
+
+
 def _agent(env: TorchPoleAvoidanceEnv, **kw: object) -> TRPOAgent:
     cfg = TRPOConfig(num_envs=env.num_envs, steps_per_env=20, **kw)  # type: ignore[arg-type]
     return TRPOAgent(env.single_observation_space, env.single_action_space, cfg)
@@ -94,15 +114,14 @@ def test_a_rollout_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.Mon
     agent = _agent(env)
     agent.normalizer.update(np.random.default_rng(0).normal(size=(64, 4)))
     collector = DeviceRolloutCollector(env, 0.99, seed=0)
-    s = agent.normalizer.stats[""]
-    mean, std = torch.as_tensor(s.mean), torch.as_tensor(np.sqrt(s.var + 1e-8))
+    normalise = DeviceNormalizer(agent.normalizer, torch.device("cpu"))
 
     def refuse(*args: object, **kwargs: object) -> None:
         raise AssertionError("a tensor was read back to the host during a rollout")
 
     for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
         monkeypatch.setattr(torch.Tensor, name, refuse)
-    batch = collector.collect(agent.policy, mean, std, 10.0, 20)
+    batch = collector.collect(agent.policy, normalise, 20)
     monkeypatch.undo()
     assert batch.obs.shape == batch.next_obs.shape == (20, 32, 4)
     assert batch.actions.shape == batch.log_probs.shape == batch.rewards.shape == (20, 32)
@@ -117,7 +136,8 @@ def test_a_rollout_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.Mon
 def test_a_device_update_stays_in_the_trust_region(action: str) -> None:
     env = TorchPoleAvoidanceEnv(16, action=action)  # type: ignore[arg-type]
     agent = _agent(env, max_kl=0.01)
-    batch = DeviceRolloutCollector(env, 0.99, seed=0).collect(agent.policy, None, None, 10.0, 20)
+    normalise = DeviceNormalizer(agent.normalizer, torch.device("cpu"))
+    batch = DeviceRolloutCollector(env, 0.99, seed=0).collect(agent.policy, normalise, 20)
     stats = device_update(agent, batch)
     assert stats.line_search_accepted and 0.0 < stats.kl <= 0.01
     assert agent.iteration == 1 and agent.env_steps == 320

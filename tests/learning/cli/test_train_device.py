@@ -46,12 +46,31 @@ def test_torch_cpu_run_writes_the_files_of_a_cpu_run(tmp_path: Path) -> None:
     assert load_checkpoint(tmp_path / "latest.pt").agent["iteration"] == 3
 
 
+def test_torch_cpu_trains_an_open_water_scene_setup(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """rl-gaussian-scene-ow on the torch open-water env (its training family drawn at reset,
+    a small table here): the files of a cpu run, the family validated on the CPU env."""
+    import learning.experiments.train_rl as train_rl
+
+    monkeypatch.setattr(train_rl, "OPEN_WATER_TABLE_EPISODES", 64)
+    args = _args(tmp_path, setup="rl-gaussian-scene-ow", iterations=1, n_envs=4)
+    assert run(args) == 0
+    with (tmp_path / "log.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["env_steps"]) for r in rows] == [4 * 64]
+    assert rows[0]["val_family_successes"] != ""
+    assert load_checkpoint(tmp_path / "best.pt").setup == "rl-gaussian-scene-ow"
+
+
 @pytest.mark.parametrize(
     ("setup", "device", "message"),
     [
-        ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional setups"),
-        ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional setups"),
-        ("il-gaussian-positional", "torch-cpu", "is for the TRPO positional setups"),
+        ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional"),
+        ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional"),
+        ("il-gaussian-positional", "torch-cpu", "is for the TRPO positional"),
+        ("rl-gaussian-radar-ow", "torch-cpu", "is for the TRPO positional"),
+        ("rl-gaussian-radar-colreg", "torch-cpu", "is for the TRPO positional"),
         ("rl-gaussian-positional", "gpu", "--device must be one of cpu, torch-cpu, cuda"),
     ],
 )
