@@ -15,9 +15,9 @@ code). Per iteration:
 3. one read-back: the iteration's episode count, return and length sums, for the callback.
 
 The agent's networks live on the device during rollouts and updates and on the CPU while the
-callback runs (validation on the CPU env, checkpoints readable anywhere). Only TRPO agents with
-vector observations (positional, running-normalised; scene, the fixed standardisation) are
-supported.
+callback runs (validation on the CPU env, checkpoints readable anywhere). TRPO agents only;
+observations: vectors (positional, running-normalised; scene, its fixed standardisation) or an
+image with a vector (radar+goal: the image scaled, the goal running-normalised).
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 import torch
 from gymnasium import spaces
+from torch import Tensor
 
 from learning.algorithms.actor_critic import fit_critic
 from learning.algorithms.base import Stopwatch
@@ -37,14 +38,17 @@ from learning.algorithms.device_rollout import (
     DeviceNormalizer,
     DeviceRolloutCollector,
     device_gae,
+    flat_rows,
 )
 from learning.algorithms.loop import IterationStats
+from learning.algorithms.networks import TensorObs, rows
 from learning.algorithms.rollout import NonFiniteError
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats, trpo_step
 
 __all__ = ["device_update", "iterate_on_device", "train_on_device"]
 
 VALUE_CHUNK = 1 << 20  # rows per critic pass for V(s_t), V(s'_t)
+IMAGE_VALUE_CHUNK = 1 << 14  # the same with an image (radar+goal: 24 kB a row in float32)
 
 
 def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
@@ -52,13 +56,13 @@ def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
     cfg: TRPOConfig = agent.config
     clock = Stopwatch()
     T, N = batch.rewards.shape
-    normalise = DeviceNormalizer(agent.normalizer, batch.obs.device)
-    obs = normalise(batch.obs.reshape(T * N, -1))
-    next_obs = normalise(batch.next_obs.reshape(T * N, -1))
-    with torch.no_grad():  # in chunks: a GPU batch may hold millions of rows
-        both = torch.cat([obs, next_obs])
-        chunks = [agent.critic(both[i : i + VALUE_CHUNK]) for i in range(0, len(both), VALUE_CHUNK)]
-        values = torch.cat(chunks).reshape(2, T, N)
+    normalise = DeviceNormalizer(agent.normalizer, batch.rewards.device)
+    raw = flat_rows(batch.obs)
+    obs = normalise(raw)
+    with torch.no_grad():  # in chunks: a GPU batch may hold millions of rows (images)
+        values = torch.stack(
+            [_values(agent, normalise, x, T * N) for x in (raw, flat_rows(batch.next_obs))]
+        ).reshape(2, T, N)
     adv, ret = device_gae(
         batch.rewards,
         values[0],
@@ -70,7 +74,8 @@ def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
     )
     adv, ret = adv.reshape(-1), ret.reshape(-1)
     actions = batch.actions.reshape(T * N, *batch.actions.shape[2:])
-    if not bool(torch.isfinite(obs.sum(dtype=torch.float64))):
+    vectors = [x for x in (obs.values() if isinstance(obs, dict) else [obs]) if x.ndim == 2]
+    if not all(bool(torch.isfinite(x.sum(dtype=torch.float64))) for x in vectors):
         raise NonFiniteError("non-finite observation in the batch: no update made")
     if not (torch.isfinite(adv).all() and torch.isfinite(ret).all()):
         raise NonFiniteError("non-finite advantages or returns: no update made")
@@ -90,13 +95,23 @@ def device_update(agent: TRPOAgent, batch: DeviceBatch) -> TRPOUpdateStats:
     )
     clock.lap("critic_s")
     if normalise.kind == "running" and not cfg.fixed_input_stats:
-        raw = batch.obs.reshape(T * N, -1).to(torch.float64)
-        moments = torch.stack([raw.mean(0), raw.var(0, unbiased=False)]).cpu().numpy()
-        agent.normalizer.stats[""].merge(moments[0], moments[1], float(T * N))
+        for key, stats in agent.normalizer.stats.items():  # the vector parts
+            x = (raw[key] if isinstance(raw, dict) else raw).to(torch.float64)
+            moments = torch.stack([x.mean(0), x.var(0, unbiased=False)]).cpu().numpy()
+            stats.merge(moments[0], moments[1], float(T * N))
     agent.iteration += 1
     agent.env_steps += T * N
     clock.lap("batch_s")
     return TRPOUpdateStats(step, value_loss, clock.times())
+
+
+def _values(agent: TRPOAgent, normalise: DeviceNormalizer, raw: TensorObs, m: int) -> Tensor:
+    """V(s) (m,) of raw rows, normalised and evaluated :data:`VALUE_CHUNK` rows at a time
+    (:data:`IMAGE_VALUE_CHUNK` with an image)."""
+    step = IMAGE_VALUE_CHUNK if isinstance(raw, dict) else VALUE_CHUNK
+    return torch.cat(
+        [agent.critic(normalise(rows(raw, slice(i, i + step)))) for i in range(0, m, step)]
+    )
 
 
 def _place(agent: TRPOAgent, device: torch.device) -> None:
@@ -167,8 +182,6 @@ def train_on_device(
         raise ValueError(f"training on a torch device is for TRPO, not {type(config).__name__}")
     env = make_env(config.num_envs)
     agent = TRPOAgent(env.single_observation_space, env.single_action_space, config)
-    if not agent.normalizer.fixed and agent.normalizer.enabled and "" not in agent.normalizer.stats:
-        raise ValueError("training on a torch device takes vector observations (no images)")
     if state is not None:
         agent.load_state_dict(state)
     elif warm_start is not None:

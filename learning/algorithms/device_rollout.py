@@ -40,12 +40,15 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from learning.algorithms.networks import TensorObs
+
 __all__ = [
     "DeviceBatch",
     "DeviceNormalizer",
     "DeviceRolloutCollector",
     "device_gae",
     "fixed_horizon",
+    "flat_rows",
     "normalize",
 ]
 
@@ -83,41 +86,65 @@ def normalize(x: Tensor, mean: Tensor | None, std: Tensor | None, clip: float) -
 
 
 class DeviceNormalizer:
-    """:class:`learning.algorithms.normalization.ObservationNormalizer` of a vector observation
-    on a torch device, its statistics as they are now: ``running`` (:func:`normalize` with the
-    running mean and variance), ``scene`` (the fixed constants of
-    :func:`usvsim.task.observations.standardize_scene`, empty slots all zeros, then clipped) or
-    disabled (the raw values as float32). Calling it maps (..., F) raw rows to float32."""
+    """:class:`learning.algorithms.normalization.ObservationNormalizer` on a torch device, its
+    statistics as they are now, part by part: an image (uint8) scaled by 1/255, a vector part
+    ``running`` (:func:`normalize` with the running mean and variance), ``scene`` (the fixed
+    constants of :func:`usvsim.task.observations.standardize_scene`, empty slots all zeros, then
+    clipped) or disabled (the raw values as float32). Calling it maps raw rows (..., F), or a
+    dict of such parts, to float32, the NumPy normaliser's numbers bit for bit (tested)."""
 
     def __init__(self, normalizer: Any, device: torch.device) -> None:
         self.clip = float(normalizer.clip)
         self.kind = "scene" if normalizer.fixed else "running" if normalizer.enabled else "off"
-        self.mean: Tensor | None = None
-        self.std: Tensor | None = None
+        self.stats: dict[str, tuple[Tensor, Tensor]] = {}  # part → μ, sqrt(σ² + ε)
+        self._scene: tuple[Tensor, Tensor, tuple[int, int]] | None = None
         if self.kind == "scene":
             from usvsim.task.observations import SCENE_FEATURES, SCENE_K, SCENE_STANDARDIZATION
 
             table = SCENE_STANDARDIZATION
-            self._slots = (SCENE_K, SCENE_FEATURES)
-            self.mean = torch.tensor(table.mean, dtype=torch.float64, device=device)
-            self.std = torch.tensor(table.std, dtype=torch.float64, device=device)
+            self._scene = (
+                torch.tensor(table.mean, dtype=torch.float64, device=device),
+                torch.tensor(table.std, dtype=torch.float64, device=device),
+                (SCENE_K, SCENE_FEATURES),
+            )
         elif self.kind == "running":
-            stats = normalizer.stats[""]
-            self.mean = torch.as_tensor(stats.mean, dtype=torch.float64, device=device)
-            var = torch.as_tensor(stats.var, dtype=torch.float64, device=device)
-            self.std = torch.sqrt(var + normalizer.eps)
+            for key, stats in normalizer.stats.items():
+                mean = torch.as_tensor(stats.mean, dtype=torch.float64, device=device)
+                var = torch.as_tensor(stats.var, dtype=torch.float64, device=device)
+                self.stats[key] = (mean, torch.sqrt(var + normalizer.eps))
+        self._inv255 = torch.tensor(1.0 / 255.0, dtype=torch.float32, device=device)
 
-    def __call__(self, x: Tensor) -> Tensor:
-        if self.kind != "scene":
-            return normalize(x, self.mean, self.std, self.clip)
-        assert self.mean is not None and self.std is not None
-        z = ((x.to(torch.float64) - self.mean) / self.std).to(torch.float32)
-        shape = (*x.shape[:-1], *self._slots)
-        valid = x[..., 4:].reshape(shape)[..., 5:6] > 0.5
-        z = torch.cat(
-            [z[..., :4], (z[..., 4:].reshape(shape) * valid).reshape(z[..., 4:].shape)], -1
-        )
-        return torch.clamp(z, -self.clip, self.clip)
+    def part(self, key: str, x: Tensor) -> Tensor:
+        """One part (``""`` for a plain vector observation)."""
+        if x.dtype == torch.uint8:  # an image: x · float32(1/255), as the NumPy normaliser
+            return x.to(torch.float32) * self._inv255
+        if self._scene is not None:
+            mean, std, slots = self._scene
+            z = ((x.to(torch.float64) - mean) / std).to(torch.float32)
+            shape = (*x.shape[:-1], *slots)
+            valid = x[..., 4:].reshape(shape)[..., 5:6] > 0.5
+            z = torch.cat([z[..., :4], (z[..., 4:].reshape(shape) * valid).flatten(-2)], -1)
+            return torch.clamp(z, -self.clip, self.clip)
+        mean_std = self.stats.get(key)
+        if mean_std is None:
+            return x.to(torch.float32)
+        return normalize(x, *mean_std, self.clip)
+
+    def __call__(self, obs: TensorObs) -> TensorObs:
+        if isinstance(obs, dict):
+            return {key: self.part(key, x) for key, x in obs.items()}
+        return self.part("", obs)
+
+
+def _parts(obs: TensorObs) -> dict[str, Tensor]:
+    return obs if isinstance(obs, dict) else {"": obs}
+
+
+def flat_rows(obs: TensorObs) -> TensorObs:
+    """(T, N, ...) → (T·N, ...), part by part."""
+    if isinstance(obs, dict):
+        return {key: x.reshape(-1, *x.shape[2:]) for key, x in obs.items()}
+    return obs.reshape(-1, *obs.shape[2:])
 
 
 def device_gae(
@@ -146,8 +173,8 @@ def device_gae(
 class DeviceBatch:
     """T steps of N envs on the device (module table)."""
 
-    obs: Tensor
-    next_obs: Tensor
+    obs: TensorObs
+    next_obs: TensorObs
     actions: Tensor
     log_probs: Tensor
     rewards: Tensor
@@ -181,8 +208,6 @@ class DeviceRolloutCollector:
         self.bounds = action_bounds
         self.generator = torch.Generator(device=self.device).manual_seed(seed + 2)
         obs, _ = env.reset(seed=seed)
-        if isinstance(obs, dict):
-            raise ValueError("the device rollout takes vector observations (positional, scene)")
         # an env on the fixed horizon applies it itself (the open-water env: each episode's own
         # time limit); the study's env returns the episode's rewards, and the collector adds it
         self._own_horizon = getattr(env, "reward_horizon", "episode") != "fixed"
@@ -194,15 +219,15 @@ class DeviceRolloutCollector:
     def collect(
         self,
         policy: torch.nn.Module,
-        normalise: Callable[[Tensor], Tensor],
+        normalise: Callable[[TensorObs], TensorObs],
         n_steps: int,
     ) -> DeviceBatch:
         """Run ``n_steps`` steps of all N envs with ``policy`` on observations normalised by
         ``normalise`` (a :class:`DeviceNormalizer`: raw rows → float32); T·N transitions."""
         T, N, dev = n_steps, self.n, self.device
         sc = self.env.scenario
-        obs_buf = torch.empty((T, *self.obs.shape), dtype=self.obs.dtype, device=dev)
-        next_buf = torch.empty_like(obs_buf)
+        obs_buf = {k: x.new_empty((T, *x.shape)) for k, x in _parts(self.obs).items()}
+        next_buf = {k: torch.empty_like(x) for k, x in obs_buf.items()}
         log_probs = torch.empty((T, N), dtype=torch.float32, device=dev)
         rewards = torch.empty((T, N), dtype=torch.float32, device=dev)
         terminated = torch.empty((T, N), dtype=torch.bool, device=dev)
@@ -210,7 +235,8 @@ class DeviceRolloutCollector:
         sums = torch.zeros(3, dtype=torch.float64, device=dev)
         actions_buf: Tensor | None = None
         for t in range(T):
-            obs_buf[t] = self.obs
+            for key, x in _parts(self.obs).items():
+                obs_buf[key][t] = x
             dist = policy(normalise(self.obs))
             actions = dist.sample(self.generator)
             if actions_buf is None:
@@ -225,7 +251,11 @@ class DeviceRolloutCollector:
                 )
             done = term | trunc
             rewards[t], terminated[t], truncated[t] = reward, term, trunc
-            next_buf[t] = torch.where(done[:, None], info["final_obs"], obs)
+            final = info["final_obs"]
+            for key, x in _parts(obs).items():
+                last = _parts(final)[key]
+                mask = done.view(-1, *([1] * (x.ndim - 1)))
+                next_buf[key][t] = torch.where(mask, last, x)
             self._ep_return += reward
             self._ep_length += 1.0
             d = done.to(torch.float64)
@@ -234,6 +264,10 @@ class DeviceRolloutCollector:
             self._ep_length *= 1.0 - d
             self.obs = obs
         assert actions_buf is not None
-        return DeviceBatch(
-            obs_buf, next_buf, actions_buf, log_probs, rewards, terminated, truncated, sums
-        )
+        if isinstance(self.obs, dict):
+            obs_out: TensorObs = dict(obs_buf)
+            next_out: TensorObs = dict(next_buf)
+        else:
+            obs_out, next_out = obs_buf[""], next_buf[""]
+        return DeviceBatch(obs_out, next_out, actions_buf, log_probs, rewards, terminated,
+                           truncated, sums)  # fmt: skip

@@ -89,17 +89,18 @@ OPEN_WATER_TABLE_EPISODES = 1 << 16
 def device_env_maker(setup: RLSetup, device: str) -> Any:
     """``make_env(num_envs)`` of the torch env for ``setup`` on ``device`` (``"torch-cpu"`` or
     ``"cuda"``: :mod:`learning.algorithms.device_loop`): the study task's for the positional
-    setups, the open-water one for the scene setups (the setup's training family, drawn on the
-    host at reset as the CPU env draws it, :data:`OPEN_WATER_TABLE_EPISODES` episodes in all;
-    the fixed reward horizon with each episode's own time limit). ``ValueError`` for a setup it
-    cannot train (an image observation, PPO, the COLREG reward or reactive targets)."""
+    setups, the open-water one for the open-water scene and radar+goal setups (the setup's
+    training family, drawn on the host at reset as the CPU env draws it,
+    :data:`OPEN_WATER_TABLE_EPISODES` episodes in all; the fixed reward horizon with each
+    episode's own time limit). ``ValueError`` for a setup it cannot train (the study task's
+    radar, PPO, the COLREG reward or reactive targets)."""
     if device not in DEVICE_DTYPES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
     trainable = setup.algorithm == "trpo" and (
         (setup.task != "open-water" and setup.observation == "positional")
         or (
             setup.task == "open-water"
-            and setup.observation == "scene"
+            and setup.observation in ("scene", "radar+goal")
             and not setup.colreg_reward
             and not setup.reactive_targets
         )
@@ -107,8 +108,8 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
     if not trainable:
         raise ValueError(
             f"--device {device} is for the TRPO positional setups (rl-gaussian-positional, "
-            "rl-categorical-positional) and open-water scene setups (rl-*-scene-ow, -ft), not "
-            f"{setup.name!r}"
+            "rl-categorical-positional) and the open-water scene and radar setups (rl-*-scene-ow, "
+            f"rl-*-radar-ow and their -ft, -cont), not {setup.name!r}"
         )
     if setup.task == "open-water":
         from usvsim.task.torch_openwater import TorchOpenWaterEnv

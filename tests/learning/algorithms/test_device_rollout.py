@@ -102,6 +102,49 @@ def test_device_scene_standardisation_equals_the_normaliser() -> None:
     np.testing.assert_array_equal(got(x).numpy(), norm(x.numpy()))
 
 
+def test_device_radar_goal_normalisation_equals_the_normaliser() -> None:
+    """radar+goal: the image scaled by float32(1/255), the goal running-normalised, as NumPy."""
+    from usvsim.task.torch_openwater import TorchOpenWaterEnv
+
+    env = TorchOpenWaterEnv(8, observation="radar+goal")
+    obs, _ = env.reset(seed=2)
+    obs, *_ = env.step(torch.zeros((8, 1), dtype=torch.float64))
+    norm = ObservationNormalizer(env.single_observation_space)
+    norm.update({k: v.numpy() for k, v in obs.items()})
+    got = DeviceNormalizer(norm, torch.device("cpu"))(obs)
+    want = norm({k: v.numpy() for k, v in obs.items()})
+    assert set(got) == set(want) == {"radar", "goal"} and bool((obs["radar"] > 0).any())
+    for key in want:
+        np.testing.assert_array_equal(got[key].numpy(), want[key])
+
+
+def test_an_open_water_radar_rollout_never_reads_back_and_updates(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """radar+goal on the torch open-water env: 12 steps of 8 boats read nothing back to the
+    host; the batch's dict parts keep their shapes and the update stays in the trust region."""
+    from usvsim.task.torch_openwater import TorchOpenWaterEnv
+
+    env = TorchOpenWaterEnv(8, observation="radar+goal", per_boat=4, reward_horizon="fixed")
+    cfg = TRPOConfig(num_envs=8, steps_per_env=12, max_kl=0.01, critic_minibatch=32)
+    agent = TRPOAgent(env.single_observation_space, env.single_action_space, cfg)
+    collector = DeviceRolloutCollector(env, 0.99, seed=0)
+    normalise = DeviceNormalizer(agent.normalizer, torch.device("cpu"))
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a tensor was read back to the host during a rollout")
+
+    for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
+        monkeypatch.setattr(torch.Tensor, name, refuse)
+    batch = collector.collect(agent.policy, normalise, 12)
+    monkeypatch.undo()
+    assert isinstance(batch.obs, dict) and isinstance(batch.next_obs, dict)
+    assert batch.obs["radar"].shape == (12, 8, 1, 50, 119) and batch.obs["goal"].shape == (12, 8, 2)
+    stats = device_update(agent, batch)
+    assert stats.line_search_accepted and 0.0 < stats.kl <= 0.01
+    assert agent.normalizer.stats["goal"].count >= 96
+
+
 def _agent(env: TorchPoleAvoidanceEnv, **kw: object) -> TRPOAgent:
     cfg = TRPOConfig(num_envs=env.num_envs, steps_per_env=20, **kw)  # type: ignore[arg-type]
     return TRPOAgent(env.single_observation_space, env.single_action_space, cfg)
