@@ -565,8 +565,10 @@ def stage_report() -> None:
         if "error" in b:
             text.append(f"  {b['mode']} {b['dtype']} N={b['n']:,}: {b['error']}")
     from gpu_check_openwater import openwater_table  # the open-water stage's lines
+    from gpu_check_ow_train import ow_train_table
 
     text += _env_table(grouped) + openwater_table(grouped) + _train_table(grouped)
+    text += ow_train_table(grouped)
     best_env = max((b.get("env_steps_per_s", 0) for b in grouped.get("env_bench", [])), default=0)
     summary["best_env_steps_per_s"] = best_env
     summary["best_openwater_scene_decision_steps_per_s"] = max(

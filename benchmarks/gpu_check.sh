@@ -24,7 +24,9 @@
 # GPU_CHECK_LIMIT_SCALE (integer factor on every stage's limit, 1), GPU_CHECK_TRAIN_SIZES
 # (1024,8192,32768,65536), GPU_CHECK_OW_SIZES (open-water env, 1000,10000,100000,1000000),
 # GPU_CHECK_OW_RADAR_SIZES (its radar+goal, 1000,10000,100000),
-# GPU_CHECK_WHEELS (a folder of wheels: gymnasium and its three small dependencies,
+# GPU_CHECK_OW_TRAIN_S (0: skipped; seconds of training rl-gaussian-radar-ow on the device,
+# benchmarks/gpu_check_ow_train.py, with GPU_CHECK_OW_TRAIN_N boats, 1024, and
+# GPU_CHECK_OW_VAL_LIMIT), GPU_CHECK_WHEELS (a folder of wheels: gymnasium and its three small dependencies,
 # `pip download -d wheels gymnasium`, installed without network where gymnasium is missing; the
 # training stage needs it for its spaces).
 set -uo pipefail
@@ -143,6 +145,14 @@ bench float64 compile 100
 # the open-water env with the plant + filter step compiled (last: compiling takes minutes)
 run ow-bench-compile 150 "$PY" benchmarks/gpu_check_openwater.py bench --device "$DEVICE" \
   --sizes "$OW_SIZES" --seconds "$SECONDS_PER_POINT" --mode compile --backend "$BACKEND"
+
+# optional, not in the 8-minute default (GPU_CHECK_OW_TRAIN_S=300 and a budget that holds it):
+# rl-gaussian-radar-ow trained on the device against its shipped model's validation figures
+if (( ${GPU_CHECK_OW_TRAIN_S:-0} > 0 )); then
+  run ow-train $(( GPU_CHECK_OW_TRAIN_S * 2 + 120 )) "$PY" benchmarks/gpu_check_ow_train.py run \
+    --device "$DEVICE" --seconds "$GPU_CHECK_OW_TRAIN_S" --n-envs "${GPU_CHECK_OW_TRAIN_N:-1024}" \
+    --val-limit "${GPU_CHECK_OW_VAL_LIMIT:-0}"
+fi
 
 "$PY" benchmarks/gpu_check.py report 2>&1 | tee -a "$LOG"
 rm -f "$OUT/reference.npy"  # 7 MB of intermediate numbers
