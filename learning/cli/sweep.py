@@ -41,6 +41,7 @@ _SPEC_OPTIONS = (
     "threads",
     "heldout",
     "ship_rule",
+    "device",
 )
 
 
@@ -77,6 +78,10 @@ class SweepArgs:
         default=200, metadata=bounds(ge=1, le=100_000)
     )
     ship_rule: str = "median-validation"  # which seed ships: median-validation or seed:K
+    device: Literal["cpu", "torch-cpu", "cuda"] = "cpu"  # where trials train (usvsim train)
+    gpus_per_trial: float = field(  # GPU share a trial asks Ray for; 0: 1 with --device cuda
+        default=0.0, metadata=bounds(ge=0, le=64)
+    )
     max_concurrent: int = field(  # trials at once; 0: one per CPU (threads CPUs each)
         default=0, metadata=bounds(ge=0, le=100_000)
     )
@@ -173,11 +178,18 @@ def run(args: SweepArgs) -> int:
             raise _fail(f"{root} holds no sweep (no trials.json)")
         _print_summary(write_report(root, compare_shipped=args.shipped), root)
         return 0
+    gpus = args.gpus_per_trial or (1.0 if spec.device == "cuda" else 0.0)
+    if spec.device == "cuda" and not args.address:
+        import torch
+
+        if not torch.cuda.is_available():
+            raise _fail("--device cuda: torch sees no CUDA GPU here (use cpu or torch-cpu)")
     where = SweepRun(
         root,
         address=args.address,
         max_concurrent=args.max_concurrent,
         tensorboard=args.tensorboard,
+        gpus_per_trial=gpus,
     )
     print(
         f"usvsim sweep {spec.name}: {len(spec.setups)} setups x {len(spec.seeds)} seeds"

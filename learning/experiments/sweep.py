@@ -84,6 +84,7 @@ __all__ = [
     "run_trial",
     "trial_dir_name",
     "trial_metrics",
+    "trial_resources",
     "validation_curve",
 ]
 
@@ -122,7 +123,9 @@ def train_trial(config: Mapping[str, Any], out: Path) -> None:
         setup = setup.with_num_envs(int(opts["n_envs"]))
     resume = (out / "latest.pt").is_file()
     flags = [f"--seed {config['seed']}", f"--out {out}", f"--threads {threads}", "--quiet"]
+    device = str(opts.pop("device", "cpu"))
     flags += [f"--{k.replace('_', '-')} {v}" for k, v in opts.items() if v and k != "stop_after"]
+    flags += [f"--device {device}"] if device != "cpu" else []
     flags += [f"--stop-after {opts['stop_after']}"] + (["--resume"] if resume else [])
     command = f"usvsim train {config['setup']} " + " ".join(flags)
     if overrides:
@@ -141,8 +144,8 @@ def train_trial(config: Mapping[str, Any], out: Path) -> None:
     if isinstance(setup, ILSetup):
         train_il(setup, out, threads=threads, log=lambda _: None, tensorboard=board, **common)
     else:
-        args = {**common, "overrides": overrides}
-        train_rl(setup, out, train_args=args, tensorboard=board, **common)
+        args = {**common, "overrides": overrides, "device": device}
+        train_rl(setup, out, train_args=args, tensorboard=board, device=device, **common)
 
 
 def _evaluate_heldout(out: Path, n: int) -> dict[str, Any]:
@@ -214,6 +217,9 @@ class SweepRun:
     # a folder: each trial also writes TensorBoard scalars into <tensorboard>/<trial> ("": none;
     # learning.experiments.run_log.RunLog)
     tensorboard: str = ""
+    # the share of a GPU each trial asks Ray for (Tune resources; 0.25: four trials a GPU);
+    # 0: none (a cuda sweep asks for it)
+    gpus_per_trial: float = 0.0
 
 
 def _param_space(spec: SweepSpec, root: Path) -> dict[str, Any]:
@@ -227,6 +233,7 @@ def _param_space(spec: SweepSpec, root: Path) -> dict[str, Any]:
         "stop_after": spec.stop_after,
         "n_envs": spec.n_envs,
         "time_budget_s": spec.time_budget_s,
+        "device": spec.device,
     }
     space = {
         "setup": spec.setups[0] if spec.search == "optuna" else tune.grid_search(list(spec.setups)),
@@ -241,13 +248,14 @@ def _param_space(spec: SweepSpec, root: Path) -> dict[str, Any]:
     return space
 
 
-def _trainable(spec: SweepSpec, tensorboard: str = "") -> Any:
+def _trainable(spec: SweepSpec, tensorboard: str = "", gpus: float = 0.0) -> Any:
     """The Tune function of a trial: :func:`run_trial` in a daemon thread, a progress report
     to Tune every :data:`REPORT_EVERY_S` (so Tune can stop the trial between two reports: a
     Ctrl-C ends the sweep within seconds, the run keeps its last ``latest.pt``), then the
     final metrics. An exception of the run fails the trial (Tune: ERROR, reported).
     ``tensorboard`` (a folder, :attr:`SweepRun.tensorboard`): the trial's TensorBoard scalars
-    go to its subfolder named as the trial's run folder."""
+    go to its subfolder named as the trial's run folder. ``gpus``: the GPU share a trial asks
+    Ray for (:attr:`SweepRun.gpus_per_trial`), beside its ``threads`` CPUs."""
     from ray import tune
 
     board = str(Path(tensorboard).resolve()) if tensorboard else ""  # trials run elsewhere
@@ -278,7 +286,15 @@ def _trainable(spec: SweepSpec, tensorboard: str = "") -> Any:
             raise outcome["error"]
         tune.report(outcome["metrics"])
 
-    return tune.with_resources(trial, {"cpu": spec.threads})
+    return tune.with_resources(trial, trial_resources(spec, gpus))
+
+
+def trial_resources(spec: SweepSpec, gpus: float = 0.0) -> dict[str, float]:
+    """What a trial asks Ray for: its ``threads`` CPUs, and ``gpus`` of a GPU where > 0."""
+    resources: dict[str, float] = {"cpu": spec.threads}
+    if gpus > 0:
+        resources["gpu"] = gpus
+    return resources
 
 
 def progress_metrics(out: Path) -> dict[str, Any]:
@@ -340,7 +356,7 @@ def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
         where.say(f"continuing the sweep in {where.root} (Tune state in {storage})")
         return tune.Tuner.restore(
             str(storage / "sweep"),
-            trainable=_trainable(spec, where.tensorboard),
+            trainable=_trainable(spec, where.tensorboard, where.gpus_per_trial),
             resume_unfinished=True,
             resume_errored=True,
         )
@@ -352,7 +368,7 @@ def _tuner(spec: SweepSpec, where: SweepRun) -> Any:
     else:
         search_alg = SessionLimitedGenerator(random_state=spec.search_seed)
     return tune.Tuner(
-        _trainable(spec, where.tensorboard),
+        _trainable(spec, where.tensorboard, where.gpus_per_trial),
         param_space=_param_space(spec, where.root),
         tune_config=tune.TuneConfig(
             search_alg=search_alg,

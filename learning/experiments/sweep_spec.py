@@ -126,6 +126,9 @@ class SweepSpec:
     threads: int = field(default=1, metadata=bounds(ge=1, le=1024))  # torch threads per trial
     heldout: int = field(default=200, metadata=bounds(ge=1, le=100_000))  # report only
     ship_rule: str = "median-validation"  # or "seed:K" (sweep_report.choose_shipped)
+    # where each trial trains (usvsim train --device): cpu, or the torch env and device loop on
+    # torch-cpu or cuda (the TRPO positional and open-water scene/radar setups)
+    device: str = "cpu"
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):  # a --config file may hold anything
@@ -160,6 +163,19 @@ class SweepSpec:
             raise ValueError("--search optuna tunes one setup on one seed (then sweep the seeds)")
         if self.ship_rule != "median-validation" and not self.ship_rule.startswith("seed:"):
             raise ValueError(f"ship rule {self.ship_rule!r}; allowed: median-validation, seed:K")
+        if self.device != "cpu":
+            self._check_device()
+
+    def _check_device(self) -> None:
+        """Every setup trains on :attr:`device` (``usvsim train --device``'s rule)."""
+        from learning.experiments.setups import SETUPS
+        from learning.experiments.train_rl import device_env_maker
+
+        for name in self.setups:
+            rl = SETUPS.get(name)
+            if rl is None:
+                raise ValueError(f"--device {self.device}: {name!r} is not an RL setup")
+            device_env_maker(rl, self.device)  # a ValueError naming what it takes
 
     def to_json(self) -> dict[str, Any]:
         data = dataclasses.asdict(self)
