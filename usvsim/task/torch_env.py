@@ -456,8 +456,42 @@ def plant_and_filter(
     return s, nav_step(n, s[:nx], e)
 
 
+def stack_columns(columns: tuple[Any, ...], ref: torch.Tensor) -> torch.Tensor:
+    """Columns (each (N,), a 0-d tensor or a number: broadcast, the same numbers) stacked into
+    one fresh (K, N) tensor like ``ref``: what a compiled substep takes, so that one graph serves
+    every plant step. Passed as separate columns, the mix of 0-d entries (a silent sensor, the
+    firing flags), column views at varying storage offsets and fresh tensors made a new
+    compilation for nearly every plant step of a decision (8 or more), and after torch's limit
+    of 8 the step fell back to eager."""
+    return torch.stack([torch.broadcast_to(torch.as_tensor(c, dtype=ref.dtype, device=ref.device),
+                                           ref.shape) for c in columns])  # fmt: skip
+
+
+def _stacked_plant_and_filter(
+    plant_step: Callable[..., Columns], nav_step: Callable[..., Columns], nx: int,
+    s: torch.Tensor, n: torch.Tensor, w: torch.Tensor, g: Columns, e: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
+    s_next, n_next = plant_and_filter(plant_step, nav_step, nx, tuple(s.unbind(0)),
+                                      tuple(n.unbind(0)), tuple(w.unbind(0)), g,
+                                      tuple(e.unbind(0)))  # fmt: skip
+    return torch.stack(s_next), torch.stack(n_next)
+
+
 @functools.cache
 def compiled_substep(backend: str = "inductor") -> Callable[..., tuple[Columns, Columns]]:
     """:func:`plant_and_filter` through ``torch.compile`` with ``backend`` (shape-generic: one
-    compilation serves every N), made once per process and backend."""
-    return torch.compile(plant_and_filter, dynamic=True, backend=backend)
+    compilation serves every N), its inputs stacked (:func:`stack_columns`) so that one graph
+    serves every plant step; made once per process and backend. Same arguments and results."""
+    compiled = torch.compile(_stacked_plant_and_filter, dynamic=True, backend=backend)
+
+    def substep(
+        plant_step: Callable[..., Columns], nav_step: Callable[..., Columns], nx: int,
+        s: Columns, n: Columns, w: Columns, g: Columns, e: tuple[Any, ...],
+    ) -> tuple[Columns, Columns]:  # fmt: skip
+        ref = s[0]
+        s_t, n_t = compiled(plant_step, nav_step, nx, stack_columns(s, ref),
+                            stack_columns(n, ref), stack_columns(w, ref), g,
+                            stack_columns(e, ref))  # fmt: skip
+        return tuple(s_t.unbind(0)), tuple(n_t.unbind(0))
+
+    return substep

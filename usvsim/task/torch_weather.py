@@ -53,8 +53,37 @@ def weather_substep(
 
 @functools.cache
 def compiled_weather_substep(backend: str = "inductor") -> Callable[..., tuple[Columns, Columns]]:
-    """:func:`weather_substep` through ``torch.compile`` (shape-generic), made once per backend."""
-    return torch.compile(weather_substep, dynamic=True, backend=backend)
+    """:func:`weather_substep` through ``torch.compile`` (shape-generic, its inputs stacked
+    so that one graph serves every plant step, as :func:`usvsim.task.torch_env.compiled_substep`),
+    made once per backend. Same arguments and results."""
+    from usvsim.task.torch_env import stack_columns
+
+    compiled = torch.compile(_stacked_weather_substep, dynamic=True, backend=backend)
+
+    def substep(
+        weather_step: Callable[..., Columns], sensed_offsets: Callable[..., Columns],
+        nav_step: Callable[..., Columns], nx: int, s: Columns, n: Columns, w: Columns,
+        g: Columns, e_weather: tuple[Any, ...], e: tuple[Any, ...],
+    ) -> tuple[Columns, Columns]:  # fmt: skip
+        ref = s[0]
+        s_t, n_t = compiled(weather_step, sensed_offsets, nav_step, nx, stack_columns(s, ref),
+                            stack_columns(n, ref), stack_columns(w, ref), g,
+                            stack_columns(e_weather, ref), stack_columns(e, ref))  # fmt: skip
+        return tuple(s_t.unbind(0)), tuple(n_t.unbind(0))
+
+    return substep
+
+
+def _stacked_weather_substep(
+    weather_step: Callable[..., Columns], sensed_offsets: Callable[..., Columns],
+    nav_step: Callable[..., Columns], nx: int, s: torch.Tensor, n: torch.Tensor,
+    w: torch.Tensor, g: Columns, e_weather: torch.Tensor, e: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
+    s_next, n_next = weather_substep(
+        weather_step, sensed_offsets, nav_step, nx, tuple(s.unbind(0)), tuple(n.unbind(0)),
+        tuple(w.unbind(0)), g, tuple(e_weather.unbind(0)), tuple(e.unbind(0)),
+    )  # fmt: skip
+    return torch.stack(s_next), torch.stack(n_next)
 
 
 def weather_start_states(

@@ -440,3 +440,26 @@ def test_positional_observations_equal_the_cpu_env() -> None:
         np.testing.assert_array_equal(te_d.numpy(), te)
         np.testing.assert_array_equal(tr_d.numpy(), tr)
     assert nothing > 0
+
+
+@pytest.mark.slow
+def test_the_compiled_weather_step_is_one_graph_with_the_same_numbers() -> None:
+    """``compile=True`` (backend eager: dynamo's trace, no code generation): the same rewards
+    and observations as the eager env over 3 decisions in weather, from one graph (the inputs
+    stacked: before, nearly every plant step of a decision compiled anew and, past torch's limit
+    of 8, fell back to eager)."""
+    import torch._dynamo
+
+    torch._dynamo.reset()
+    torch._dynamo.utils.counters.clear()
+    runs = []
+    for compile_ in (False, True):
+        env = TorchOpenWaterEnv(4, family=weather_family(), per_boat=2, compile=compile_,
+                                compile_backend="eager")  # fmt: skip
+        obs, _ = env.reset(seed=3)
+        for _ in range(3):
+            obs, r, *_ = env.step(torch.zeros((4, 1), dtype=torch.float64))
+        runs.append((obs.numpy(), r.numpy()))
+    np.testing.assert_array_equal(runs[0][0], runs[1][0])
+    np.testing.assert_array_equal(runs[0][1], runs[1][1])
+    assert torch._dynamo.utils.counters["stats"]["unique_graphs"] == 1
