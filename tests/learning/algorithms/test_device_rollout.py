@@ -102,6 +102,16 @@ def test_device_scene_standardisation_equals_the_normaliser() -> None:
     np.testing.assert_array_equal(got(x).numpy(), norm(x.numpy()))
 
 
+def _refuse_host_reads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every way to read a tensor's value back to the host raises until ``monkeypatch.undo()``."""
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a tensor was read back to the host during a rollout")
+
+    for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
+        monkeypatch.setattr(torch.Tensor, name, refuse)
+
+
 def test_device_radar_goal_normalisation_equals_the_normaliser() -> None:
     """radar+goal: the image scaled by float32(1/255), the goal running-normalised, as NumPy."""
     from usvsim.task.torch_openwater import TorchOpenWaterEnv
@@ -131,11 +141,7 @@ def test_an_open_water_radar_rollout_never_reads_back_and_updates(
     collector = DeviceRolloutCollector(env, 0.99, seed=0)
     normalise = DeviceNormalizer(agent.normalizer, torch.device("cpu"))
 
-    def refuse(*args: object, **kwargs: object) -> None:
-        raise AssertionError("a tensor was read back to the host during a rollout")
-
-    for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
-        monkeypatch.setattr(torch.Tensor, name, refuse)
+    _refuse_host_reads(monkeypatch)
     batch = collector.collect(agent.policy, normalise, 12)
     monkeypatch.undo()
     assert isinstance(batch.obs, dict) and isinstance(batch.next_obs, dict)
@@ -159,11 +165,7 @@ def test_a_rollout_never_reads_a_tensor_back_to_the_host(monkeypatch: pytest.Mon
     collector = DeviceRolloutCollector(env, 0.99, seed=0)
     normalise = DeviceNormalizer(agent.normalizer, torch.device("cpu"))
 
-    def refuse(*args: object, **kwargs: object) -> None:
-        raise AssertionError("a tensor was read back to the host during a rollout")
-
-    for name in ("__bool__", "item", "tolist", "numpy", "cpu", "__int__", "__float__"):
-        monkeypatch.setattr(torch.Tensor, name, refuse)
+    _refuse_host_reads(monkeypatch)
     batch = collector.collect(agent.policy, normalise, 20)
     monkeypatch.undo()
     assert batch.obs.shape == batch.next_obs.shape == (20, 32, 4)
