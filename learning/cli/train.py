@@ -69,8 +69,9 @@ checkpoints).
 ``DIR/<name of the output folder>`` (``tensorboard --logdir DIR`` shows runs side by side; tags
 and steps: :mod:`learning.experiments.run_log`; needs ``pip install "usvsim[tensorboard]"``).
 
-``--device {cpu,torch-cpu,cuda}`` (the TRPO positional setups and the open-water scene setups
-``rl-*-scene-ow``, ``-ft``): ``cpu`` (the default) steps the CPU env with NumPy arrays;
+``--device {cpu,torch-cpu,cuda}`` (the TRPO positional setups and the open-water scene and
+radar setups ``rl-*-scene-ow``, ``rl-*-radar-ow`` and their ``-ft``, ``-cont``): ``cpu`` (the
+default) steps the CPU env with NumPy arrays;
 ``torch-cpu`` and ``cuda`` train with the torch env (the study task's, or the open-water one on
 the setup's training family), rollouts, GAE and the TRPO step on that device
 (:mod:`learning.algorithms.device_loop`); validation, checkpoints and files are those of a
@@ -223,8 +224,8 @@ class TrainArgs:
         rl = SETUPS.get(self.setup)
         if rl is None:
             raise UserError(
-                f"--device {self.device} is for the TRPO positional and open-water scene "
-                f"setups, not {self.setup!r}"
+                f"--device {self.device} is for the TRPO positional and open-water scene and "
+                f"radar setups, not {self.setup!r}"
             )
         try:
             device_env_maker(rl, self.device)
