@@ -501,13 +501,18 @@ def _train_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
     rows = grouped.get("train_bench", [])
     if not rows:
         return []
-    text = ["", "TRPO training on the device (rl-categorical-positional's network, 64 decisions):"]
+    text = [
+        "",
+        "TRPO training on the device (64 decisions an iteration; study: "
+        "rl-categorical-positional's network, ow-scene / ow-radar: the open-water setups'):",
+    ]
     for r in rows:
         if "error" in r:
-            text.append(f"  N={r.get('n', '-')}: {r['error']}")
+            text.append(f"  {r.get('env', 'study')} N={r.get('n', '-')}: {r['error']}")
             continue
         text.append(
-            f"  N={r['n']:>8,} {r['dtype']}: {r['train_env_steps_per_s']:.3e} env steps/s "
+            f"  {r.get('env', 'study'):>8} N={r['n']:>8,} {r['dtype']}: "
+            f"{r['train_env_steps_per_s']:.3e} env steps/s "
             f"training ({r['iteration_s']:.3g} s per iteration, update {r['update_share']:.0%}), "
             f"rollout alone {r['rollout_env_steps_per_s']:.3e}"
             + (

@@ -24,7 +24,8 @@
 # GPU_CHECK_LIMIT_SCALE (integer factor on every stage's limit, 1), GPU_CHECK_TRAIN_SIZES
 # (1024,8192,32768,65536), GPU_CHECK_OW_SIZES (open-water env, 1000,10000,100000,1000000),
 # GPU_CHECK_OW_RADAR_SIZES (its radar+goal, 1000,10000,100000),
-# GPU_CHECK_OW_TRAIN_S (0: skipped; seconds of training rl-gaussian-radar-ow on the device,
+# GPU_CHECK_OW_TRAIN_SIZES (open-water scene training, 1024,8192,32768),
+# GPU_CHECK_OW_RADAR_TRAIN_SIZES (its radar+goal, 1024,4096), GPU_CHECK_OW_TRAIN_S (0: skipped; seconds of training rl-gaussian-radar-ow on the device,
 # benchmarks/gpu_check_ow_train.py, with GPU_CHECK_OW_TRAIN_N boats, 1024, and
 # GPU_CHECK_OW_VAL_LIMIT), GPU_CHECK_WHEELS (a folder of wheels: gymnasium and its three small dependencies,
 # `pip download -d wheels gymnasium`, installed without network where gymnasium is missing; the
@@ -131,6 +132,12 @@ run ow-bench-radar 60 "$PY" benchmarks/gpu_check_openwater.py bench --device "$D
   --sizes "$OW_RADAR_SIZES" --seconds "$SECONDS_PER_POINT" --observation radar+goal
 # TRPO training on the device (rollouts, GAE, CG and line search there), iterations/s
 run train-bench 120 "$PY" benchmarks/gpu_check_train.py --device "$DEVICE" --sizes "$TRAIN_SIZES"
+# the same on the open-water env: scene (issue 40's >= 1e6 env steps/s while training) and
+# radar+goal (the CNN), with the policy's inference (rollout) and training figures per N
+run train-bench-ow-scene 90 "$PY" benchmarks/gpu_check_train.py --device "$DEVICE" \
+  --env ow-scene --sizes "${GPU_CHECK_OW_TRAIN_SIZES:-1024,8192,32768}"
+run train-bench-ow-radar 90 "$PY" benchmarks/gpu_check_train.py --device "$DEVICE" \
+  --env ow-radar --sizes "${GPU_CHECK_OW_RADAR_TRAIN_SIZES:-1024,4096}"
 env_bench float32 eager 45 radar+goal
 env_bench float32 compile 170  # inductor on the env's ~800-op step: minutes (420 s on 2 CPU cores)
 # the open-water env in wind and waves (the weather plant, ~1,000 more ops a plant step):
