@@ -303,6 +303,20 @@ GAINS = (
 '''
 
 
+def _plant_fields(vessel: VesselParams, config: Any, dt_s: float) -> dict[str, Any]:
+    """The header fields naming the plant a generated module is for (vessel, its fingerprint,
+    the autopilot and its design, the step)."""
+    from usvsim.vessel.autopilot import AutopilotConfig
+
+    return {
+        "vessel": vessel.name,
+        "fingerprint": vessel_fingerprint(vessel),
+        "kind": config.kind,
+        "config": "the default design" if config == AutopilotConfig() else repr(config),
+        "dt_s": float(dt_s),
+    }
+
+
 def kernel_source(vessel: VesselParams, autopilot: object | None = None, dt_s: float = 0.1) -> str:
     """The torch module (Python source) of the plant of ``vessel`` with ``autopilot`` (an
     :class:`usvsim.vessel.autopilot.AutopilotConfig`, default the default PID) at step ``dt_s``
@@ -319,11 +333,7 @@ def kernel_source(vessel: VesselParams, autopilot: object | None = None, dt_s: f
     u = ca.SX.sym("u")
     drag = ca.Function("surge_drag", [u], [surge_trim(vessel, u)], ["u"], ["drag"])
     header = _HEADER.format(
-        vessel=vessel.name,
-        fingerprint=vessel_fingerprint(vessel),
-        kind=config.kind,
-        config="the default design" if config == AutopilotConfig() else repr(config),
-        dt_s=float(dt_s),
+        **_plant_fields(vessel, config, dt_s),
         cruise=float(design.cruise_speed_mps),
         nx=NX,
         ns=NX + NC,
@@ -401,11 +411,7 @@ def weather_kernel_source(
     s, w = ca.SX.sym("s", NS + NWS), ca.SX.sym("w", NWI)
     offsets = ca.Function("sensed_offsets", [s, w], [sensed_offsets_expr(s, w)], ["s", "w"], ["d"])
     header = _WEATHER_HEADER.format(
-        vessel=vessel.name,
-        fingerprint=vessel_fingerprint(vessel),
-        kind=config.kind,
-        config="the default design" if config == AutopilotConfig() else repr(config),
-        dt_s=float(dt_s),
+        **_plant_fields(vessel, config, dt_s),
         yaw_m=weather.yaw_model[0],
         yaw_d=weather.yaw_model[1],
         turn=float(weather.turn_damping),
