@@ -92,8 +92,9 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
     setups, the open-water one for the open-water scene and radar+goal setups (the setup's
     training family, drawn on the host at reset as the CPU env draws it,
     :data:`OPEN_WATER_TABLE_EPISODES` episodes in all; the fixed reward horizon with each
-    episode's own time limit). ``ValueError`` for a setup it cannot train (the study task's
-    radar, PPO, the COLREG reward or reactive targets)."""
+    episode's own time limit; the setup's COLREG reward terms, :mod:`usvsim.task.torch_colreg`).
+    ``ValueError`` for a setup it cannot train (the study task's radar, PPO, reactive
+    targets)."""
     if device not in DEVICE_DTYPES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
     trainable = setup.algorithm == "trpo" and (
@@ -101,7 +102,6 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
         or (
             setup.task == "open-water"
             and setup.observation in ("scene", "radar+goal")
-            and not setup.colreg_reward
             and not setup.reactive_targets
         )
     )
@@ -109,7 +109,8 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
         raise ValueError(
             f"--device {device} is for the TRPO positional setups (rl-gaussian-positional, "
             "rl-categorical-positional) and the open-water scene and radar setups (rl-*-scene-ow, "
-            f"rl-*-radar-ow and their -ft, -cont), not {setup.name!r}"
+            "rl-*-radar-ow and their -ft, -cont; the -colreg setups without reactive targets), "
+            f"not {setup.name!r}"
         )
     if setup.task == "open-water":
         from usvsim.task.torch_openwater import TorchOpenWaterEnv
@@ -125,6 +126,7 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
                 observation=setup.observation,
                 reward_horizon="fixed",
                 gamma=setup.algorithm_config.gamma,
+                colreg_reward=setup.colreg_weights,
             )
 
         return make_open_water

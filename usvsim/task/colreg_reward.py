@@ -63,7 +63,6 @@ from usvsim.task.colreg_geometry import (
     encounter_kinematics,
 )
 from usvsim.task.colreg_params import ColregParams
-from usvsim.task.openwater import vessel_motion
 
 __all__ = [
     "COLREG_TERMS",
@@ -268,6 +267,10 @@ class ColregReward:
         taken (``step`` its :class:`~usvsim.task.openwater_batch.OpenWaterStep`, which began at
         episode times ``period_start_s`` (N,) s): the own ship at the period's last plant step
         (:func:`own_motion`), the vessels where they are at that time."""
+        # here, not at the top: the torch path (usvsim.task.torch_colreg) imports this module
+        # where SciPy and CasADi are absent, and openwater needs them
+        from usvsim.task.openwater import vessel_motion
+
         base = sim.base
         pos, course, speed, t_s = own_motion(step.trajectory, step.end_step, base.dt_s)
         v_pos, v_vel = vessel_motion(sim.v_p0, sim.v_course, sim.v_speed, sim.v_turn,

@@ -48,6 +48,7 @@ __all__ = [
     "EpisodeSource",
     "EpisodeStarts",
     "NoiseSource",
+    "OutlierDraws",
     "ReplayNoise",
     "TorchEpisodes",
     "episode_geometry_torch",
@@ -278,3 +279,45 @@ class ReplayNoise:
             out[idx] = self._noise.for_boats(idx).standard_normal((idx.size, m))
             self._noise.for_boats(None)
         return torch.as_tensor(out, dtype=self.dtype, device=self.device)
+
+
+class OutlierDraws:
+    """The standard normals of each decision's GNSS outlier draws, G per boat (the open-water
+    episodes' outlier faults): from a seeded generator on the device, or (``replay``, test
+    mode) from each episode's own NumPy stream (its ``outlier_seed``), seeded on the host as
+    the CPU batch seeds it; only the boats whose episode has outliers draw from theirs."""
+
+    def __init__(
+        self, n_boats: int, device: torch.device, dtype: torch.dtype, replay: bool
+    ) -> None:
+        self.n, self.device, self.dtype = n_boats, device, dtype
+        self._gen = torch.Generator(device=device)
+        self._streams = BoatNoise(n_boats) if replay else None
+        self._drawing = np.zeros(n_boats, dtype=bool)  # replay: boats drawing outliers (host)
+
+    def seed(self, seed: int) -> None:
+        self._gen.manual_seed(int(seed) % 2**63 + 2)  # not the episodes' or the sensors'
+
+    def start(self, boats: torch.Tensor, outlier_seed: np.ndarray, probability: np.ndarray) -> None:
+        """Replay: seed the streams of ``boats`` (N,) bool starting episodes with seeds
+        ``outlier_seed`` (N,) and outlier probabilities ``probability`` (N,), host arrays;
+        nothing to do on the device."""
+        if self._streams is None:
+            return
+        idx = np.flatnonzero(boats.cpu().numpy())
+        if idx.size:
+            self._streams.seed(idx, [int(s) for s in outlier_seed[idx]])
+            self._drawing[idx] = probability[idx] > 0
+
+    def normals(self, g: int) -> torch.Tensor:
+        """(N, g) normals of this decision (zeros for replayed boats without outliers)."""
+        if self._streams is None:
+            return torch.randn(
+                (self.n, g), generator=self._gen, dtype=self.dtype, device=self.device
+            )
+        z = np.zeros((self.n, g))
+        drawing = np.flatnonzero(self._drawing)
+        if drawing.size:
+            z[drawing] = self._streams.for_boats(drawing).standard_normal((drawing.size, g))
+            self._streams.for_boats(None)
+        return torch.as_tensor(z, dtype=self.dtype, device=self.device)

@@ -54,10 +54,12 @@ import numpy as np
 import torch
 
 from usvsim.nav.torch_nav import started_nav_state, torch_ssa
+from usvsim.task.colreg_reward import ColregRewardWeights
 from usvsim.task.radar import RadarConfig
 from usvsim.task.reward import GaussianReward
-from usvsim.task.scenario import BoatNoise, Scenario
+from usvsim.task.scenario import Scenario
 from usvsim.task.scene_radar import MAX_DISCS
+from usvsim.task.torch_colreg import TorchColregReward
 from usvsim.task.torch_env import (
     ClosedLoop,
     check_options,
@@ -66,7 +68,7 @@ from usvsim.task.torch_env import (
     single_action_space,
     torch_heading_change,
 )
-from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, ReplayNoise
+from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, OutlierDraws, ReplayNoise
 from usvsim.task.torch_observations import (
     TorchObservation,
     relative_polar_torch,
@@ -131,6 +133,9 @@ class TorchOpenWaterEnv:
     scenario : Scenario, optional
         Decision period, plant step, goal radius, safety distance (default the study's).
     reward : GaussianReward, optional
+    colreg_reward : ColregRewardWeights, optional
+        Add the COLREG terms (:mod:`usvsim.task.torch_colreg`; ``info["reward_colreg"]`` and
+        ``info["reward_colreg_<term>"]``), as ``OpenWaterVectorEnv(colreg_reward=...)``.
     compile : bool
         Run a plant step + filter step through ``torch.compile`` (for a GPU; the study env's
         :func:`usvsim.task.torch_env.compiled_substep`), ``compile_backend`` its backend.
@@ -153,6 +158,7 @@ class TorchOpenWaterEnv:
         noise: Literal["device", "replay"] = "device",
         scenario: Scenario | None = None,
         reward: GaussianReward | None = None,
+        colreg_reward: ColregRewardWeights | None = None,
         compile: bool = False,
         compile_backend: str = "inductor",
     ) -> None:
@@ -188,9 +194,7 @@ class TorchOpenWaterEnv:
         self.noise: NoiseSource = (ReplayNoise if self._replay else DeviceNoise)(
             n, self.device, self.dtype
         )
-        self._outlier_gen = torch.Generator(device=self.device)
-        self._outlier_noise = BoatNoise(n) if self._replay else None
-        self._outlier_boats = np.zeros(n, dtype=bool)  # replay: boats drawing outliers (host)
+        self._outliers = OutlierDraws(n, self.device, self.dtype, self._replay)
         self._half_beam = self.plant.vessel.half_beam_m
         self._ref_decisions = replace(sc, time_limit_s=_HORIZON_REF_S).max_decisions
         self._steps = torch.arange(1, self.T + 1, device=self.device)
@@ -201,6 +205,8 @@ class TorchOpenWaterEnv:
         self._substep = compiled_substep(compile_backend) if compile else plant_and_filter
         self._compile_backend = compile_backend if compile else None
         self._weather: Any = None  # the weather kernel, where the table has weather
+        self._colreg_weights = colreg_reward
+        self._colreg: TorchColregReward | None = None  # built with the table (its vessel slots)
         self._ready = False
 
     # ----------------------------------------------------------------------------- tables
@@ -224,6 +230,11 @@ class TorchOpenWaterEnv:
         start = self.plant.initial_state(table.start_eta, table.speed_mps)
         self._table["x0"], self._table["c0"] = start.x, start.c
         self._n_rows = table.n_episodes
+        if self._colreg_weights is not None:
+            slots = table.vessels.shape[1]
+            self._colreg = TorchColregReward(
+                self._colreg_weights, self.num_envs, slots, self.device, self.dtype
+            )
 
     # ----------------------------------------------------------------------------- reset
     @torch.no_grad()
@@ -241,7 +252,7 @@ class TorchOpenWaterEnv:
             family = OPEN_WATER_FAMILY if self.family is None else self.family
             self._upload(family_table(family, seed, self.num_envs, self.per_boat))
         self.noise.seed(seed)
-        self._outlier_gen.manual_seed(int(seed) % 2**63 + 2)  # not the episodes' or sensors'
+        self._outliers.seed(seed)
         n, dev, dt = self.num_envs, self.device, self.dtype
         states = self.plant.kernel.ns + (0 if self._weather is None else self._weather.nws)
         self._s = torch.zeros((states, n), dtype=dt, device=dev)
@@ -286,8 +297,10 @@ class TorchOpenWaterEnv:
             start.append(
                 weather_start_states(self._weather, x0, c0, w_in, t["weather_start"][row], z)
             )
-        if self._replay:
-            self._seed_outlier_streams(boats, row)
+        if self._replay:  # the host's copy of the rows, only where the streams are replayed
+            rows = row.cpu().numpy()
+            tab = self._table_np
+            self._outliers.start(boats, tab.outlier_seed[rows], tab.gnss[rows, 5])
         self._s = torch.where(boats[None, :], torch.cat(start), self._s)
         self._n = torch.where(boats[None, :], nav, self._n)
         self.discs = self.discs.where(boats, self._discs_of(row))
@@ -298,17 +311,9 @@ class TorchOpenWaterEnv:
         self._t_goal = torch.where(boats, math.inf, self._t_goal)
         self._n_dec = torch.where(boats, 0, self._n_dec)
         self._frame = torch.where(boats, 0, self._frame)
+        if self._colreg is not None:
+            self._colreg.reset(boats)
         return select_rows(boats, self._observe(advance=boats), obs)
-
-    def _seed_outlier_streams(self, boats: torch.Tensor, row: torch.Tensor) -> None:
-        """Replay: seed the restarting boats' outlier streams as the CPU batch does (host)."""
-        assert self._outlier_noise is not None
-        idx = np.flatnonzero(boats.cpu().numpy())
-        if idx.size == 0:
-            return
-        rows = row.cpu().numpy()[idx]
-        self._outlier_noise.seed(idx, [int(s) for s in self._table_np.outlier_seed[rows]])
-        self._outlier_boats[idx] = self._table_np.gnss[rows, 5] > 0
 
     # ----------------------------------------------------------------------------- observe
     def _observe(self, advance: torch.Tensor | None) -> TorchObservation:
@@ -343,27 +348,12 @@ class TorchOpenWaterEnv:
         return {"radar": image, "goal": standardized_goal(r_g[:, 0], b_g[:, 0])}
 
     # ----------------------------------------------------------------------------- step
-    def _outlier_normals(self) -> torch.Tensor:
-        """(N, G) standard normals of this decision's outlier draws (G GNSS errors)."""
-        g = len(self._gnss_slots)
-        if self._outlier_noise is None:
-            return torch.randn(
-                (self.num_envs, g), generator=self._outlier_gen, dtype=self.dtype,
-                device=self.device,
-            )  # fmt: skip
-        z = np.zeros((self.num_envs, g))
-        drawing = np.flatnonzero(self._outlier_boats)
-        if drawing.size:
-            z[drawing] = self._outlier_noise.for_boats(drawing).standard_normal((drawing.size, g))
-            self._outlier_noise.for_boats(None)
-        return torch.as_tensor(z, dtype=self.dtype, device=self.device)
-
     def _sensor_inputs(self, normals: torch.Tensor) -> list[tuple[Any, ...]]:
         """The filter's per-step inputs with the episodes' GNSS faults
         (``BoatDisturbances.perturb_normals`` and the dropout mask)."""
         gnss = self._take("gnss")
         scale, threshold, outlier_scale = gnss[:, 0:1], gnss[:, 1:2], gnss[:, 2:3]
-        jump = self._outlier_normals() < threshold
+        jump = self._outliers.normals(len(self._gnss_slots)) < threshold
         factor = torch.where(jump, scale * outlier_scale, scale)  # (N, G)
         t = (self._n_dec.to(self.dtype) * self.scenario.decision_period_s)[:, None] + (
             self.scenario.dt_s * self._steps.to(self.dtype)
@@ -441,7 +431,14 @@ class TorchOpenWaterEnv:
             r.pole_weight, r.pole_sigma_m, r.goal_weight, r.goal_sigma_m,
             judged.distance_to_obstacle_m, judged.distance_to_goal_m,
         )  # fmt: skip
-        reward = pole + goal_term
+        reward, extra = pole + goal_term, dict[str, torch.Tensor]()
+        if self._colreg is not None:
+            start_s = time_s - sc.decision_period_s
+            terms = self._colreg.of_period(x_n, y_e, judged.end_step, self.discs, start_s,
+                                           sc.dt_s, sc.decision_period_s)  # fmt: skip
+            reward = reward + terms["total"]
+            extra = {f"reward_colreg_{k}": v for k, v in terms.items() if k != "total"}
+            extra["reward_colreg"] = terms["total"]
         if self.reward_horizon == "fixed":
             reward, terminated, truncated = fixed_horizon_torch(
                 reward, terminated, truncated, out_of_area, time_s, limit, self._ref_decisions,
@@ -463,6 +460,7 @@ class TorchOpenWaterEnv:
             "is_success": reached & ~collision & (self._min_d >= sc.safety_distance_m),
             "time_s": time_s,
             "time_to_goal_s": self._t_goal.clone(),
+            **extra,
         }
         obs = self._restart(terminated | truncated, obs)
         return obs, reward, terminated, truncated, info

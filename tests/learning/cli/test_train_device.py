@@ -78,13 +78,32 @@ def test_torch_cpu_trains_an_open_water_radar_setup(
     assert ckpt.agent["normalizer"]["goal"]["count"] >= 4 * 64  # the batch merged
 
 
+def test_torch_cpu_trains_a_colreg_setup_with_the_colreg_reward(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """rl-gaussian-radar-colreg (issue 41) on the torch open-water env: its env adds the
+    setup's COLREG terms to the reward; one iteration runs and writes a cpu run's files."""
+    import learning.experiments.train_rl as train_rl
+    from learning.experiments.setups import get_setup
+
+    monkeypatch.setattr(train_rl, "OPEN_WATER_TABLE_EPISODES", 32)
+    env = train_rl.device_env_maker(get_setup("rl-gaussian-radar-colreg"), "torch-cpu")(4)
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(torch.zeros((4, 1), dtype=torch.float64))
+    plain = info["reward_pole"] + info["reward_goal"] + info["reward_colreg"]
+    torch.testing.assert_close(reward, plain)  # no boat ended: the horizon left it alone
+    args = _args(tmp_path, setup="rl-gaussian-radar-colreg", iterations=1, n_envs=4)
+    assert run(args) == 0
+    assert load_checkpoint(tmp_path / "best.pt").setup == "rl-gaussian-radar-colreg"
+
+
 @pytest.mark.parametrize(
     ("setup", "device", "message"),
     [
         ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional"),
         ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional"),
         ("il-gaussian-positional", "torch-cpu", "is for the TRPO positional"),
-        ("rl-gaussian-radar-colreg", "torch-cpu", "is for the TRPO positional"),
+        ("rl-gaussian-radar-colreg-reactive", "torch-cpu", "is for the TRPO positional"),
         ("rl-gaussian-positional", "gpu", "--device must be one of cpu, torch-cpu, cuda"),
     ],
 )
