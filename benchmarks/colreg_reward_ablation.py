@@ -19,6 +19,9 @@ for vo-steered ones). Writes ``OUT/ablation.json`` and ``OUT/ablation.md`` (atom
     nice python benchmarks/colreg_reward_ablation.py --iterations 300 --seeds 0,1,2 \\
         --out usvsim-results/colreg-ablation
     python benchmarks/colreg_reward_ablation.py --score-only --out usvsim-results/colreg-ablation
+    # one process per run, each resumable (a cut-off run goes on from its latest.pt):
+    nice python benchmarks/colreg_reward_ablation.py --train-only --variants none --seeds 1 \\
+        --iterations 300 --out usvsim-results/colreg-ablation
     python benchmarks/colreg_reward_ablation.py --iterations 3 --variants all,none \\
         --val-episodes 1 --test-episodes 1 --sets imazu-01,imazu-02 --out /tmp/abl  # a smoke run
 """
@@ -27,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -91,17 +93,37 @@ def _value(p: dict[str, Any]) -> float:
     return float(p["success_rate"]) * float(p["compliance_rate"] or 0.0)
 
 
+def finished(out: Path) -> dict[str, Any] | None:
+    """The ``summary.json`` of a run in ``out`` that ended by its rules (not interrupted),
+    else None."""
+    path = out / "summary.json"
+    if not path.is_file():
+        return None
+    summary: dict[str, Any] = json.loads(path.read_text())
+    return None if summary.get("interrupted", True) else summary
+
+
+def train_one(variant: str, seed: int, args: argparse.Namespace) -> None:
+    """Train one variant and seed into ``OUT/<variant>/seed<k>``: nothing where that run has
+    finished, from its ``latest.pt`` where one was cut off (a session's end), else anew."""
+    out = Path(args.out) / variant / f"seed{seed}"
+    if finished(out) is not None:
+        return
+    train_rl(variant_setup(variant, args.setup), out, seed=seed, iterations=args.iterations,
+             resume=(out / "latest.pt").is_file(), stop_after=0,
+             validate_every=args.validate_every, time_budget_s=args.time_budget_s,
+             device=args.device,
+             command=f"benchmarks/colreg_reward_ablation.py {variant} seed {seed}")  # fmt: skip
+
+
 def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     """Train (unless ``--score-only``), choose on validation, report on test."""
     out = Path(args.out) / variant / f"seed{seed}"
     setup = variant_setup(variant, args.setup)
-    wall = None
     if not args.score_only:
-        t0 = time.perf_counter()
-        train_rl(setup, out, seed=seed, iterations=args.iterations, stop_after=0,
-                 validate_every=args.validate_every, time_budget_s=args.time_budget_s,
-                 command=f"benchmarks/colreg_reward_ablation.py {variant} seed {seed}")  # fmt: skip
-        wall = time.perf_counter() - t0
+        train_one(variant, seed, args)
+    summary = finished(out)
+    wall = None if summary is None else float(summary["wall_time_s"])  # resumed parts included
     files = [p for p in (out / "best.pt", out / "latest.pt") if p.is_file()]
     if not files:
         raise SystemExit(f"{out}: no best.pt or latest.pt (train first, without --score-only)")
@@ -154,18 +176,31 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--test-episodes", type=int, default=10, help="per set, test split")
     ap.add_argument("--reactive-targets", action="store_true", help="targets steered by vo")
     ap.add_argument("--score-only", action="store_true", help="score the runs in --out")
+    ap.add_argument(
+        "--train-only",
+        action="store_true",
+        help="train (or resume) the runs, score nothing (one process per run)",
+    )
+    ap.add_argument("--device", default="cpu", help="cpu, torch-cpu or cuda (usvsim train's)")
     ap.add_argument("--out", default="usvsim-results/colreg-ablation")
     args = ap.parse_args(argv)
     for v in args.variants.split(","):
         variant_setup(v, args.setup)  # unknown variants fail before anything runs
     if args.iterations < 1 or args.val_episodes < 1 or args.test_episodes < 1:
         raise SystemExit("--iterations, --val-episodes and --test-episodes must be >= 1")
+    if args.train_only and args.score_only:
+        raise SystemExit("--train-only and --score-only: choose one")
     return args
 
 
 def main(argv: list[str] | None = None) -> None:
     args = parse(argv)
     runs = []
+    if args.train_only:
+        for variant in args.variants.split(","):
+            for seed in (int(s) for s in args.seeds.split(",")):
+                train_one(variant, seed, args)
+        return
     for variant in args.variants.split(","):
         for seed in (int(s) for s in args.seeds.split(",")):
             runs.append(run_one(variant, seed, args))
