@@ -146,6 +146,9 @@ run ow-equality-weather 75 "$PY" benchmarks/gpu_check_openwater.py equality --de
   --weather
 run ow-bench-weather 45 "$PY" benchmarks/gpu_check_openwater.py bench --device "$DEVICE" \
   --sizes "$OW_SIZES" --seconds "$SECONDS_PER_POINT" --weather
+# the COLREG encounters with the COLREG reward terms on (issue 41's training env): equality
+run ow-equality-colreg 45 "$PY" benchmarks/gpu_check_openwater.py equality --device "$DEVICE" \
+  --colreg
 bench float32 eager 40
 bench float64 eager 40
 bench float64 compile 100

@@ -6,11 +6,14 @@ the episodes come from a committed table (``benchmarks/data/openwater-table.npz`
 ``make-table`` where CasADi is installed); ``--weather`` takes
 ``benchmarks/data/openwater-weather-table.npz`` instead (``weather_family()``, the same size:
 wind, gusts and waves per episode, calm ones among them; the weather plant's inputs in the
-table). Results go to ``$OUT/results.jsonl`` as they come (stages ``ow_equality`` and
-``ow_bench``; ``gpu_check.py report`` prints them)::
+table); ``--colreg`` takes ``benchmarks/data/openwater-colreg-table.npz`` (``COLREG_FAMILY``, the
+same size: Imazu- and trafficgen-like encounters, issue 41) and adds the COLREG reward terms
+(``usvsim.task.torch_colreg``, default weights) to the env's reward. Results go to
+``$OUT/results.jsonl`` as they come (stages ``ow_equality`` and ``ow_bench``;
+``gpu_check.py report`` prints them)::
 
     python benchmarks/gpu_check_openwater.py make-table           # here, with CasADi
-    python benchmarks/gpu_check_openwater.py equality --device cuda [--weather]
+    python benchmarks/gpu_check_openwater.py equality --device cuda [--weather | --colreg]
     python benchmarks/gpu_check_openwater.py bench --device cuda --sizes 1000,10000,100000,1000000
 
 ``equality``: 16 boats x 40 decisions with the table's episodes and noise replayed, on the device
@@ -48,6 +51,8 @@ from gpu_check import (  # noqa: E402  (results.jsonl of the same run)
 
 TABLE = REPO / "benchmarks" / "data" / "openwater-table.npz"
 WEATHER_TABLE = REPO / "benchmarks" / "data" / "openwater-weather-table.npz"
+COLREG_TABLE = REPO / "benchmarks" / "data" / "openwater-colreg-table.npz"
+TABLES = {"calm": TABLE, "weather": WEATHER_TABLE, "colreg": COLREG_TABLE}
 TABLE_BOATS, PER_BOAT = 128, 8
 EQ_BOATS, EQ_DECISIONS = 16, 40
 # float64 on the device against torch-cpu float64: the same operations, another library's
@@ -58,11 +63,14 @@ BARS = {"max_position_diff_m": POSITION_TOL_M, "max_heading_diff_rad": HEADING_T
 
 
 def make_table() -> None:
+    from usvsim.task.colreg_family import COLREG_FAMILY
     from usvsim.task.openwater_env import OPEN_WATER_FAMILY, weather_family
     from usvsim.task.torch_openwater_episodes import family_table
 
     TABLE.parent.mkdir(parents=True, exist_ok=True)
-    for path, family in ((TABLE, OPEN_WATER_FAMILY), (WEATHER_TABLE, weather_family())):
+    families = ((TABLE, OPEN_WATER_FAMILY), (WEATHER_TABLE, weather_family()),
+                (COLREG_TABLE, COLREG_FAMILY))  # fmt: skip
+    for path, family in families:
         family_table(family, 0, TABLE_BOATS, PER_BOAT).save(path)
         print(f"wrote {path} ({path.stat().st_size:,} bytes)")
 
@@ -74,17 +82,28 @@ def _actions(obs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.clip(a, -1.0, 1.0)[:, None]
 
 
+def _colreg_reward(kind: str) -> Any:
+    """The env's ``colreg_reward``: the default weights for the COLREG table, else None."""
+    if kind != "colreg":
+        return None
+    from usvsim.task.colreg_reward import ColregRewardWeights
+
+    return ColregRewardWeights()
+
+
 def run(
-    device: str, dtype: str, actions: list[np.ndarray] | None, table: Path = TABLE
+    device: str, dtype: str, actions: list[np.ndarray] | None, kind: str = "calm"
 ) -> dict[str, Any]:
-    """16 boats x 40 decisions; the actions from the first run's observations (None: make them)."""
+    """16 boats x 40 decisions on table ``kind`` (:data:`TABLES`); the actions from the first
+    run's observations (None: make them)."""
     import torch
 
     from usvsim.task.torch_openwater import TorchOpenWaterEnv
     from usvsim.task.torch_openwater_episodes import load_table
 
-    env = TorchOpenWaterEnv(EQ_BOATS, table=load_table(table), per_boat=PER_BOAT, device=device,
-                            dtype=dtype, noise="replay", observation_dtype="float64")  # fmt: skip
+    env = TorchOpenWaterEnv(EQ_BOATS, table=load_table(TABLES[kind]), per_boat=PER_BOAT,
+                            device=device, dtype=dtype, noise="replay", observation_dtype="float64",
+                            colreg_reward=_colreg_reward(kind))  # fmt: skip
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
     made: list[np.ndarray] = []
@@ -126,14 +145,13 @@ def radar_check(device: str) -> dict[str, Any]:
             "radar_pixels_lit": int((images[0] > 0).sum())}  # fmt: skip
 
 
-def stage_equality(device: str, dtypes: list[str], weather: bool = False) -> None:
+def stage_equality(device: str, dtypes: list[str], kind: str = "calm") -> None:
     t0 = time.perf_counter()
-    table = WEATHER_TABLE if weather else TABLE
-    if not weather:
+    if kind == "calm":
         record("ow_radar", device=device, **radar_check(device))
-    ref = run("torch-cpu", "float64", None, table)
+    ref = run("torch-cpu", "float64", None, kind)
     for dtype in dtypes:
-        got = run(device, dtype, ref["actions"], table)
+        got = run(device, dtype, ref["actions"], kind)
         dpsi = np.angle(np.exp(1j * (got["x"][..., 2] - ref["x"][..., 2])))
         same_done = np.array_equal(got["done"], ref["done"])
         fields = {
@@ -143,7 +161,8 @@ def stage_equality(device: str, dtypes: list[str], weather: bool = False) -> Non
             "max_reward_diff": float(np.abs(got["reward"] - ref["reward"]).max()),
             "flags_equal": bool(same_done),
             "episodes_ended": int(ref["done"].any(axis=1).sum()),
-            "weather": weather,
+            "weather": kind == "weather",
+            "table": kind,
         }
         record_equality("ow_equality", device, dtype, (EQ_BOATS, EQ_DECISIONS), t0, fields, BARS)
 
@@ -156,20 +175,22 @@ def stage_bench(
     observation: str = "scene",
     mode: str = "eager",
     backend: str = "inductor",
-    weather: bool = False,
+    kind: str = "calm",
 ) -> None:
     from usvsim.task.torch_openwater import TorchOpenWaterEnv
     from usvsim.task.torch_openwater_episodes import load_table
     from usvsim.task.torch_openwater_speed import measure_openwater_steps
 
-    table = load_table(WEATHER_TABLE if weather else TABLE)
+    table = load_table(TABLES[kind])
 
     def make_env(n: int) -> Any:
         return TorchOpenWaterEnv(n, table=table, per_boat=PER_BOAT, device=device, dtype=dtype,
                                  observation=observation, compile=mode == "compile",
-                                 compile_backend=backend)  # fmt: skip
+                                 compile_backend=backend,
+                                 colreg_reward=_colreg_reward(kind))  # fmt: skip
 
-    fields = dict(device=device, dtype=dtype, observation=observation, mode=mode, weather=weather)
+    fields = dict(device=device, dtype=dtype, observation=observation, mode=mode,
+                  weather=kind == "weather", table=kind)  # fmt: skip
     bench_sizes(
         "ow_bench", sizes, make_env, lambda env: measure_openwater_steps(env, seconds), fields,
         names=("setup_s", "decision_steps_per_s"), peak_memory=True,
@@ -184,7 +205,7 @@ def openwater_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
                  "table's episodes and noise, against torch-cpu float64:"]  # fmt: skip
     for e in grouped.get("ow_equality", []):
         verdict = {True: "ok", False: "EXCEEDED", None: "stated, no bar"}[e["within_tolerance"]]
-        sea = "weather" if e.get("weather") else "calm"
+        sea = e.get("table", "weather" if e.get("weather") else "calm")
         text.append(
             f"  {sea:>7} {e['device']:>9} {e['dtype']:>8} "
             f"max |dpos| {e['max_position_diff_m']:.3g} m, "
@@ -206,7 +227,8 @@ def openwater_table(grouped: dict[str, list[dict[str, Any]]]) -> list[str]:
             text.append(f"  {b['observation']:>10} N={b['n']:>10,} {b['dtype']}: {b['error']}")
             continue
         text.append(
-            f"  {b['observation']:>10} {'weather' if b.get('weather') else 'calm':>7} "
+            f"  {b['observation']:>10} "
+            f"{b.get('table', 'weather' if b.get('weather') else 'calm'):>7} "
             f"{b.get('mode', 'eager'):>7} N={b['n']:>10,} {b['dtype']}: "
             f"{b['decision_steps_per_s']:.3e} (first step {b['setup_s']} s)"
             + (f" (peak {b['peak_gib']} GiB)" if b.get("peak_gib") is not None else "")
@@ -222,16 +244,21 @@ def main() -> None:
     add_equality_stage(sub, "equality")
     add_bench_stage(sub, "bench", "1000,10000,100000,1000000", ["scene", "radar+goal"])
     for name in ("equality", "bench"):
-        sub.choices[name].add_argument("--weather", action="store_true", help="the weather table")
+        group = sub.choices[name].add_mutually_exclusive_group()
+        group.add_argument("--weather", action="store_true", help="the weather table")
+        group.add_argument("--colreg", action="store_true",
+                           help="the COLREG table, with the COLREG reward terms")  # fmt: skip
     args = parser.parse_args()
     if args.stage == "make-table":
         make_table()
-    elif args.stage == "equality":
-        stage_equality(args.device, args.dtypes.split(","), args.weather)
+        return
+    kind = "weather" if args.weather else "colreg" if args.colreg else "calm"
+    if args.stage == "equality":
+        stage_equality(args.device, args.dtypes.split(","), kind)
     else:
         sizes = [int(float(s)) for s in args.sizes.split(",")]
         stage_bench(args.device, args.dtype, sizes, args.seconds, args.observation, args.mode,
-                    args.backend, args.weather)  # fmt: skip
+                    args.backend, kind)  # fmt: skip
 
 
 if __name__ == "__main__":
