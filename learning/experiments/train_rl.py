@@ -92,27 +92,23 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
     setups, the open-water one for the open-water scene and radar+goal setups (the setup's
     training family, drawn on the host at reset as the CPU env draws it,
     :data:`OPEN_WATER_TABLE_EPISODES` episodes in all; the fixed reward horizon with each
-    episode's own time limit; the setup's COLREG reward terms, :mod:`usvsim.task.torch_colreg`).
-    ``ValueError`` for a setup it cannot train (the study task's radar, PPO, reactive
-    targets)."""
+    episode's own time limit; the setup's COLREG reward terms, :mod:`usvsim.task.torch_colreg`;
+    reactive targets steered on the host, :mod:`usvsim.evaluation.torch_reactive`).
+    ``ValueError`` for a setup it cannot train (the study task's radar, PPO)."""
     if device not in DEVICE_DTYPES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
     trainable = setup.algorithm == "trpo" and (
         (setup.task != "open-water" and setup.observation == "positional")
-        or (
-            setup.task == "open-water"
-            and setup.observation in ("scene", "radar+goal")
-            and not setup.reactive_targets
-        )
+        or (setup.task == "open-water" and setup.observation in ("scene", "radar+goal"))
     )
     if not trainable:
         raise ValueError(
             f"--device {device} is for the TRPO positional setups (rl-gaussian-positional, "
             "rl-categorical-positional) and the open-water scene and radar setups (rl-*-scene-ow, "
-            "rl-*-radar-ow and their -ft, -cont; the -colreg setups without reactive targets), "
-            f"not {setup.name!r}"
+            f"rl-*-radar-ow and their -ft, -cont; the -colreg setups), not {setup.name!r}"
         )
     if setup.task == "open-water":
+        from usvsim.evaluation.torch_reactive import DeviceReactiveTargets
         from usvsim.task.torch_openwater import TorchOpenWaterEnv
 
         def make_open_water(num_envs: int) -> Any:
@@ -127,6 +123,7 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
                 reward_horizon="fixed",
                 gamma=setup.algorithm_config.gamma,
                 colreg_reward=setup.colreg_weights,
+                on_decision=DeviceReactiveTargets() if setup.reactive_targets else None,
             )
 
         return make_open_water

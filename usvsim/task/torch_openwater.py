@@ -10,7 +10,8 @@ vessels, the judge at every 0.1 s plant step against every disc, the reward, the
 ``scene`` observation (:mod:`usvsim.task.torch_scene`) or the radar image of every disc with the
 episode's radar degradation (:mod:`usvsim.task.torch_scene_radar`: the CPU image pixel for pixel,
 from the same counter-based draws of each boat's frame key) and the restart of finished boats.
-No host round trip and no Python loop over boats, discs or vessels per step.
+No host round trip (but an ``on_decision`` hook's, e.g. reactive targets) and no Python loop
+over boats, discs or vessels per step.
 
 Episodes are the CPU family's draws, packed on the host and copied to the device
 (:mod:`usvsim.task.torch_openwater_episodes`): with the same seed the same episodes as the CPU
@@ -136,6 +137,11 @@ class TorchOpenWaterEnv:
     colreg_reward : ColregRewardWeights, optional
         Add the COLREG terms (:mod:`usvsim.task.torch_colreg`; ``info["reward_colreg"]`` and
         ``info["reward_colreg_<term>"]``), as ``OpenWaterVectorEnv(colreg_reward=...)``.
+    on_decision : object, optional
+        ``reset(env, boats)`` when ``boats`` (N,) bool start episodes and ``steer(env, time_s)``
+        after each decision's reward, before the observation: may replace ``env.discs``'
+        vessel motion (reactive targets: :class:`usvsim.evaluation.torch_reactive.
+        DeviceReactiveTargets`), as ``OpenWaterVectorEnv(on_decision=...)``.
     compile : bool
         Run a plant step + filter step through ``torch.compile`` (for a GPU; the study env's
         :func:`usvsim.task.torch_env.compiled_substep`), ``compile_backend`` its backend.
@@ -159,6 +165,7 @@ class TorchOpenWaterEnv:
         scenario: Scenario | None = None,
         reward: GaussianReward | None = None,
         colreg_reward: ColregRewardWeights | None = None,
+        on_decision: Any = None,
         compile: bool = False,
         compile_backend: str = "inductor",
     ) -> None:
@@ -205,7 +212,7 @@ class TorchOpenWaterEnv:
         self._substep = compiled_substep(compile_backend) if compile else plant_and_filter
         self._compile_backend = compile_backend if compile else None
         self._weather: Any = None  # the weather kernel, where the table has weather
-        self._colreg_weights = colreg_reward
+        self._colreg_weights, self.on_decision = colreg_reward, on_decision
         self._colreg: TorchColregReward | None = None  # built with the table (its vessel slots)
         self._ready = False
 
@@ -313,6 +320,8 @@ class TorchOpenWaterEnv:
         self._frame = torch.where(boats, 0, self._frame)
         if self._colreg is not None:
             self._colreg.reset(boats)
+        if self.on_decision is not None:
+            self.on_decision.reset(self, boats)
         return select_rows(boats, self._observe(advance=boats), obs)
 
     # ----------------------------------------------------------------------------- observe
@@ -444,6 +453,8 @@ class TorchOpenWaterEnv:
                 reward, terminated, truncated, out_of_area, time_s, limit, self._ref_decisions,
                 sc.decision_period_s, self.gamma,
             )  # fmt: skip
+        if self.on_decision is not None:
+            self.on_decision.steer(self, time_s)
         obs = self._observe(advance=torch.ones_like(terminated))
         info = {
             "final_obs": obs,

@@ -97,13 +97,29 @@ def test_torch_cpu_trains_a_colreg_setup_with_the_colreg_reward(
     assert load_checkpoint(tmp_path / "best.pt").setup == "rl-gaussian-radar-colreg"
 
 
+def test_torch_cpu_trains_the_reactive_colreg_setup(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """rl-gaussian-radar-colreg-reactive: the targets steered by vo on the host each decision
+    (usvsim.evaluation.torch_reactive); one iteration runs and writes a cpu run's files."""
+    import learning.experiments.train_rl as train_rl
+    from learning.experiments.setups import get_setup
+    from usvsim.evaluation.torch_reactive import DeviceReactiveTargets
+
+    monkeypatch.setattr(train_rl, "OPEN_WATER_TABLE_EPISODES", 32)
+    env = train_rl.device_env_maker(get_setup("rl-gaussian-radar-colreg-reactive"), "torch-cpu")(4)
+    assert isinstance(env.on_decision, DeviceReactiveTargets)
+    args = _args(tmp_path, setup="rl-gaussian-radar-colreg-reactive", iterations=1, n_envs=4)
+    assert run(args) == 0
+    assert load_checkpoint(tmp_path / "best.pt").setup == "rl-gaussian-radar-colreg-reactive"
+
+
 @pytest.mark.parametrize(
     ("setup", "device", "message"),
     [
         ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional"),
         ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional"),
         ("il-gaussian-positional", "torch-cpu", "is for the TRPO positional"),
-        ("rl-gaussian-radar-colreg-reactive", "torch-cpu", "is for the TRPO positional"),
         ("rl-gaussian-positional", "gpu", "--device must be one of cpu, torch-cpu, cuda"),
     ],
 )

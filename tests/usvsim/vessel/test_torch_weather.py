@@ -113,7 +113,7 @@ def test_float32_stays_within_its_stated_tolerance(runs: tuple[np.ndarray, ...])
 
 
 def test_sensed_offsets_equal_numpy() -> None:
-    c_traj, start, (inputs, *_) = _episode(seed=1)
+    c_traj, _start, (inputs, *_) = _episode(seed=1)
     kernel = load_weather_kernel()
     last = c_traj[:, -1]
     want = sensed_offsets(last[:, :8], last[:, NS : NS + NWS], inputs)
