@@ -34,6 +34,8 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from learning.experiments.setups import get_setup
 from learning.experiments.train_rl import train_rl
 from usvsim.common.fileio import atomic_write_text
@@ -142,6 +144,37 @@ def _fmt(rate: float | None, ci: list[float] | None) -> str:
     return f"{100 * rate:.0f} % [{100 * ci[0]:.0f}, {100 * ci[1]:.0f}]"
 
 
+def across_seeds(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per variant with at least two seeds: the IQM over seeds of the test split's per-set
+    success and compliance rates, with rliable's 95 % stratified-bootstrap interval over seeds
+    (:func:`usvsim.evaluation.seed_stats.iqm_with_interval`); compliance over the sets where
+    every seed met an encounter. Collisions summed over seeds."""
+    from usvsim.evaluation.seed_stats import iqm_with_interval
+
+    out = []
+    for variant in dict.fromkeys(r["variant"] for r in runs):
+        mine = [r for r in runs if r["variant"] == variant]
+        if len(mine) < 2:
+            continue
+        collisions = sum(r["test"]["collisions"] for r in mine)
+        row: dict[str, Any] = {
+            "variant": variant, "seeds": [r["seed"] for r in mine], "collisions": collisions
+        }  # fmt: skip
+        for name in ("success_rate", "compliance_rate"):
+            scores = np.array(
+                [[np.nan if s[name] is None else s[name] for s in r["test"]["per_set"]]
+                 for r in mine], dtype=float,
+            )  # fmt: skip
+            scores = scores[:, np.isfinite(scores).all(axis=0)]  # (seeds, sets)
+            if scores.shape[1] == 0:
+                row[name] = row[f"{name}_ci95"] = None
+                continue
+            point, ci = iqm_with_interval(scores)
+            row[name], row[f"{name}_ci95"] = point, list(ci)
+        out.append(row)
+    return out
+
+
 def markdown(runs: list[dict[str, Any]], args: argparse.Namespace) -> str:
     """The ablation table: one row per variant and seed, test split figures."""
     lines = [
@@ -160,6 +193,24 @@ def markdown(runs: list[dict[str, Any]], args: argparse.Namespace) -> str:
             f"| {_fmt(t['success_rate'], t['success_ci95'])} "
             f"| {_fmt(t['compliance_rate'], t['compliance_ci95'])} | {t['collisions']} | {wall} |"
         )
+    summary = across_seeds(runs)
+    if summary:
+        lines += [
+            "",
+            "Across seeds (test split, IQM over seeds of the per-set rates, rliable's 95 % "
+            "bootstrap interval):",
+            "",
+            "| variant | seeds | success | compliance | collisions |",
+            "|---|---|---|---|---|",
+        ]
+        for r in summary:
+            seeds = ",".join(str(k) for k in r["seeds"])
+            lines.append(
+                f"| {r['variant']} | {seeds} "
+                f"| {_fmt(r['success_rate'], r['success_rate_ci95'])} "
+                f"| {_fmt(r['compliance_rate'], r['compliance_rate_ci95'])} "
+                f"| {r['collisions']} |"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -208,8 +259,8 @@ def main(argv: list[str] | None = None) -> None:
                   f"{runs[-1]['test']['compliance_rate']} compliance", flush=True)  # fmt: skip
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "ablation.json", json.dumps({"args": vars(args), "runs": runs},
-                                                        indent=1, default=str))  # fmt: skip
+    data = {"args": vars(args), "runs": runs, "across_seeds": across_seeds(runs)}
+    atomic_write_text(out / "ablation.json", json.dumps(data, indent=1, default=str))
     atomic_write_text(out / "ablation.md", markdown(runs, args))
     print(markdown(runs, args))
 

@@ -50,3 +50,34 @@ def test_train_only_resumes_cut_runs_and_skips_finished_ones(
 def test_train_only_and_score_only_together_are_refused() -> None:
     with pytest.raises(SystemExit, match="choose one"):
         ablation.parse(["--train-only", "--score-only"])
+
+
+def _run(variant: str, seed: int, success: list[float], compliance: list[float | None]) -> dict:
+    rates = zip(success, compliance, strict=True)
+    per_set = [{"success_rate": s, "compliance_rate": c} for s, c in rates]
+    return {"variant": variant, "seed": seed, "colreg_reward": "all", "chosen": "best.pt",
+            "train_wall_s": 1.0, "test": {"success_rate": 0.9, "success_ci95": [0.8, 1.0],
+                                          "compliance_rate": 0.5, "compliance_ci95": [0.4, 0.6],
+                                          "collisions": seed, "per_set": per_set}}  # fmt: skip
+
+
+def test_across_seeds_gives_each_variant_its_iqm_and_interval() -> None:
+    """Three seeds of `all`: the IQM over seeds of the per-set rates (with 3 seeds the mean),
+    compliance only over the sets every seed met an encounter in; one seed: no row."""
+    runs = [
+        _run("all", 0, [1.0, 0.8], [0.5, None]),
+        _run("all", 1, [0.9, 0.7], [0.7, 0.2]),
+        _run("all", 2, [0.8, 0.6], [0.6, 0.9]),
+        _run("none", 0, [0.5, 0.5], [0.1, 0.1]),
+    ]
+    rows = ablation.across_seeds(runs)
+    assert [r["variant"] for r in rows] == ["all"]
+    row = rows[0]
+    assert row["seeds"] == [0, 1, 2] and row["collisions"] == 3
+    assert row["success_rate"] == pytest.approx(0.8)  # mean of the six per-set rates
+    assert row["compliance_rate"] == pytest.approx(0.6)  # the first set only
+    low, high = row["success_rate_ci95"]
+    assert 0.6 <= low <= 0.8 <= high <= 1.0
+    args = ablation.parse(["--out", "/tmp/unused"])
+    table = ablation.markdown(runs, args)
+    assert "| all | 0,1,2 | 80 % [" in table and "| none | 0 |" in table
