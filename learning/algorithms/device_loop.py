@@ -45,7 +45,7 @@ from learning.algorithms.networks import TensorObs, rows
 from learning.algorithms.rollout import NonFiniteError
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig, TRPOUpdateStats, trpo_step
 
-__all__ = ["device_update", "iterate_on_device", "train_on_device"]
+__all__ = ["device_update", "iterate_on_device", "place_agent", "train_on_device"]
 
 VALUE_CHUNK = 1 << 20  # rows per critic pass for V(s_t), V(s'_t)
 IMAGE_VALUE_CHUNK = 1 << 14  # the same with an image (radar+goal: 24 kB a row in float32)
@@ -114,8 +114,8 @@ def _values(agent: TRPOAgent, normalise: DeviceNormalizer, raw: TensorObs, m: in
     )
 
 
-def _place(agent: TRPOAgent, device: torch.device) -> None:
-    """Move the agent's networks and its critic optimiser's state to ``device``."""
+def place_agent(agent: TRPOAgent, device: torch.device) -> None:
+    """Move a TRPO agent's networks and its critic optimiser's state to ``device``."""
     agent.policy.to(device)
     agent.critic.to(device)
     for state in agent.critic_optimizer.state.values():
@@ -125,31 +125,41 @@ def _place(agent: TRPOAgent, device: torch.device) -> None:
 
 
 def iterate_on_device(
-    agent: TRPOAgent,
+    agent: Any,
     env: Any,
-    callback: Callable[[IterationStats, TRPOAgent], bool | None] | None = None,
-) -> TRPOAgent:
+    callback: Callable[[IterationStats, Any], bool | None] | None = None,
+) -> Any:
     """:func:`learning.algorithms.loop.iterate` on a torch env (module docstring). The env
-    restarts with a reset seeded ``config.seed + agent.iteration``."""
+    restarts with a reset seeded ``config.seed + agent.iteration``. ``agent``: a
+    :class:`TRPOAgent`, or an agent with its own ``place(device)`` and
+    ``update_on_device(batch)`` (:class:`learning.imitation.gail.GAILAgent`)."""
     cfg: TRPOConfig = agent.config
     device = torch.device(env.device)
     space = agent.action_space
     bounds = None
     if isinstance(space, spaces.Box):  # Gaussian actions: clipped on the way to the env
         bounds = (float(np.min(space.low)), float(np.max(space.high)))
-    collector = DeviceRolloutCollector(env, cfg.gamma, cfg.seed + agent.iteration, bounds)
+    collector = DeviceRolloutCollector(
+        env, cfg.gamma, cfg.seed + agent.iteration, bounds, info_keys=tuple(agent.info_keys),
+        env_reward=getattr(agent, "env_reward", True),
+    )  # fmt: skip
+    # an agent with its own update on the device (GAIL: its discriminator too) places itself
+    place = getattr(agent, "place", None) or (lambda d: place_agent(agent, d))
+    update_on_device = getattr(agent, "update_on_device", None) or (
+        lambda b: device_update(agent, b)
+    )
     start = time.perf_counter()
     while agent.iteration < cfg.iterations:
-        _place(agent, device)
+        place(device)
         t0 = time.perf_counter()
         agent.policy.eval()
         normalise = DeviceNormalizer(agent.normalizer, device)
         batch = collector.collect(agent.policy, normalise, cfg.steps_per_env)
         t1 = time.perf_counter()
-        update = device_update(agent, batch)
+        update = update_on_device(batch)
         n, ret_sum, len_sum = batch.episode_sums.tolist()  # the iteration's one read-back
         t2 = time.perf_counter()
-        _place(agent, torch.device("cpu"))
+        place(torch.device("cpu"))
         stats = IterationStats(
             iteration=agent.iteration,
             env_steps=agent.env_steps,
@@ -163,7 +173,7 @@ def iterate_on_device(
         )
         if callback is not None and callback(stats, agent):
             break
-    _place(agent, torch.device("cpu"))
+    place(torch.device("cpu"))
     return agent
 
 

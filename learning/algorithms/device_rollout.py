@@ -26,6 +26,8 @@ rewards            (T, N)        r_t after the fixed horizon (float32)
 terminated         (T, N)        absorbing end (goal, collision, left the area)
 truncated          (T, N)        time limit
 episode_sums       (3,)          episodes ended, their returns' sum, their lengths' sum
+info[key]          (T, N)        boolean ``info[key]`` per step, for the ``info_keys`` asked
+                                 (GAIL: how each episode ended)
 =================  ============  ============================================================
 
 Every transition is valid (``SAME_STEP``: no reset-only steps).
@@ -34,7 +36,7 @@ Every transition is valid (``SAME_STEP``: no reset-only steps).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import torch
@@ -181,6 +183,7 @@ class DeviceBatch:
     terminated: Tensor
     truncated: Tensor
     episode_sums: Tensor
+    info: dict[str, Tensor] = field(default_factory=dict)
 
     @property
     def episode_end(self) -> Tensor:
@@ -194,6 +197,9 @@ class DeviceRolloutCollector:
     ``out_of_area`` and ``time_s`` in ``info``), ``scenario`` (``max_decisions``,
     ``decision_period_s``), ``device``, ``num_envs``. ``gamma``: the trainer's discount, for
     the fixed horizon. ``action_bounds`` (low, high) clip Box actions on the way to the env.
+    ``info_keys``: boolean ``info`` entries kept per step (:attr:`DeviceBatch.info`).
+    ``env_reward`` False: the env's rewards are not the trainer's (GAIL), so no fixed horizon
+    is added and the env's own terminations stand, as on the CPU path.
     """
 
     def __init__(
@@ -202,15 +208,18 @@ class DeviceRolloutCollector:
         gamma: float,
         seed: int,
         action_bounds: tuple[float, float] | None = None,
+        info_keys: tuple[str, ...] = (),
+        env_reward: bool = True,
     ) -> None:
         self.env, self.gamma, self.n = env, gamma, env.num_envs
+        self.info_keys = info_keys
         self.device = torch.device(env.device)
         self.bounds = action_bounds
         self.generator = torch.Generator(device=self.device).manual_seed(seed + 2)
         obs, _ = env.reset(seed=seed)
         # an env on the fixed horizon applies it itself (the open-water env: each episode's own
         # time limit); the study's env returns the episode's rewards, and the collector adds it
-        self._own_horizon = getattr(env, "reward_horizon", "episode") != "fixed"
+        self._own_horizon = env_reward and getattr(env, "reward_horizon", "episode") != "fixed"
         self.obs = obs
         self._ep_return = torch.zeros(self.n, dtype=torch.float64, device=self.device)
         self._ep_length = torch.zeros(self.n, dtype=torch.float64, device=self.device)
@@ -233,6 +242,7 @@ class DeviceRolloutCollector:
         terminated = torch.empty((T, N), dtype=torch.bool, device=dev)
         truncated = torch.empty((T, N), dtype=torch.bool, device=dev)
         sums = torch.zeros(3, dtype=torch.float64, device=dev)
+        info_buf = {k: torch.empty((T, N), dtype=torch.bool, device=dev) for k in self.info_keys}
         actions_buf: Tensor | None = None
         for t in range(T):
             for key, x in _parts(self.obs).items():
@@ -251,6 +261,8 @@ class DeviceRolloutCollector:
                 )
             done = term | trunc
             rewards[t], terminated[t], truncated[t] = reward, term, trunc
+            for key, buf in info_buf.items():
+                buf[t] = info[key]
             final = info["final_obs"]
             for key, x in _parts(obs).items():
                 last = _parts(final)[key]
@@ -270,4 +282,4 @@ class DeviceRolloutCollector:
         else:
             obs_out, next_out = obs_buf[""], next_buf[""]
         return DeviceBatch(obs_out, next_out, actions_buf, log_probs, rewards, terminated,
-                           truncated, sums)  # fmt: skip
+                           truncated, sums, info_buf)  # fmt: skip

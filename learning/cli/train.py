@@ -69,13 +69,15 @@ checkpoints).
 ``DIR/<name of the output folder>`` (``tensorboard --logdir DIR`` shows runs side by side; tags
 and steps: :mod:`learning.experiments.run_log`; needs ``pip install "usvsim[tensorboard]"``).
 
-``--device {cpu,torch-cpu,cuda}`` (the TRPO positional setups and the open-water scene and
-radar setups ``rl-*-scene-ow``, ``rl-*-radar-ow`` and their ``-ft``, ``-cont``): ``cpu`` (the
-default) steps the CPU env with NumPy arrays;
-``torch-cpu`` and ``cuda`` train with the torch env (the study task's, or the open-water one on
-the setup's training family), rollouts, GAE and the TRPO step on that device
-(:mod:`learning.algorithms.device_loop`); validation, checkpoints and files are those of a
-``cpu`` run. Another setup, or ``cuda`` where torch sees no GPU: one line, exit 2.
+``--device {cpu,torch-cpu,cuda}`` (the TRPO positional setups, the open-water scene and radar
+setups ``rl-*-scene-ow``, ``rl-*-radar-ow`` and their ``-ft``, ``-cont``, the ``rl-*-colreg``
+setups; GAIL for ``il-*-positional`` and the ``il-*-ow`` / ``-colreg`` setups whose
+discriminator sees the policy's observation): ``cpu`` (the default) steps the CPU env with NumPy
+arrays; ``torch-cpu`` and ``cuda`` train with the torch env (the study task's, or the open-water
+one on the setup's training family), rollouts, GAE, the TRPO step and GAIL's discriminator on
+that device (:mod:`learning.algorithms.device_loop`,
+:func:`learning.imitation.gail.train_gail_on_device`); validation, checkpoints and files are
+those of a ``cpu`` run. Another setup, or ``cuda`` where torch sees no GPU: one line, exit 2.
 
 ``--harsh-radar-copies K`` (il-*-radar-ow only, a new run): every demonstration also enters the
 expert data K times with its radar at the family's harshest level, and K/(K+1) of the training
@@ -101,7 +103,13 @@ from learning.experiments.il_setups import IL_SETUPS, MAX_HARSH_RADAR_COPIES, ge
 from learning.experiments.run_log import check_tensorboard
 from learning.experiments.setups import SETUPS, get_setup, setup_from_params
 from learning.experiments.train_il import train_il
-from learning.experiments.train_rl import DEVICES, device_env_maker, first_policy, train_rl
+from learning.experiments.train_rl import (
+    DEVICES,
+    device_env_maker,
+    first_policy,
+    il_device_env_maker,
+    train_rl,
+)
 from learning.experiments.validation import RunResult
 from learning.imitation.discriminator import DISC_OBSERVATIONS, DiscObservation
 from usvsim.common.errors import UserError
@@ -145,7 +153,7 @@ class TrainArgs:
         default=0, metadata=bounds(ge=0, le=MAX_HARSH_RADAR_COPIES)
     )
     tensorboard: str = ""  # also TensorBoard scalars in DIR/<out folder's name>; "": none
-    device: str = "cpu"  # rl-*-positional (TRPO): cpu (C kernel, NumPy), torch-cpu or cuda
+    device: str = "cpu"  # cpu (C kernel, NumPy), torch-cpu or cuda (module docstring: which)
 
     @classmethod
     def cli_epilog(cls) -> str:
@@ -221,14 +229,12 @@ class TrainArgs:
         device loop trains, and cuda only where torch sees a GPU."""
         if self.device not in DEVICES:
             raise UserError(f"--device must be one of {', '.join(DEVICES)}, got {self.device!r}")
-        rl = SETUPS.get(self.setup)
-        if rl is None:
-            raise UserError(
-                f"--device {self.device} is for the TRPO positional and open-water scene and "
-                f"radar setups, not {self.setup!r}"
-            )
+        rl, il = SETUPS.get(self.setup), IL_SETUPS.get(self.setup)
         try:
-            device_env_maker(rl, self.device)
+            if rl is not None:
+                device_env_maker(rl, self.device)
+            elif il is not None:
+                il_device_env_maker(il, self.device)
         except ValueError as err:
             raise UserError(str(err)) from None
         if self.device == "cuda" and not torch.cuda.is_available():
@@ -385,6 +391,7 @@ def _run_il(args: TrainArgs) -> int:
             quiet=args.quiet,
             command=command_of(args),
             tensorboard=_board(args, out),
+            device=args.device,
         ),
         setup.name,
         out,

@@ -38,7 +38,7 @@ from learning.experiments.checkpoint import (
 from learning.experiments.il_setups import ILSetup
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import setup_from_params
-from learning.experiments.train_rl import open_water_fields
+from learning.experiments.train_rl import il_device_env_maker, open_water_fields
 from learning.experiments.validation import (
     RunResult,
     extra_successes,
@@ -55,7 +55,7 @@ from learning.imitation.demonstrations import (
     load_recordings,
     quality_check,
 )
-from learning.imitation.gail import GAILAgent, GAILStats, train_gail
+from learning.imitation.gail import GAILAgent, GAILStats, train_gail, train_gail_on_device
 from learning.imitation.preprocess import (
     ExpertData,
     check_observations,
@@ -302,6 +302,7 @@ def train_il(
     demos_dir: str | Path | None = None,
     log: Callable[[str], None] = print,
     tensorboard: str | Path = "",
+    device: str = "cpu",
 ) -> ILRunResult:
     """Train ``setup`` by GAIL, writing into ``out_dir`` the files of ``usvsim train``
     (:mod:`learning.cli.train`; ``log.csv`` columns :data:`IL_CSV_FIELDS`).
@@ -318,7 +319,9 @@ def train_il(
     prints one line per validation. ``threads``: torch CPU threads (on 2 shared cores, 2
     threads made an iteration 20× slower than 1 when measured). ``tensorboard`` (a folder; "":
     none): also every ``log.csv`` row as TensorBoard scalars there
-    (:class:`learning.experiments.run_log.RunLog`).
+    (:class:`learning.experiments.run_log.RunLog`). ``device`` (``"cpu"``, ``"torch-cpu"`` or
+    ``"cuda"``): where the env steps and GAIL trains (:func:`il_device_env_maker`,
+    :func:`learning.imitation.gail.train_gail_on_device`); validation stays on the CPU env.
 
     Raises ``CheckpointError`` when ``resume`` finds no usable checkpoint of ``setup``, and
     ``NonFiniteError`` / ``NonFiniteWeightsError`` (after writing ``log.csv``) when an update
@@ -391,9 +394,12 @@ def train_il(
             )
         return PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
 
+    trainer: Any = train_gail
+    if device != "cpu":
+        trainer, make_env = train_gail_on_device, il_device_env_maker(setup, device)
     run.start = time.perf_counter()  # the clock counts GAIL, warm start included
     try:
-        agent = train_gail(
+        agent = trainer(
             setup.gail,
             cfg,
             make_env,

@@ -60,6 +60,7 @@ __all__ = [
     "device_env_maker",
     "env_maker",
     "first_policy",
+    "il_device_env_maker",
     "open_water_fields",
     "train_rl",
 ]
@@ -139,6 +140,37 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
         )
 
     return make_env
+
+
+def il_device_env_maker(setup: Any, device: str) -> Any:
+    """``make_env(num_envs)`` of the torch env a GAIL run of ``setup`` steps on ``device``
+    (``"torch-cpu"`` or ``"cuda"``): the study task's for the positional setups, the open-water
+    one on the setup's training family for the ``-ow`` and ``-colreg`` setups, episode rewards
+    (GAIL replaces them). ``ValueError`` for a setup it cannot train: the study task's radar, or
+    a discriminator that sees another view than the policy (``disc_observation="scene"``)."""
+    if device not in DEVICE_DTYPES:
+        raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
+    open_water = setup.task == "open-water" and setup.observation in ("scene", "radar+goal")
+    study = setup.task != "open-water" and setup.observation == "positional"
+    if setup.gail.disc_observation != "policy" or not (open_water or study):
+        raise ValueError(
+            f"--device {device} trains GAIL for the IL positional and open-water setups whose "
+            f"discriminator sees the policy's observation (il-*-positional, il-*-scene-ow, "
+            f"il-gaussian-scene-colreg), not {setup.name!r}"
+        )
+    dtype = DEVICE_DTYPES[device]
+    if open_water:
+        from usvsim.task.torch_openwater import TorchOpenWaterEnv
+
+        return lambda n: TorchOpenWaterEnv(
+            n, family=setup.training_family, per_boat=max(16, OPEN_WATER_TABLE_EPISODES // n),
+            device=device, dtype=dtype, action=setup.action, observation=setup.observation,
+        )  # fmt: skip
+    from usvsim.task.torch_env import TorchPoleAvoidanceEnv
+
+    return lambda n: TorchPoleAvoidanceEnv(
+        n, device=device, dtype=dtype, action=setup.action, observation=setup.observation
+    )
 
 
 def open_water_fields(setup: Any) -> tuple[str, ...]:

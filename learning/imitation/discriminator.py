@@ -26,6 +26,7 @@ from usvsim.task.observations import (
     POSITIONAL_STANDARDIZATION,
     SCENE_FEATURES,
     SCENE_K,
+    SCENE_STANDARDIZATION,
     observation_space,
     standardize_scene,
 )
@@ -105,6 +106,10 @@ class Discriminator(nn.Module):
         if isinstance(obs, dict):
             return self.head(self.trunk({**obs, "zz_action": az})).squeeze(-1)
         return self.head(self.trunk(torch.cat([obs, az], dim=-1))).squeeze(-1)
+
+
+def _obs_to(obs: Tensor | dict[str, Tensor], device: torch.device) -> Any:
+    return {k: v.to(device) for k, v in obs.items()} if isinstance(obs, dict) else obs.to(device)
 
 
 def index_obs(obs: Obs | dict[str, Tensor] | Tensor, idx: Any) -> Any:
@@ -194,7 +199,7 @@ class GAILTrainer:
         az = self._az(normalize_actions(expert.actions, action_space), np.zeros((len(expert), 2)))
         if config.absorbing:  # one goal-absorbing sample per expert run
             n_runs = int(expert.last.sum())
-            obs = cat_obs([obs, self._absorbing_obs(obs, n_runs)])
+            obs = cat_obs([obs, self.absorbing_obs(obs, n_runs)])
             z = np.tile([1.0, 0.0], (n_runs, 1))
             az = torch.cat([az, self._az(np.zeros((n_runs, 1), np.float32), z)])
         self.expert_obs, self.expert_az = obs, az
@@ -219,10 +224,11 @@ class GAILTrainer:
         return torch.as_tensor(np.concatenate([a, z], axis=1), dtype=torch.float32)
 
     @staticmethod
-    def _absorbing_obs(like: Tensor | dict[str, Tensor], n: int) -> Any:
+    def absorbing_obs(like: Tensor | dict[str, Tensor], n: int) -> Any:
+        """``n`` absorbing-state observations (all zeros) shaped and placed as ``like``'s."""
         if isinstance(like, dict):
-            return {k: torch.zeros((n, *v.shape[1:])) for k, v in like.items()}
-        return torch.zeros((n, like.shape[1]))
+            return {k: torch.zeros((n, *v.shape[1:]), device=v.device) for k, v in like.items()}
+        return torch.zeros((n, like.shape[1]), device=like.device)
 
     def batch_obs(self, batch: RolloutBatch) -> Obs:
         """The raw observations D sees of ``batch``'s steps (T, N, ...): the policy's, or the
@@ -244,7 +250,7 @@ class GAILTrainer:
         az = self._az(normalize_actions(acts, self.action_space), np.zeros((int(valid.sum()), 2)))
         kinds = (ends & batch.terminated[..., None]).reshape(-1, N_ABSORBING)
         kinds = kinds[kinds.any(axis=1)].astype(np.float32)
-        abs_obs = self._absorbing_obs(obs, kinds.shape[0])
+        abs_obs = self.absorbing_obs(obs, kinds.shape[0])
         abs_az = self._az(np.zeros((kinds.shape[0], 1), np.float32), kinds)
         return obs, az, abs_obs, abs_az
 
@@ -252,7 +258,7 @@ class GAILTrainer:
 
     def _gradient_penalty(self, obs_e: Any, az_e: Tensor, obs_p: Any, az_p: Tensor) -> Tensor:
         """E[(‖∇ f(x̂)‖ − 1)²] at x̂ = εx_E + (1 − ε)x_π (Gulrajani et al. 2017)."""
-        eps = torch.rand(az_e.shape[0], 1, generator=self.generator)
+        eps = torch.rand(az_e.shape[0], 1, generator=self.generator).to(az_e.device)
 
         def mix(a: Tensor, b: Tensor) -> Tensor:
             e = eps.view(-1, *([1] * (a.dim() - 1)))
@@ -277,12 +283,13 @@ class GAILTrainer:
         m = min(cfg.disc_minibatch, n_e, n_p)
         out: dict[str, float] = {}
         for _ in range(cfg.disc_steps):
-            ie = torch.randint(n_e, (m,), generator=self.generator)
-            ip = torch.randint(n_p, (m,), generator=self.generator)
+            # drawn by the CPU generator on any device (the same draws), used where the data is
+            ie = torch.randint(n_e, (m,), generator=self.generator).to(self.expert_az.device)
+            ip = torch.randint(n_p, (m,), generator=self.generator).to(pol_az.device)
             obs_e, az_e = index_obs(self.expert_obs, ie), self.expert_az[ie]
             obs_p, az_p = index_obs(pol_obs, ip), pol_az[ip]
             logits = self.disc(cat_obs([obs_e, obs_p]), torch.cat([az_e, az_p]))
-            labels = torch.cat([torch.ones(m), torch.zeros(m)])
+            labels = torch.cat([torch.ones(m), torch.zeros(m)]).to(logits.device)
             loss = functional.binary_cross_entropy_with_logits(logits, labels)
             if cfg.gradient_penalty > 0:
                 loss = loss + cfg.gradient_penalty * self._gradient_penalty(
@@ -312,7 +319,78 @@ class GAILTrainer:
             self.disc(index_obs(obs, slice(i, i + chunk)), az[i : i + chunk])
             for i in range(0, n, chunk)
         ]
-        return torch.cat(parts) if parts else torch.zeros(0)
+        return torch.cat(parts) if parts else torch.zeros(0, device=az.device)
+
+    # -- on a torch device (issue 40: GAIL with the env and TRPO on the device) ---------------
+
+    def to(self, device: torch.device) -> None:
+        """Move the discriminator, its optimiser's state and the expert samples to ``device``
+        (the random generator stays on the CPU: the same draws anywhere)."""
+        self.disc.to(device)
+        for state in self.optimizer.state.values():
+            for key, value in state.items():
+                if isinstance(value, torch.Tensor) and key != "step":
+                    state[key] = value.to(device)
+        self.expert_obs = _obs_to(self.expert_obs, device)
+        self.expert_az = self.expert_az.to(device)
+
+    def disc_obs_tensor(self, obs: Tensor | dict[str, Tensor]) -> Tensor | dict[str, Tensor]:
+        """:meth:`disc_obs` of raw observation tensors (..., F) on their device, the same
+        numbers (the standardisations in float64, then float32, as NumPy's)."""
+        if isinstance(obs, dict):
+            return {k: v.to(torch.float32) / (255.0 if v.dtype == torch.uint8 else 1.0)
+                    for k, v in obs.items()}  # fmt: skip
+        if obs.dtype == torch.uint8:
+            return {"image": obs.to(torch.float32) / 255.0}
+        table = (
+            SCENE_STANDARDIZATION if obs.shape[-1] == SCENE_WIDTH else POSITIONAL_STANDARDIZATION
+        )
+        mean = torch.as_tensor(np.asarray(table.mean), dtype=torch.float64, device=obs.device)
+        std = torch.as_tensor(np.asarray(table.std), dtype=torch.float64, device=obs.device)
+        x = ((obs.to(torch.float64) - mean) / std).to(torch.float32)
+        if obs.shape[-1] == SCENE_WIDTH:  # standardize_scene: every empty slot all zeros
+            shape = (*obs.shape[:-1], SCENE_K, SCENE_FEATURES)
+            valid = obs[..., 4:].reshape(shape)[..., 5:6] > 0.5
+            x = torch.cat([x[..., :4], (x[..., 4:].reshape(shape) * valid).flatten(-2)], -1)
+        return x
+
+    def az_tensor(self, actions: Tensor, z: Tensor | None = None) -> Tensor:
+        """[a, z] (B, 3) of env action tensors (:func:`normalize_actions`; z zeros by
+        default), float32 on the actions' device."""
+        if isinstance(self.action_space, spaces.Discrete):
+            half = (N_CATEGORIES - 1) / 2
+            a = (actions.reshape(-1, 1).to(torch.float32) - half) / half
+        else:
+            a = actions.reshape(-1, 1).clamp(-1.0, 1.0).to(torch.float32)
+        if z is None:
+            z = torch.zeros((a.shape[0], N_ABSORBING), dtype=torch.float32, device=a.device)
+        return torch.cat([a, z.to(torch.float32)], dim=1)
+
+    def rewards_tensor(
+        self, obs: Any, az: Tensor, terminated: Tensor, ends: Tensor, log_probs: Tensor,
+        gamma: float,
+    ) -> Tensor:  # fmt: skip
+        """:meth:`rewards` of a device batch: ``obs``, ``az`` its T·N steps' discriminator
+        inputs (:meth:`disc_obs_tensor`, :meth:`az_tensor`), ``terminated`` and ``log_probs``
+        (T, N), ``ends`` (T, N, 2) [reached the goal, collided]; (T, N) float32."""
+        cfg = self.config
+        T, N = terminated.shape
+        clip = cfg.reward_clip
+        r = reward_from_logits(self.logits(obs, az), cfg.reward).clamp(-clip, clip)
+        r = r.to(torch.float64).reshape(T, N)
+        if cfg.absorbing:
+            kinds = torch.eye(N_ABSORBING, dtype=torch.float32, device=az.device)
+            zero_a = torch.zeros((N_ABSORBING, 1), dtype=torch.float32, device=az.device)
+            abs_logits = self.logits(
+                self.absorbing_obs(obs, N_ABSORBING), torch.cat([zero_a, kinds], dim=1)
+            )
+            r_abs = reward_from_logits(abs_logits, cfg.reward).clamp(-clip, clip)
+            v_abs = gamma / (1.0 - gamma) * r_abs  # γ r(s_a) / (1 − γ), float32 as NumPy's
+            for kind in range(N_ABSORBING):
+                r = r + torch.where(terminated & ends[..., kind], v_abs[kind], 0.0)
+        if cfg.entropy_bonus > 0:
+            r = r + cfg.entropy_bonus * -log_probs
+        return r.to(torch.float32)
 
     def rewards(self, batch: RolloutBatch, ends: NDArray[np.bool_], gamma: float) -> Any:
         """Imitation rewards (T, N) for ``batch`` (steps 3 of the module docstring)."""
@@ -328,7 +406,7 @@ class GAILTrainer:
         if cfg.absorbing:
             kinds = np.eye(N_ABSORBING, dtype=np.float32)
             abs_logits = self.logits(
-                self._absorbing_obs(obs, N_ABSORBING),
+                self.absorbing_obs(obs, N_ABSORBING),
                 self._az(np.zeros((N_ABSORBING, 1), np.float32), kinds),
             )
             r_abs = reward_from_logits(abs_logits, cfg.reward).clamp(-clip, clip).numpy()

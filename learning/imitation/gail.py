@@ -78,11 +78,14 @@ from numpy.typing import NDArray
 from torch import Tensor
 
 from learning.algorithms.base import UpdateTimes
+from learning.algorithms.device_loop import device_update, iterate_on_device, place_agent
+from learning.algorithms.device_rollout import DeviceBatch, flat_rows
 from learning.algorithms.loop import IterationStats, iterate
 from learning.algorithms.networks import refresh_batchnorm
 from learning.algorithms.rollout import Obs, RolloutBatch
 from learning.algorithms.trpo import TRPOAgent, TRPOConfig
 from learning.imitation.discriminator import (
+    N_ABSORBING,
     REWARDS,
     GAILConfig,
     GAILTrainer,
@@ -103,6 +106,7 @@ __all__ = [
     "normalize_actions",
     "reward_from_logits",
     "train_gail",
+    "train_gail_on_device",
 ]
 
 AGENT_FORMAT = "usvsim.learning.gail-agent/1"
@@ -202,6 +206,7 @@ class GAILAgent:
     """
 
     info_keys = END_INFO
+    env_reward = False  # the env's rewards are replaced by the imitation rewards
 
     def __init__(
         self,
@@ -256,7 +261,7 @@ class GAILAgent:
 
     def update(self, batch: RolloutBatch) -> GAILStats:
         """Discriminator step, imitation rewards into ``batch.rewards``, TRPO step."""
-        agent, gail, cfg = self.policy_agent, self.trainer, self.gail_config
+        agent, gail = self.policy_agent, self.trainer
         start = time.perf_counter()
         ends = end_kinds(batch)
         obs, az, abs_obs, abs_az = gail.policy_samples(batch, ends)
@@ -265,12 +270,28 @@ class GAILAgent:
         diag = gail.update_discriminator(obs, az)
         batch.rewards = gail.rewards(batch, ends, self.config.gamma)
         discriminator_s = time.perf_counter() - start
+        step = self._policy_step(lambda: agent.update(batch))
+        done = batch.episode_end & batch.valid
+        n_goal = int((ends[..., 0] & batch.terminated).sum())
+        return GAILStats(
+            goal_rate=n_goal / int(done.sum()) if done.any() else math.nan,
+            mean_reward=float(batch.rewards[batch.valid].mean()),
+            kl=step.kl,
+            entropy=step.entropy,
+            line_search_accepted=step.line_search_accepted,
+            times=dataclasses.replace(step.times, discriminator_s=discriminator_s),
+            **diag,
+        )
+
+    def _policy_step(self, update: Callable[[], Any]) -> Any:
+        """The TRPO step ``update()`` with GAIL's warm-up and frozen input statistics."""
+        agent, cfg = self.policy_agent, self.gail_config
         # warm-up: the critic learns the imitation reward's values (and D its task) before
         # the first policy step, so that noisy advantages do not undo the cloned policy
         frozen = agent.iteration < cfg.policy_warmup
         agent.config = dataclasses.replace(self.config, max_kl=1e-9) if frozen else self.config
         saved = _input_stats(agent) if cfg.freeze_input_stats else None
-        step = agent.update(batch)
+        step = update()
         agent.config = self.config
         if saved is not None:
             # GAIL drives the state distribution towards the expert's, so the expert's input
@@ -279,11 +300,50 @@ class GAILAgent:
             # radar: a cloned 15/15 policy fell to 1/15 in 10 iterations with its step frozen)
             agent.normalizer.load_state_dict(saved[0])
             agent.policy.load_state_dict(saved[1], strict=False)
-        done = batch.episode_end & batch.valid
+        return step
+
+    # -- on a torch device (issue 40; learning.algorithms.device_loop.iterate_on_device) ------
+
+    def place(self, device: torch.device) -> None:
+        """Move the policy agent and the discriminator (with its expert samples) to
+        ``device``."""
+        place_agent(self.policy_agent, device)
+        self.trainer.to(device)
+
+    def update_on_device(self, batch: DeviceBatch) -> GAILStats:
+        """:meth:`update` on a :class:`learning.algorithms.device_rollout.DeviceBatch` (every
+        step valid; ``batch.info`` holds :data:`END_INFO`): discriminator step, imitation
+        rewards, TRPO step, all on the batch's device (the discriminator's minibatch indices
+        drawn on the CPU, as on the CPU path). A discriminator on another view of the state
+        (``disc_observation="scene"``) is not supported here."""
+        gail = self.trainer
+        if self.obs_info_keys:
+            raise ValueError("GAIL on a device: the discriminator sees the policy's observation")
+        start = time.perf_counter()
+        T, N = batch.rewards.shape
+        goal, hit = batch.info[END_INFO[0]], batch.info[END_INFO[1]]
+        ends = torch.stack([goal, hit & ~goal], dim=-1)  # end_kinds
+        obs = gail.disc_obs_tensor(flat_rows(batch.obs))
+        az = gail.az_tensor(batch.actions.reshape(T * N, *batch.actions.shape[2:]))
+        kinds = (ends & batch.terminated[..., None]).reshape(-1, N_ABSORBING)
+        kinds = kinds[kinds.any(dim=1)]  # one read of its size a batch, not a step
+        pol_obs, pol_az = obs, az
+        if kinds.shape[0]:
+            zero_a = torch.zeros((kinds.shape[0], 1), dtype=torch.float32, device=az.device)
+            abs_obs = gail.absorbing_obs(obs, kinds.shape[0])
+            pol_obs = cat_obs([obs, abs_obs])
+            pol_az = torch.cat([az, gail.az_tensor(zero_a, kinds.to(torch.float32))])
+        diag = gail.update_discriminator(pol_obs, pol_az)
+        rewards = gail.rewards_tensor(obs, az, batch.terminated, ends, batch.log_probs,
+                                      self.config.gamma)  # fmt: skip
+        discriminator_s = time.perf_counter() - start
+        imitation = dataclasses.replace(batch, rewards=rewards)
+        step = self._policy_step(lambda: device_update(self.policy_agent, imitation))
+        done = int(batch.episode_end.sum())
         n_goal = int((ends[..., 0] & batch.terminated).sum())
         return GAILStats(
-            goal_rate=n_goal / int(done.sum()) if done.any() else math.nan,
-            mean_reward=float(batch.rewards[batch.valid].mean()),
+            goal_rate=n_goal / done if done else math.nan,
+            mean_reward=float(rewards.mean()),
             kl=step.kl,
             entropy=step.entropy,
             line_search_accepted=step.line_search_accepted,
@@ -339,3 +399,30 @@ def train_gail(
         return iterate(agent, env, callback)
     finally:
         env.close()
+
+
+def train_gail_on_device(
+    gail_config: GAILConfig,
+    trpo_config: TRPOConfig,
+    make_env: Callable[[int], Any],
+    expert: ExpertData,
+    *,
+    callback: Callable[[IterationStats, GAILAgent], bool | None] | None = None,
+    state: dict[str, Any] | None = None,
+) -> GAILAgent:
+    """:func:`train_gail` on a torch env (``make_env(num_envs)``:
+    :class:`usvsim.task.torch_env.TorchPoleAvoidanceEnv` or
+    :class:`usvsim.task.torch_openwater.TorchOpenWaterEnv`): rollouts, the discriminator's
+    steps, the imitation rewards, GAE and the TRPO step on the env's device
+    (:func:`learning.algorithms.device_loop.iterate_on_device`); behavioural cloning and the
+    callback (validation, checkpoints) on the CPU."""
+    env = make_env(trpo_config.num_envs)
+    agent = GAILAgent(
+        env.single_observation_space, env.single_action_space, trpo_config, gail_config, expert
+    )
+    if state is not None:
+        agent.load_state_dict(state)
+    elif gail_config.bc_epochs > 0:
+        agent.warm_start()
+    result: GAILAgent = iterate_on_device(agent, env, callback)
+    return result

@@ -114,12 +114,27 @@ def test_torch_cpu_trains_the_reactive_colreg_setup(
     assert load_checkpoint(tmp_path / "best.pt").setup == "rl-gaussian-radar-colreg-reactive"
 
 
+def test_torch_cpu_trains_gail(tmp_path: Path) -> None:
+    """il-categorical-positional by GAIL on the torch study env: two iterations, the
+    discriminator's state saved beside latest.pt, a cpu run's validation columns."""
+    args = _args(tmp_path, setup="il-categorical-positional", iterations=2, n_envs=8)
+    assert run(args) == 0
+    with (tmp_path / "log.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["env_steps"]) for r in rows] == [8 * 64, 2 * 8 * 64]
+    assert all(r["val_successes"] != "" and r["disc_loss"] != "" for r in rows)
+    assert (tmp_path / "latest.gail.pt").is_file()
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert "--device torch-cpu" in summary["command"]
+
+
 @pytest.mark.parametrize(
     ("setup", "device", "message"),
     [
         ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional"),
         ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional"),
-        ("il-gaussian-positional", "torch-cpu", "is for the TRPO positional"),
+        ("il-gaussian-radar", "torch-cpu", "trains GAIL for the IL positional"),
+        ("il-gaussian-radar-ow", "torch-cpu", "discriminator sees the policy's observation"),
         ("rl-gaussian-positional", "gpu", "--device must be one of cpu, torch-cpu, cuda"),
     ],
 )
