@@ -389,16 +389,25 @@ def train_gail(
     """
     env = make_vector_env(trpo_config.num_envs)
     try:
-        agent = GAILAgent(
-            env.single_observation_space, env.single_action_space, trpo_config, gail_config, expert
-        )
-        if state is not None:
-            agent.load_state_dict(state)
-        elif gail_config.bc_epochs > 0:
-            agent.warm_start()
-        return iterate(agent, env, callback)
+        return iterate(_started_agent(env, gail_config, trpo_config, expert, state), env, callback)
     finally:
         env.close()
+
+
+def _started_agent(
+    env: Any, gail_config: GAILConfig, trpo_config: TRPOConfig, expert: ExpertData,
+    state: dict[str, Any] | None,
+) -> GAILAgent:  # fmt: skip
+    """A GAIL agent for ``env``'s spaces: resumed from ``state``, else cloned from the expert
+    when the config asks for behavioural cloning."""
+    agent = GAILAgent(
+        env.single_observation_space, env.single_action_space, trpo_config, gail_config, expert
+    )
+    if state is not None:
+        agent.load_state_dict(state)
+    elif gail_config.bc_epochs > 0:
+        agent.warm_start()
+    return agent
 
 
 def train_gail_on_device(
@@ -417,12 +426,6 @@ def train_gail_on_device(
     (:func:`learning.algorithms.device_loop.iterate_on_device`); behavioural cloning and the
     callback (validation, checkpoints) on the CPU."""
     env = make_env(trpo_config.num_envs)
-    agent = GAILAgent(
-        env.single_observation_space, env.single_action_space, trpo_config, gail_config, expert
-    )
-    if state is not None:
-        agent.load_state_dict(state)
-    elif gail_config.bc_epochs > 0:
-        agent.warm_start()
+    agent = _started_agent(env, gail_config, trpo_config, expert, state)
     result: GAILAgent = iterate_on_device(agent, env, callback)
     return result

@@ -72,21 +72,8 @@ def test_device_rewards_and_discriminator_step_equal_the_cpu_path() -> None:
         np.testing.assert_array_equal(got.numpy(), want)
 
 
-class _Greedy:
-    observation, action = "positional", "gaussian"
-
-    def __init__(self, agent: object) -> None:
-        self.agent = agent
-
-    def reset(self, n_boats: int) -> None:
-        pass
-
-    def act(self, obs: np.ndarray) -> np.ndarray:
-        return self.agent.act(obs)  # type: ignore[attr-defined]
-
-
 @pytest.mark.slow
-def test_gail_on_the_device_makes_the_policy_more_expert_like() -> None:
+def test_gail_on_the_device_makes_the_policy_more_expert_like(greedy: type) -> None:
     """test_gail's learning test on the torch study env (torch-cpu): 40 iterations of 16 boats
     x 64 decisions make the greedy policy's paths nearer the expert's than an untrained
     policy's. Measured (one thread): path distance 25.7 m untrained, 5.9 m after (seed 0);
@@ -107,7 +94,7 @@ def test_gail_on_the_device_makes_the_policy_more_expert_like() -> None:
     reference = expert_reference(validation_episodes(), n_samples=4)
     untrained = TRPOAgent(spaces.Box(-np.inf, np.inf, (4,), dtype=np.float32),
                           action_space("gaussian"), TRPOConfig())  # fmt: skip
-    before = helmsman_likeness(_Greedy(untrained), reference=reference)
+    before = helmsman_likeness(greedy(untrained), reference=reference)
     cfg = TRPOConfig(seed=0, iterations=40, num_envs=16, steps_per_env=64, max_kl=0.02)
     rewards: list[float] = []
     threads = torch.get_num_threads()
@@ -119,6 +106,6 @@ def test_gail_on_the_device_makes_the_policy_more_expert_like() -> None:
         )  # fmt: skip
     finally:
         torch.set_num_threads(threads)
-    after = helmsman_likeness(_Greedy(agent), reference=reference)
+    after = helmsman_likeness(greedy(agent), reference=reference)
     assert len(rewards) == 40
     assert after.path_distance_m < 0.7 * before.path_distance_m, (before, after)

@@ -146,30 +146,17 @@ def test_same_seed_same_run(expert: ExpertData) -> None:
     assert a == b
 
 
-class _Greedy:
-    observation, action = "positional", "gaussian"
-
-    def __init__(self, agent: TRPOAgent) -> None:
-        self.agent = agent
-
-    def reset(self, n_boats: int) -> None:
-        pass
-
-    def act(self, obs: np.ndarray) -> np.ndarray:
-        return self.agent.act(obs)
-
-
 @pytest.mark.slow
-def test_short_gail_run_makes_the_policy_more_expert_like(expert: ExpertData) -> None:
+def test_short_gail_run_makes_the_policy_more_expert_like(expert: ExpertData, greedy: type) -> None:
     reference = expert_reference(validation_episodes(), n_samples=4)
     untrained = TRPOAgent(
         spaces.Box(-np.inf, np.inf, (4,), dtype=np.float32),
         action_space("gaussian"),
         TRPOConfig(),
     )
-    before = helmsman_likeness(_Greedy(untrained), reference=reference)
+    before = helmsman_likeness(greedy(untrained), reference=reference)
     agent, _ = _gail_run(expert, 40)
-    after = helmsman_likeness(_Greedy(agent), reference=reference)
+    after = helmsman_likeness(greedy(agent), reference=reference)
     assert after.path_distance_m < 0.7 * before.path_distance_m
     assert math.isfinite(after.action_distance_deg)
 
