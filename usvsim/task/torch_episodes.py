@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 import torch
@@ -52,6 +52,8 @@ __all__ = [
     "ReplayNoise",
     "TorchEpisodes",
     "episode_geometry_torch",
+    "faulty_sensor_inputs",
+    "gnss_slots",
 ]
 
 EpisodeSource = Literal["numpy", "device"]
@@ -321,3 +323,31 @@ class OutlierDraws:
             z[drawing] = self._streams.for_boats(drawing).standard_normal((drawing.size, g))
             self._streams.for_boats(None)
         return torch.as_tensor(z, dtype=self.dtype, device=self.device)
+
+
+def gnss_slots(layout: Any) -> list[tuple[int, int]]:
+    """(plant step j, input e) of every GNSS error among a decision's filter inputs
+    (``layout``: :class:`usvsim.task.torch_env.ClosedLoop`'s; the CPU batch's
+    ``gnss_index``)."""
+    return [(j, e) for j, cols in enumerate(layout.index) for e in range(1, 5) if cols[e] >= 0]
+
+
+def faulty_sensor_inputs(
+    layout: Any, slots: list[tuple[int, int]], normals: torch.Tensor, gnss: torch.Tensor,
+    outlier_normals: torch.Tensor, time_s: torch.Tensor,
+) -> list[tuple[Any, ...]]:  # fmt: skip
+    """The filter's per-step inputs of one decision with the open-water episodes' GNSS faults
+    (``BoatDisturbances.perturb_normals`` and the dropout mask): ``normals`` (N, draws) the
+    decision's standard normals, ``gnss`` (N, 6) each boat's fault row (the episode table's),
+    ``outlier_normals`` (N, G) the outlier draws of the G ``slots`` (:func:`gnss_slots`),
+    ``time_s`` (N, T) the episode time at each plant step."""
+    scale, threshold, outlier_scale = gnss[:, 0:1], gnss[:, 1:2], gnss[:, 2:3]
+    factor = torch.where(outlier_normals < threshold, scale * outlier_scale, scale)  # (N, G)
+    available = ~((time_s >= gnss[:, 3:4]) & (time_s < gnss[:, 4:5]))
+    es = [list(e) for e in layout.step_inputs(normals)]
+    for g, (j, k) in enumerate(slots):  # the GNSS entries of a decision
+        es[j][k] = normals[:, layout.index[j][k]] * factor[:, g]
+    for j in range(len(es)):
+        if layout.gps[j]:
+            es[j][6] = es[j][6] * available[:, j].to(normals.dtype)
+    return [tuple(e) for e in es]

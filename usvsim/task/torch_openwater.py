@@ -69,7 +69,14 @@ from usvsim.task.torch_env import (
     single_action_space,
     torch_heading_change,
 )
-from usvsim.task.torch_episodes import DeviceNoise, NoiseSource, OutlierDraws, ReplayNoise
+from usvsim.task.torch_episodes import (
+    DeviceNoise,
+    NoiseSource,
+    OutlierDraws,
+    ReplayNoise,
+    faulty_sensor_inputs,
+    gnss_slots,
+)
 from usvsim.task.torch_observations import (
     TorchObservation,
     relative_polar_torch,
@@ -194,9 +201,7 @@ class TorchOpenWaterEnv:
         self.device, self.dtype = self.plant.device, self.plant.dtype
         self.observation_dtype = DTYPES[observation_dtype]
         # the GNSS columns of a decision's normals, step by step (the CPU batch's gnss_index)
-        self._gnss_slots = [
-            (j, e) for j, cols in enumerate(self.layout.index) for e in range(1, 5) if cols[e] >= 0
-        ]
+        self._gnss_slots = gnss_slots(self.layout)
         self._replay = noise == "replay"
         self.noise: NoiseSource = (ReplayNoise if self._replay else DeviceNoise)(
             n, self.device, self.dtype
@@ -357,25 +362,6 @@ class TorchOpenWaterEnv:
         return {"radar": image, "goal": standardized_goal(r_g[:, 0], b_g[:, 0])}
 
     # ----------------------------------------------------------------------------- step
-    def _sensor_inputs(self, normals: torch.Tensor) -> list[tuple[Any, ...]]:
-        """The filter's per-step inputs with the episodes' GNSS faults
-        (``BoatDisturbances.perturb_normals`` and the dropout mask)."""
-        gnss = self._take("gnss")
-        scale, threshold, outlier_scale = gnss[:, 0:1], gnss[:, 1:2], gnss[:, 2:3]
-        jump = self._outliers.normals(len(self._gnss_slots)) < threshold
-        factor = torch.where(jump, scale * outlier_scale, scale)  # (N, G)
-        t = (self._n_dec.to(self.dtype) * self.scenario.decision_period_s)[:, None] + (
-            self.scenario.dt_s * self._steps.to(self.dtype)
-        )  # (N, T) episode time at each plant step
-        available = ~((t >= gnss[:, 3:4]) & (t < gnss[:, 4:5]))
-        es = [list(e) for e in self.layout.step_inputs(normals)]
-        for g, (j, k) in enumerate(self._gnss_slots):  # the GNSS entries of a decision
-            es[j][k] = normals[:, self.layout.index[j][k]] * factor[:, g]
-        for j in range(self.T):
-            if self.layout.gps[j]:
-                es[j][6] = es[j][6] * available[:, j].to(self.dtype)
-        return [tuple(e) for e in es]
-
     @torch.no_grad()
     def step(
         self, actions: Any
@@ -390,7 +376,13 @@ class TorchOpenWaterEnv:
         )  # fmt: skip
         cur = self._take("current")
         w: Columns = (torch_ssa(self._n[8] + dpsi), self._take("speed_mps"), cur[:, 0], cur[:, 1])
-        es = self._sensor_inputs(self.noise.decision_normals(self.layout.draws))
+        t_plant = (self._n_dec.to(self.dtype) * sc.decision_period_s)[:, None] + (
+            sc.dt_s * self._steps.to(self.dtype)
+        )  # (N, T) episode time at each plant step
+        es = faulty_sensor_inputs(
+            self.layout, self._gnss_slots, self.noise.decision_normals(self.layout.draws),
+            self._take("gnss"), self._outliers.normals(len(self._gnss_slots)), t_plant,
+        )  # fmt: skip
         s, n = tuple(self._s.unbind(0)), tuple(self._n.unbind(0))
         xs, ys = [], []
         if self._weather is None:
