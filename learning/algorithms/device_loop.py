@@ -142,6 +142,7 @@ def iterate_on_device(
     collector = DeviceRolloutCollector(
         env, cfg.gamma, cfg.seed + agent.iteration, bounds, info_keys=tuple(agent.info_keys),
         env_reward=getattr(agent, "env_reward", True),
+        obs_info_keys=tuple(getattr(agent, "obs_info_keys", ())),
     )  # fmt: skip
     # an agent with its own update on the device (GAIL: its discriminator too) places itself
     place = getattr(agent, "place", None) or (lambda d: place_agent(agent, d))

@@ -28,6 +28,8 @@ truncated          (T, N)        time limit
 episode_sums       (3,)          episodes ended, their returns' sum, their lengths' sum
 info[key]          (T, N)        boolean ``info[key]`` per step, for the ``info_keys`` asked
                                  (GAIL: how each episode ended)
+aux[key]           (T, N, ...)   ``info[key]`` describing s_t, for the ``obs_info_keys`` asked
+                                 (an asymmetric GAIL's discriminator view)
 =================  ============  ============================================================
 
 Every transition is valid (``SAME_STEP``: no reset-only steps).
@@ -184,6 +186,7 @@ class DeviceBatch:
     truncated: Tensor
     episode_sums: Tensor
     info: dict[str, Tensor] = field(default_factory=dict)
+    aux: dict[str, Tensor] = field(default_factory=dict)
 
     @property
     def episode_end(self) -> Tensor:
@@ -197,7 +200,9 @@ class DeviceRolloutCollector:
     ``out_of_area`` and ``time_s`` in ``info``), ``scenario`` (``max_decisions``,
     ``decision_period_s``), ``device``, ``num_envs``. ``gamma``: the trainer's discount, for
     the fixed horizon. ``action_bounds`` (low, high) clip Box actions on the way to the env.
-    ``info_keys``: boolean ``info`` entries kept per step (:attr:`DeviceBatch.info`).
+    ``info_keys``: boolean ``info`` entries kept per step (:attr:`DeviceBatch.info`);
+    ``obs_info_keys``: ``info`` entries describing the observation returned with them, at reset
+    and every step (:attr:`DeviceBatch.aux`).
     ``env_reward`` False: the env's rewards are not the trainer's (GAIL), so no fixed horizon
     is added and the env's own terminations stand, as on the CPU path.
     """
@@ -210,13 +215,15 @@ class DeviceRolloutCollector:
         action_bounds: tuple[float, float] | None = None,
         info_keys: tuple[str, ...] = (),
         env_reward: bool = True,
+        obs_info_keys: tuple[str, ...] = (),
     ) -> None:
         self.env, self.gamma, self.n = env, gamma, env.num_envs
-        self.info_keys = info_keys
+        self.info_keys, self.obs_info_keys = info_keys, obs_info_keys
         self.device = torch.device(env.device)
         self.bounds = action_bounds
         self.generator = torch.Generator(device=self.device).manual_seed(seed + 2)
-        obs, _ = env.reset(seed=seed)
+        obs, info = env.reset(seed=seed)
+        self.aux = self._aux(info)
         # an env on the fixed horizon applies it itself (the open-water env: each episode's own
         # time limit); the study's env returns the episode's rewards, and the collector adds it
         self._own_horizon = env_reward and getattr(env, "reward_horizon", "episode") != "fixed"
@@ -243,10 +250,13 @@ class DeviceRolloutCollector:
         truncated = torch.empty((T, N), dtype=torch.bool, device=dev)
         sums = torch.zeros(3, dtype=torch.float64, device=dev)
         info_buf = {k: torch.empty((T, N), dtype=torch.bool, device=dev) for k in self.info_keys}
+        aux_buf = {k: x.new_empty((T, *x.shape)) for k, x in self.aux.items()}
         actions_buf: Tensor | None = None
         for t in range(T):
             for key, x in _parts(self.obs).items():
                 obs_buf[key][t] = x
+            for key, x in self.aux.items():
+                aux_buf[key][t] = x
             dist = policy(normalise(self.obs))
             actions = dist.sample(self.generator)
             if actions_buf is None:
@@ -274,7 +284,7 @@ class DeviceRolloutCollector:
             sums += torch.stack([d.sum(), (d * self._ep_return).sum(), (d * self._ep_length).sum()])
             self._ep_return *= 1.0 - d
             self._ep_length *= 1.0 - d
-            self.obs = obs
+            self.obs, self.aux = obs, self._aux(info)
         assert actions_buf is not None
         if isinstance(self.obs, dict):
             obs_out: TensorObs = dict(obs_buf)
@@ -282,4 +292,11 @@ class DeviceRolloutCollector:
         else:
             obs_out, next_out = obs_buf[""], next_buf[""]
         return DeviceBatch(obs_out, next_out, actions_buf, log_probs, rewards, terminated,
-                           truncated, sums, info_buf)  # fmt: skip
+                           truncated, sums, info_buf, aux_buf)  # fmt: skip
+
+    def _aux(self, info: dict[str, Any]) -> dict[str, Tensor]:
+        """The ``obs_info_keys`` entries of ``info`` (``KeyError`` naming one absent)."""
+        missing = [k for k in self.obs_info_keys if k not in info]
+        if missing:
+            raise KeyError(f"the env's info has no {missing[0]!r} (obs_info_keys)")
+        return {k: info[k] for k in self.obs_info_keys}

@@ -71,11 +71,10 @@ and steps: :mod:`learning.experiments.run_log`; needs ``pip install "usvsim[tens
 
 ``--device {cpu,torch-cpu,cuda}`` (the TRPO positional setups, the open-water scene and radar
 setups ``rl-*-scene-ow``, ``rl-*-radar-ow`` and their ``-ft``, ``-cont``, the ``rl-*-colreg``
-setups; GAIL for ``il-*-positional`` and the ``il-*-ow`` / ``-colreg`` setups whose
-discriminator sees the policy's observation): ``cpu`` (the default) steps the CPU env with NumPy
-arrays; ``torch-cpu`` and ``cuda`` train with the torch env (the study task's, or the open-water
-one on the setup's training family), rollouts, GAE, the TRPO step and GAIL's discriminator on
-that device (:mod:`learning.algorithms.device_loop`,
+setups; GAIL for ``il-*-positional`` and the ``il-*-ow`` / ``-colreg`` setups): ``cpu`` (the
+default) steps the CPU env with NumPy arrays; ``torch-cpu`` and ``cuda`` train with the torch
+env (the study task's, or the open-water one on the setup's training family), rollouts, GAE,
+the TRPO step and GAIL's discriminator on that device (:mod:`learning.algorithms.device_loop`,
 :func:`learning.imitation.gail.train_gail_on_device`); validation, checkpoints and files are
 those of a ``cpu`` run. Another setup, or ``cuda`` where torch sees no GPU: one line, exit 2.
 

@@ -146,17 +146,17 @@ def il_device_env_maker(setup: Any, device: str) -> Any:
     """``make_env(num_envs)`` of the torch env a GAIL run of ``setup`` steps on ``device``
     (``"torch-cpu"`` or ``"cuda"``): the study task's for the positional setups, the open-water
     one on the setup's training family for the ``-ow`` and ``-colreg`` setups, episode rewards
-    (GAIL replaces them). ``ValueError`` for a setup it cannot train: the study task's radar, or
-    a discriminator that sees another view than the policy (``disc_observation="scene"``)."""
+    (GAIL replaces them), with the scene in ``info`` where the discriminator sees it
+    (``disc_observation="scene"``). ``ValueError`` for a setup it cannot train: the study
+    task's radar."""
     if device not in DEVICE_DTYPES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
     open_water = setup.task == "open-water" and setup.observation in ("scene", "radar+goal")
     study = setup.task != "open-water" and setup.observation == "positional"
-    if setup.gail.disc_observation != "policy" or not (open_water or study):
+    if not (open_water or study):
         raise ValueError(
-            f"--device {device} trains GAIL for the IL positional and open-water setups whose "
-            f"discriminator sees the policy's observation (il-*-positional, il-*-scene-ow, "
-            f"il-gaussian-scene-colreg), not {setup.name!r}"
+            f"--device {device} trains GAIL for the IL positional and open-water setups "
+            f"(il-*-positional, il-*-ow, il-*-colreg), not {setup.name!r}"
         )
     dtype = DEVICE_DTYPES[device]
     if open_water:
@@ -165,6 +165,7 @@ def il_device_env_maker(setup: Any, device: str) -> Any:
         return lambda n: TorchOpenWaterEnv(
             n, family=setup.training_family, per_boat=max(16, OPEN_WATER_TABLE_EPISODES // n),
             device=device, dtype=dtype, action=setup.action, observation=setup.observation,
+            info_observation=None if setup.gail.disc_observation == "policy" else "scene",
         )  # fmt: skip
     from usvsim.task.torch_env import TorchPoleAvoidanceEnv
 

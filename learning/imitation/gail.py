@@ -315,15 +315,14 @@ class GAILAgent:
         step valid; ``batch.info`` holds :data:`END_INFO`): discriminator step, imitation
         rewards, TRPO step, all on the batch's device (the discriminator's minibatch indices
         drawn on the CPU, as on the CPU path). A discriminator on another view of the state
-        (``disc_observation="scene"``) is not supported here."""
+        (``disc_observation="scene"``) reads it from ``batch.aux``."""
         gail = self.trainer
-        if self.obs_info_keys:
-            raise ValueError("GAIL on a device: the discriminator sees the policy's observation")
         start = time.perf_counter()
         T, N = batch.rewards.shape
         goal, hit = batch.info[END_INFO[0]], batch.info[END_INFO[1]]
         ends = torch.stack([goal, hit & ~goal], dim=-1)  # end_kinds
-        obs = gail.disc_obs_tensor(flat_rows(batch.obs))
+        view = batch.aux[self.obs_info_keys[0]] if self.obs_info_keys else batch.obs
+        obs = gail.disc_obs_tensor(flat_rows(view))
         az = gail.az_tensor(batch.actions.reshape(T * N, *batch.actions.shape[2:]))
         kinds = (ends & batch.terminated[..., None]).reshape(-1, N_ABSORBING)
         kinds = kinds[kinds.any(dim=1)]  # one read of its size a batch, not a step

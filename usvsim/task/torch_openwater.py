@@ -141,17 +141,13 @@ class TorchOpenWaterEnv:
     scenario : Scenario, optional
         Decision period, plant step, goal radius, safety distance (default the study's).
     reward : GaussianReward, optional
-    colreg_reward : ColregRewardWeights, optional
-        Add the COLREG terms (:mod:`usvsim.task.torch_colreg`; ``info["reward_colreg"]`` and
-        ``info["reward_colreg_<term>"]``), as ``OpenWaterVectorEnv(colreg_reward=...)``.
-    on_decision : object, optional
-        ``reset(env, boats)`` when ``boats`` (N,) bool start episodes and ``steer(env, time_s)``
-        after each decision's reward, before the observation: may replace ``env.discs``'
-        vessel motion (reactive targets: :class:`usvsim.evaluation.torch_reactive.
-        DeviceReactiveTargets`), as ``OpenWaterVectorEnv(on_decision=...)``.
+    colreg_reward, info_observation ("scene"), on_decision : optional
+        As ``OpenWaterVectorEnv``'s: the COLREG terms (:mod:`usvsim.task.torch_colreg`),
+        ``info["observation_scene"]`` of the observation returned, and a hook with
+        ``reset(env, boats)`` at restarts and ``steer(env, time_s)`` after the reward that may
+        replace ``env.discs``' vessel motion (:mod:`usvsim.evaluation.torch_reactive`).
     compile : bool
-        Run a plant step + filter step through ``torch.compile`` (for a GPU; the study env's
-        :func:`usvsim.task.torch_env.compiled_substep`), ``compile_backend`` its backend.
+        A plant + filter step through ``torch.compile`` (``compile_backend``; for a GPU).
     """
 
     def __init__(
@@ -173,6 +169,7 @@ class TorchOpenWaterEnv:
         reward: GaussianReward | None = None,
         colreg_reward: ColregRewardWeights | None = None,
         on_decision: Any = None,
+        info_observation: str | None = None,
         compile: bool = False,
         compile_backend: str = "inductor",
     ) -> None:
@@ -188,6 +185,8 @@ class TorchOpenWaterEnv:
             raise ValueError("give family or table, not both")
         if per_boat < 1:
             raise ValueError(f"per_boat must be >= 1, got {per_boat}")
+        if info_observation not in (None, "scene"):
+            raise ValueError(f"info_observation must be None or 'scene', got {info_observation!r}")
         self.reward = reward or GaussianReward()
         if not isinstance(self.reward, GaussianReward):
             raise ValueError("the torch open-water env computes the GaussianReward only")
@@ -218,19 +217,14 @@ class TorchOpenWaterEnv:
         self._compile_backend = compile_backend if compile else None
         self._weather: Any = None  # the weather kernel, where the table has weather
         self._colreg_weights, self.on_decision = colreg_reward, on_decision
+        self.info_observation = info_observation
         self._colreg: TorchColregReward | None = None  # built with the table (its vessel slots)
         self._ready = False
 
     # ----------------------------------------------------------------------------- tables
     def _upload(self, table: OpenWaterTable) -> None:
         """The table's arrays on the device, and each row's start state (plant, controller)."""
-
-        def put(a: np.ndarray) -> torch.Tensor:
-            if a.dtype == np.bool_ or a.dtype == np.int64:
-                return torch.as_tensor(a, device=self.device)
-            return torch.as_tensor(a, dtype=self.dtype, device=self.device)
-
-        self._table = {name: put(value) for name, value in vars(table).items() if value is not None}
+        self._table = table.on_device(self.device, self.dtype)
         self._weather = None
         if table.in_weather:
             self._weather = load_weather_kernel(self.plant.vessel, None, self.plant.dt_s)
@@ -279,7 +273,10 @@ class TorchOpenWaterEnv:
         everyone = torch.ones(n, dtype=torch.bool, device=dev)
         obs = self._restart(everyone, self._observe(advance=None))
         self._ready = True
-        return obs, {"goal_ne": self._take("goal_ne").clone()}
+        info = {"goal_ne": self._take("goal_ne").clone()}
+        if self.info_observation is not None:
+            info["observation_scene"] = self._scene()
+        return obs, info
 
     def _take(self, name: str) -> torch.Tensor:
         """Table field ``name`` at every boat's current row."""
@@ -334,15 +331,11 @@ class TorchOpenWaterEnv:
         """Every boat's observation from its estimate and the discs now; a radar image draws
         each boat's current frame, and the boats ``advance`` (N,) bool (None: none) move on to
         their next frame (``OpenWaterBatch._observe`` draws one frame per observation)."""
-        t_s = self._n_dec.to(self.dtype) * self.scenario.decision_period_s
-        centres, velocity = self.discs.at(t_s)
-        pos, psi, goal = self._n[0:2].T, self._n[8], self._take("goal_ne")
         if self.observation_kind == "scene":
-            obs = scene_observation_torch(
-                pos, psi, self._n[2:4].T, goal, centres, self.discs.radii_all, velocity,
-                self.discs.ok_all,
-            )  # fmt: skip
-            return obs.to(self.observation_dtype)
+            return self._scene()
+        t_s = self._n_dec.to(self.dtype) * self.scenario.decision_period_s
+        centres, _ = self.discs.at(t_s)
+        pos, psi, goal = self._n[0:2].T, self._n[8], self._take("goal_ne")
         if self.observation_kind == "positional":
             obs = positional_torch(pos, psi, goal, centres, self.discs.radii_all, self.discs.ok_all)
             return obs.to(self.observation_dtype)
@@ -360,6 +353,17 @@ class TorchOpenWaterEnv:
             return image
         r_g, b_g = relative_polar_torch(pos, psi, goal[:, None, :])
         return {"radar": image, "goal": standardized_goal(r_g[:, 0], b_g[:, 0])}
+
+    def _scene(self) -> torch.Tensor:
+        """Every boat's ``scene`` observation from its estimate and the discs now."""
+        centres, velocity = self.discs.at(
+            self._n_dec.to(self.dtype) * self.scenario.decision_period_s
+        )
+        obs = scene_observation_torch(
+            self._n[0:2].T, self._n[8], self._n[2:4].T, self._take("goal_ne"), centres,
+            self.discs.radii_all, velocity, self.discs.ok_all,
+        )  # fmt: skip
+        return obs.to(self.observation_dtype)
 
     # ----------------------------------------------------------------------------- step
     @torch.no_grad()
@@ -466,6 +470,8 @@ class TorchOpenWaterEnv:
             **extra,
         }
         obs = self._restart(terminated | truncated, obs)
+        if self.info_observation is not None:  # of the observation returned (after restarts)
+            info["observation_scene"] = self._scene()
         return obs, reward, terminated, truncated, info
 
     # ----------------------------------------------------------------------------- state

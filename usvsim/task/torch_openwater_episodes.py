@@ -101,6 +101,18 @@ class OpenWaterTable:
     def n_episodes(self) -> int:
         return int(self.speed_mps.shape[0])
 
+    def on_device(self, device: Any, dtype: Any) -> dict[str, Any]:
+        """Every field present as a torch tensor on ``device``: booleans and int64 as they
+        are, floats in ``dtype``."""
+        import torch  # here: packing a table needs no torch
+
+        def put(a: np.ndarray) -> Any:
+            if a.dtype == np.bool_ or a.dtype == np.int64:
+                return torch.as_tensor(a, device=device)
+            return torch.as_tensor(a, dtype=dtype, device=device)
+
+        return {f.name: put(v) for f in fields(self) if (v := getattr(self, f.name)) is not None}
+
     def save(self, path: str | Path) -> None:
         """Write the table to ``path`` (``.npz``), atomically (a temporary file, then renamed)."""
         path = Path(path)

@@ -134,7 +134,6 @@ def test_torch_cpu_trains_gail(tmp_path: Path) -> None:
         ("rl-gaussian-radar", "torch-cpu", "is for the TRPO positional"),
         ("rl-categorical-positional-ppo", "torch-cpu", "is for the TRPO positional"),
         ("il-gaussian-radar", "torch-cpu", "trains GAIL for the IL positional"),
-        ("il-gaussian-radar-ow", "torch-cpu", "discriminator sees the policy's observation"),
         ("rl-gaussian-positional", "gpu", "--device must be one of cpu, torch-cpu, cuda"),
     ],
 )

@@ -109,3 +109,47 @@ def test_gail_on_the_device_makes_the_policy_more_expert_like(greedy: type) -> N
     after = helmsman_likeness(greedy(agent), reference=reference)
     assert len(rewards) == 40
     assert after.path_distance_m < 0.7 * before.path_distance_m, (before, after)
+
+
+def test_asymmetric_gail_reads_the_scene_from_the_rollout() -> None:
+    """A radar policy whose discriminator sees the true scene (il-gaussian-radar-ow's view) on
+    the torch open-water env: the rollout keeps info["observation_scene"] of each s_t in
+    ``aux`` (reset's first, then each step's), and a GAIL iteration trains D on it."""
+    import dataclasses
+
+    from learning.algorithms.trpo import TRPOConfig
+    from learning.imitation.demonstrations import load_recordings
+    from learning.imitation.discriminator import GAILConfig
+    from learning.imitation.family_demos import FAMILY_DEMOS_DIR
+    from learning.imitation.gail import train_gail_on_device
+    from learning.imitation.preprocess import expert_data
+    from usvsim.task.openwater_env import OPEN_WATER_FAMILY
+    from usvsim.task.torch_openwater import TorchOpenWaterEnv
+
+    runs = load_recordings(FAMILY_DEMOS_DIR).recordings[:3]
+    data = expert_data(runs, "radar+goal", "gaussian")
+    data = dataclasses.replace(data, disc_obs=expert_data(runs, "scene", "gaussian").obs)
+
+    def make_env(n: int) -> TorchOpenWaterEnv:
+        return TorchOpenWaterEnv(n, family=OPEN_WATER_FAMILY, per_boat=4, observation="radar+goal",
+                                 info_observation="scene")  # fmt: skip
+
+    env = make_env(3)
+    _, first = env.reset(seed=5)
+    collector = DeviceRolloutCollector(env, 0.99, 5, (-1.0, 1.0),
+                                       obs_info_keys=("observation_scene",))  # fmt: skip
+    from learning.algorithms.trpo import TRPOAgent
+
+    agent = TRPOAgent(env.single_observation_space, env.single_action_space, TRPOConfig())
+    batch = collector.collect(agent.policy, DeviceNormalizer(agent.normalizer, env.device), 4)
+    scene = batch.aux["observation_scene"]
+    assert scene.shape == (4, 3, 52)
+    torch.testing.assert_close(scene[0], first["observation_scene"], rtol=0, atol=0)
+    cfg = TRPOConfig(seed=0, iterations=1, num_envs=3, steps_per_env=8)
+    gail = GAILConfig(disc_observation="scene")
+    stats: list[object] = []
+    agent_g = train_gail_on_device(
+        gail, cfg, make_env, data, callback=lambda s, a: stats.append(s.update) and None
+    )
+    assert agent_g.iteration == 1 and np.isfinite(stats[0].disc_loss)  # type: ignore[attr-defined]
+    assert agent_g.trainer.disc_space.shape == (52,)

@@ -463,3 +463,29 @@ def test_the_compiled_weather_step_is_one_graph_with_the_same_numbers() -> None:
     np.testing.assert_array_equal(runs[0][0], runs[1][0])
     np.testing.assert_array_equal(runs[0][1], runs[1][1])
     assert torch._dynamo.utils.counters["stats"]["unique_graphs"] == 1
+
+
+def test_info_scene_beside_a_radar_observation_equals_the_cpu_env() -> None:
+    """``info_observation="scene"`` (an asymmetric GAIL's view) beside radar+goal: the scene of
+    the observation returned, restarts included, as the CPU env's (float32 observations from
+    simulations within ~1e-8 of each other: relative 1e-6)."""
+    from usvsim.task.openwater_env import OpenWaterVectorEnv
+
+    fam = OPEN_WATER_SETS["moving-vessels"]
+    cpu = OpenWaterVectorEnv(6, observation="radar+goal", family=fam, info_observation="scene")
+    dev = TorchOpenWaterEnv(6, family=fam, noise="replay", observation="radar+goal",
+                            info_observation="scene", per_boat=16)  # fmt: skip
+    _, i_cpu = cpu.reset(seed=2)
+    _, i_dev = dev.reset(seed=2)
+    rng = np.random.default_rng(2)
+    ended = 0
+    for _ in range(60):
+        np.testing.assert_allclose(i_dev["observation_scene"].numpy(), i_cpu["observation_scene"],
+                                   rtol=1e-6, atol=1e-6)  # fmt: skip
+        a = rng.uniform(-1, 1, (6, 1))
+        _, _, te, tr, i_cpu = cpu.step(a)
+        _, _, _, _, i_dev = dev.step(torch.as_tensor(a))
+        ended += int((te | tr).sum())
+    assert ended >= 1
+    with pytest.raises(ValueError, match="info_observation"):
+        TorchOpenWaterEnv(2, family=fam, info_observation="radar")
