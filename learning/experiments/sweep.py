@@ -142,7 +142,8 @@ def train_trial(config: Mapping[str, Any], out: Path) -> None:
     }
     board = str(config.get("tensorboard", ""))  # _trainable's; "": none
     if isinstance(setup, ILSetup):
-        train_il(setup, out, threads=threads, log=lambda _: None, tensorboard=board, **common)
+        train_il(setup, out, threads=threads, log=lambda _: None, tensorboard=board,
+                 device=device, **common)  # fmt: skip
     else:
         args = {**common, "overrides": overrides, "device": device}
         train_rl(setup, out, train_args=args, tensorboard=board, device=device, **common)

@@ -168,14 +168,17 @@ class SweepSpec:
 
     def _check_device(self) -> None:
         """Every setup trains on :attr:`device` (``usvsim train --device``'s rule)."""
+        from learning.experiments.il_setups import IL_SETUPS
         from learning.experiments.setups import SETUPS
-        from learning.experiments.train_rl import device_env_maker
+        from learning.experiments.train_rl import device_env_maker, il_device_env_maker
 
-        for name in self.setups:
-            rl = SETUPS.get(name)
-            if rl is None:
-                raise ValueError(f"--device {self.device}: {name!r} is not an RL setup")
-            device_env_maker(rl, self.device)  # a ValueError naming what it takes
+        for name in self.setups:  # a ValueError naming what each takes
+            if name in SETUPS:
+                device_env_maker(SETUPS[name], self.device)
+            elif name in IL_SETUPS:
+                il_device_env_maker(IL_SETUPS[name], self.device)
+            else:
+                raise ValueError(f"--device {self.device}: no setup {name!r}")
 
     def to_json(self) -> dict[str, Any]:
         data = dataclasses.asdict(self)

@@ -530,7 +530,8 @@ def test_a_device_sweep_checks_its_setups_and_asks_for_its_gpu_share() -> None:
     assert SweepSpec.from_json(spec.to_json()) == spec
     assert trial_resources(spec) == {"cpu": 2}
     assert trial_resources(spec, 0.25) == {"cpu": 2, "gpu": 0.25}
-    refused = ("il-gaussian-positional", "rl-gaussian-radar", "rl-gaussian-radar-ppo")
+    SweepSpec("d", ("il-gaussian-positional", "il-gaussian-radar-ow"), (0,), device="torch-cpu")
+    refused = ("il-gaussian-radar", "rl-gaussian-radar", "rl-gaussian-radar-ppo")
     for name in refused:
         with pytest.raises(ValueError, match="--device torch-cpu"):
             SweepSpec("d", (name,), (0,), device="torch-cpu")
