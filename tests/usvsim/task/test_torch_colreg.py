@@ -5,6 +5,7 @@ open-water env's rewards on COLREG episodes against ``OpenWaterVectorEnv(colreg_
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 
 from usvsim.task.colreg_family import COLREG_FAMILY
@@ -121,6 +122,7 @@ def test_env_colreg_rewards_equal_the_cpu_env() -> None:
     assert seen["cpa"] > 0 and seen["starboard"] > 0, seen
 
 
+@pytest.mark.slow
 def test_env_colreg_rewards_equal_the_cpu_env_on_the_colreg_family_alone() -> None:
     seen = _run_pair(COLREG_FAMILY, 16, 200, seed=11)
     assert seen["gap"] <= 1e-8, seen
