@@ -34,8 +34,6 @@ from learning.experiments.sweep import (
 from learning.experiments.sweep_report import (
     TrialRecord,
     choose_shipped,
-    iqm,
-    probability_of_improvement,
 )
 
 
@@ -116,26 +114,6 @@ def test_trial_folders_are_distinct_per_draw() -> None:
     assert a != b and a.startswith("rl-gaussian-positional-seed1-h")
     grid = trial_dir_name("rl-gaussian-positional", 0, {"max_kl": 0.01}, "grid")
     assert grid == "rl-gaussian-positional-seed0-max_kl=0.01"
-
-
-def test_iqm_equals_rliable() -> None:
-    metrics = pytest.importorskip("rliable.metrics")  # the sweep extra
-
-    rng = np.random.default_rng(0)
-    for n in (1, 2, 3, 5, 8, 13):
-        x = rng.uniform(size=n)
-        assert iqm(x) == pytest.approx(float(metrics.aggregate_iqm(x[:, None])), abs=1e-12)
-
-
-def test_probability_of_improvement_equals_rliable() -> None:
-    metrics = pytest.importorskip("rliable.metrics")  # the sweep extra
-    rng = np.random.default_rng(1)
-    for nx, ny in ((1, 1), (3, 5), (5, 5), (4, 2)):
-        x = np.round(rng.uniform(size=nx), 1)  # ties on purpose
-        y = np.round(rng.uniform(size=ny), 1)
-        expected = float(metrics.probability_of_improvement(x[:, None], y[:, None]))
-        assert probability_of_improvement(x, y) == pytest.approx(expected, abs=1e-12)
-    assert probability_of_improvement(np.ones(3), np.ones(3)) == 0.5
 
 
 def _record(seed: int, best: int, auc: float, status: str = "finished") -> TrialRecord:
@@ -412,39 +390,6 @@ def test_config_file_and_flags_define_the_same_sweep(tmp_path: Path) -> None:
         spec_of(SweepArgs(config=str(config), seeds="0-1"))
 
 
-def test_performance_profile_equals_rliable() -> None:
-    rly = pytest.importorskip("rliable.library")  # the sweep extra
-    from learning.experiments.sweep_report import score_distribution
-
-    rng = np.random.default_rng(2)
-    taus = np.linspace(0.0, 1.0, 101)
-    scores = {"a": np.round(rng.uniform(size=(5, 1)), 2), "b": rng.uniform(size=(3, 1))}
-    for x in scores.values():
-        assert score_distribution(x, taus) == pytest.approx(rly.score_distributions(x, taus))
-    np.random.seed(3)  # noqa: NPY002 (rliable resamples with the global generator)
-    ours = rly.get_interval_estimates(scores, lambda x: score_distribution(x, taus), reps=200)
-    np.random.seed(3)  # noqa: NPY002
-    theirs = rly.get_interval_estimates(
-        scores, lambda x: rly.score_distributions(x, taus), reps=200
-    )
-    for k in scores:
-        assert ours[0][k] == pytest.approx(theirs[0][k])
-        assert ours[1][k] == pytest.approx(theirs[1][k])
-
-
-def test_bootstrap_intervals_are_reproducible_and_leave_numpy_alone() -> None:
-    pytest.importorskip("rliable")  # the sweep extra
-    from learning.experiments.sweep_report import bootstrap_intervals
-
-    x = {"a": np.random.default_rng(0).uniform(size=(5, 1))}
-    state = np.random.get_state()  # noqa: NPY002
-    first = bootstrap_intervals(x, lambda s: np.array([iqm(s[:, 0])]), 300)[1]["a"]
-    again = bootstrap_intervals(x, lambda s: np.array([iqm(s[:, 0])]), 300)[1]["a"]
-    assert np.array_equal(first, again)  # seeded: was different on every call before
-    after = np.random.get_state()  # noqa: NPY002
-    assert all(np.array_equal(a, b) for a, b in zip(state[1:], after[1:], strict=True))
-
-
 def test_config_file_values_are_range_checked_as_the_flags(tmp_path: Path) -> None:
     import dataclasses
 
@@ -518,40 +463,3 @@ def test_trials_are_reported_in_setup_then_seed_order(tmp_path: Path) -> None:
         ("rl-gaussian-radar", 0), ("rl-gaussian-radar", 1),
         ("il-gaussian-radar", 0), ("il-gaussian-radar", 1), ("il-gaussian-radar", 2),
     ]  # fmt: skip
-
-
-def test_a_device_sweep_checks_its_setups_and_asks_for_its_gpu_share() -> None:
-    """--device: every setup must train there (usvsim train --device's rule); a trial asks Ray
-    for its threads and, with a GPU share, that share."""
-    from learning.experiments.sweep import SweepSpec, trial_resources
-
-    spec = SweepSpec("d", ("rl-categorical-positional", "rl-gaussian-scene-ow"), (0,),
-                     device="torch-cpu", threads=2)  # fmt: skip
-    assert SweepSpec.from_json(spec.to_json()) == spec
-    assert trial_resources(spec) == {"cpu": 2}
-    assert trial_resources(spec, 0.25) == {"cpu": 2, "gpu": 0.25}
-    SweepSpec("d", ("il-gaussian-positional", "il-gaussian-radar-ow"), (0,), device="torch-cpu")
-    refused = ("il-gaussian-radar", "rl-gaussian-radar", "rl-gaussian-radar-ppo")
-    for name in refused:
-        with pytest.raises(ValueError, match="--device torch-cpu"):
-            SweepSpec("d", (name,), (0,), device="torch-cpu")
-
-
-@pytest.mark.slow
-def test_a_torch_cpu_sweep_trains_its_trials_on_the_device(tmp_path: Path) -> None:
-    """``usvsim sweep --device torch-cpu``: the trial's run folder records the device loop's
-    command and the sweep reports it."""
-    pytest.importorskip("ray.tune")
-    out = tmp_path / "dev"
-    main = "import sys; from usvsim.cli.main import main; sys.exit(main())"
-    args = ["sweep", "--setups", "rl-categorical-positional", "--seeds", "0", "--iterations", "2"]
-    args += ["--validate-every", "1", "--n-envs", "8", "--heldout", "3", "--no-shipped"]
-    args += ["--device", "torch-cpu", "--out", str(out)]
-    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
-    done = subprocess.run(
-        [sys.executable, "-c", main, *args], capture_output=True, text=True, env=env, timeout=300
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    (trial,) = json.loads((out / "trials.json").read_text())
-    summary = json.loads((out / "runs" / trial["dir"] / "summary.json").read_text())
-    assert "--device torch-cpu" in summary["command"] and summary["iterations"] == 2
