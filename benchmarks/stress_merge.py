@@ -32,7 +32,13 @@ another seed's: same name, new weights) from a new run of them on the file's set
         docs/data/stress.json new.json
 
 The new run must hold each named helmsman on every set of the file, the same split and episodes
-per set; the file records it under ``replaced`` (helmsmen, wall-clock).
+per set; the file records it under ``replaced`` (helmsmen, wall-clock). The same works on the
+study task's ``usvsim bench --json`` (``docs/data/bench.json``: no ``helmsmen`` list, rows per
+episode set)::
+
+    usvsim bench --helmsmen radar-gaussian-gail-openwater --json --no-plots > new.json
+    python benchmarks/stress_merge.py --replace-helmsmen radar-gaussian-gail-openwater \
+        docs/data/bench.json new.json
 """
 
 from __future__ import annotations
@@ -123,7 +129,8 @@ def replace_helmsmen(base: dict[str, Any], new: dict[str, Any], helmsmen: list[s
             raise SystemExit(
                 f"stress_merge: the runs differ in {key} ({base.get(key)!r}, {new.get(key)!r})"
             )
-    unknown = [h for h in helmsmen if h not in base["helmsmen"]]
+    present = base.get("helmsmen") or list(dict.fromkeys(r["helmsman"] for r in base["rows"]))
+    unknown = [h for h in helmsmen if h not in present]
     if unknown:
         raise SystemExit(f"stress_merge: {unknown} are not helmsmen of the file")
     fresh = {(r["episode_set"], r["helmsman"]): r for r in new["rows"]}

@@ -85,6 +85,22 @@ def test_stress_merge_replace_helmsmen_swaps_one_helmsmans_rows_on_every_set() -
         replace_helmsmen(base, {**new, "split": "validation"}, ["model"])
 
 
+def test_stress_merge_replace_helmsmen_takes_the_study_bench_json_without_a_helmsmen_list() -> None:
+    replace_helmsmen = _script("stress_merge").replace_helmsmen
+    rows = [_row(h, s, 10) for s in ("validation", "held-out") for h in ("vo", "model")]
+    base = {"scenario": "pole", "rows": rows}
+    new = {"scenario": "pole", "rows": [_row("model", "validation", 12)], "wall_s": 3.0}
+    with pytest.raises(SystemExit, match="no row for model on held-out"):
+        replace_helmsmen(base, new, ["model"])
+    new["rows"].append(_row("model", "held-out", 150))
+    replace_helmsmen(base, new, ["model"])
+    assert [(r["episode_set"], r["helmsman"], r["successes"]) for r in base["rows"]] == [
+        ("validation", "vo", 10), ("validation", "model", 12),
+        ("held-out", "vo", 10), ("held-out", "model", 150),
+    ]  # fmt: skip
+    assert base["replaced"] == [{"helmsmen": ["model"], "wall_s": 3.0}]
+
+
 def test_colreg_table_merge_adds_a_row_and_a_column_and_refuses_a_changed_row() -> None:
     merge_block = _script("colreg_table").merge_block
     old = "head\n\n| helmsman | x |\n|---|---|\n| `vo` | 1 |\n| `vo-radar` | 2 |\n| `m` | 3 |\n"
@@ -122,3 +138,20 @@ def test_committed_data_and_page_hold_the_same_sb_mpc_radar_rows() -> None:
     table = _script("colreg_table").stress_table(stress)
     row = next(ln for ln in table.splitlines() if ln.startswith("| `sb-mpc-radar` |"))
     assert row in page
+
+
+def test_reship_docs_sets_one_models_column_and_row_and_a_whole_table() -> None:
+    docs = _script("reship_docs")
+    text = (
+        "intro\n\n| set | vo-radar | m | n |\n|---|---|---|---|\n| a | 100 | 90 | 80 |\n"
+        "| b | 99 | 70 | 60 |\n\nafter\n\n| helmsman | x |\n|---|---|\n| m | old |\n| n | keep |\n"
+    )
+    text = docs.set_column(text, "| set | vo-radar |", "m", {"a": "91", "c": "5"})
+    assert "| a | 100 | 91 | 80 |" in text and "| b | 99 | 70 | 60 |" in text
+    assert docs.set_column(text, "| set | vo-radar |", "absent", {"a": "1"}) == text
+    text = docs.set_row(text, "| helmsman | x |", "| m | new |")
+    assert "| m | new |\n| n | keep |" in text
+    text = docs.set_table(text, "| helmsman | x |", "| helmsman | y |\n|---|---|\n| z | 1 |\n")
+    assert text.endswith("after\n\n| helmsman | y |\n|---|---|\n| z | 1 |\n")
+    with pytest.raises(SystemExit, match="no table"):
+        docs.set_row(text, "| nothing |", "| m | 1 |")
