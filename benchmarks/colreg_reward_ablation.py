@@ -118,12 +118,32 @@ def train_one(variant: str, seed: int, args: argparse.Namespace) -> None:
              command=f"benchmarks/colreg_reward_ablation.py {variant} seed {seed}")  # fmt: skip
 
 
+SCORING = ("setup", "sets", "val_episodes", "test_episodes", "reactive_targets")
+
+
+def cached(out: Path, args: argparse.Namespace) -> dict[str, Any] | None:
+    """A finished run's record from its ``scores.json`` where it was scored with these scoring
+    arguments (:data:`SCORING`), else None."""
+    path = out / "scores.json"
+    if not path.is_file():
+        return None
+    record: dict[str, Any] = json.loads(path.read_text())
+    same = all(record.get("scoring", {}).get(k) == getattr(args, k) for k in SCORING)
+    return record if same else None
+
+
 def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
-    """Train (unless ``--score-only``), choose on validation, report on test."""
+    """Train (unless ``--score-only``), choose on validation, report on test. The record is
+    kept in ``OUT/<variant>/seed<k>/scores.json`` (with ``summary.json`` a few kB): a run scored
+    once is read from there, so its figures outlive its checkpoints (copy the two files to keep
+    them; ``--score-only --out`` on the copies remakes the tables)."""
     out = Path(args.out) / variant / f"seed{seed}"
     setup = variant_setup(variant, args.setup)
     if not args.score_only:
         train_one(variant, seed, args)
+    record = cached(out, args)
+    if record is not None and finished(out) is not None:
+        return {k: v for k, v in record.items() if k != "scoring"}
     summary = finished(out)
     wall = None if summary is None else float(summary["wall_time_s"])  # resumed parts included
     files = [p for p in (out / "best.pt", out / "latest.pt") if p.is_file()]
@@ -133,9 +153,13 @@ def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]
         val = {p.name: score(p, args, "validation", args.val_episodes) for p in files}
     chosen = max(files, key=lambda p: _value(val[p.name]))
     test = score(chosen, args, "test", args.test_episodes)
-    return {"variant": variant, "seed": seed, "colreg_reward": setup.colreg_reward,
-            "train_wall_s": wall, "chosen": chosen.name, "validation": val,
-            "test": test}  # fmt: skip
+    record = {"variant": variant, "seed": seed, "colreg_reward": setup.colreg_reward,
+              "train_wall_s": wall, "chosen": chosen.name, "validation": val,
+              "test": test}  # fmt: skip
+    if summary is not None:  # a finished run's figures are final: keep them
+        scoring = {k: getattr(args, k) for k in SCORING}
+        atomic_write_text(out / "scores.json", json.dumps({**record, "scoring": scoring}))
+    return record
 
 
 def _fmt(rate: float | None, ci: list[float] | None) -> str:

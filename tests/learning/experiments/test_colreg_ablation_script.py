@@ -81,3 +81,32 @@ def test_across_seeds_gives_each_variant_its_iqm_and_interval() -> None:
     args = ablation.parse(["--out", "/tmp/unused"])
     table = ablation.markdown(runs, args)
     assert "| all | 0,1,2 | 80 % [" in table and "| none | 0 |" in table
+
+
+def test_a_finished_runs_scores_are_kept_and_read_back_without_its_checkpoints(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    run = tmp_path / "all" / "seed0"
+    run.mkdir(parents=True)
+    (run / "summary.json").write_text(json.dumps({"interrupted": False, "wall_time_s": 9.0}))
+    for name in ("best.pt", "latest.pt"):
+        (run / name).write_bytes(b"")
+    scored: list[tuple[str, str]] = []
+
+    def fake_score(path: Path, args: Any, split: str, n: int) -> dict[str, Any]:
+        scored.append((path.name, split))
+        rate = 0.9 if path.name == "latest.pt" else 0.5
+        return {"success_rate": rate, "compliance_rate": 0.5, "per_set": []}
+
+    monkeypatch.setattr(ablation, "score", fake_score)
+    args = ablation.parse(["--score-only", "--out", str(tmp_path)])
+    first = ablation.run_one("all", 0, args)
+    assert first["chosen"] == "latest.pt" and first["train_wall_s"] == 9.0
+    assert sorted(scored) == [("best.pt", "validation"), ("latest.pt", "test"),
+                              ("latest.pt", "validation")]  # fmt: skip
+    for name in ("best.pt", "latest.pt"):
+        (run / name).unlink()  # a later session: only the small files were kept
+    assert ablation.run_one("all", 0, args) == first and len(scored) == 3
+    other = ablation.parse(["--score-only", "--test-episodes", "20", "--out", str(tmp_path)])
+    with pytest.raises(SystemExit, match=r"no best\.pt or latest\.pt"):
+        ablation.run_one("all", 0, other)  # other scoring: the kept record does not serve
