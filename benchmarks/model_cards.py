@@ -37,14 +37,25 @@ def main(argv: list[str] | None = None) -> int:
         help="a stress JSON (usvsim bench --suite stress --json); repeatable",
     )
     parser.add_argument(
+        "--sets-of",
+        type=Path,
+        default=None,
+        help="keep only the sets of this stress JSON (docs/data/stress.json: the cards' sets)",
+    )
+    parser.add_argument(
         "--recommend",
         action="store_true",
         help="set the recommended marks by the rule (validation figures only)",
     )
     args = parser.parse_args(argv)  # fmt: skip
     cards = load_cards()
+    keep = json.loads(args.sets_of.read_text())["sets"] if args.sets_of else None
     for path in args.stress:
-        cards = with_stress_figures(cards, json.loads(path.read_text()))
+        stress = json.loads(path.read_text())
+        if keep is not None:
+            stress["sets"] = [s for s in stress["sets"] if s in keep]
+            stress["rows"] = [r for r in stress["rows"] if r["episode_set"] in keep]
+        cards = with_stress_figures(cards, stress)
     if args.recommend:
         cards = with_recommendations(cards)
         for (use, family), name in recommend(cards).items():
