@@ -55,13 +55,13 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from usvsim.common.errors import UserError
-from usvsim.evaluation.seed_stats import SeedTable
+from usvsim.evaluation.seed_stats import SeedTable, load_seed_tables
 
 __all__ = [
     "CARD_FIELDS",
@@ -104,8 +104,11 @@ RECOMMENDATION_RULE = (
     "stress suite's validation split (100 episodes per set, usvsim bench --suite stress --split "
     "validation) on the use's sets (open-water uses: all sets; study uses: study and waypoints, "
     "the task they were trained for); ties broken by the mean over all sets of the validation "
-    "split, then by name. Test-split figures play no part."
+    "split, then by name. Where a model of the use and family was trained over at least 3 seeds "
+    "(its setup's seed table in usvsim/models/seeds/), only such models compete. Test-split "
+    "figures play no part."
 )
+MIN_SEEDS = 3  # issue 37: every recommended open-water model trained over >= 3 seeds
 CARD_FIELDS = (
     "former_names", "observation", "action", "algorithm", "method", "family", "task", "use",
     "setup", "seed", "code_commit", "date", "best_iteration", "runs", "validation", "test",
@@ -376,14 +379,22 @@ def _score(card: ModelCard) -> tuple[float, float, str]:
     return (sum(wanted) / len(wanted), sum(everything) / len(everything), card.name)
 
 
-def recommend(cards: Mapping[str, ModelCard]) -> dict[tuple[str, str], str]:
+def recommend(
+    cards: Mapping[str, ModelCard], seeded: Collection[str] | None = None
+) -> dict[tuple[str, str], str]:
     """(use, family) -> the recommended model under :data:`RECOMMENDATION_RULE`; only cards
-    with the stress suite's validation figures compete (``validation["stress"]``)."""
+    with the stress suite's validation figures compete (``validation["stress"]``), and where a
+    use and family has a card whose setup is in ``seeded`` (default: the setups with a seed
+    table of at least :data:`MIN_SEEDS` seeds), only those."""
+    if seeded is None:
+        seeded = {s for s, t in load_seed_tables().items() if len(t.seeds) >= MIN_SEEDS}
+    competing = [c for c in cards.values() if c.validation.get("stress")]
+    replicated = {(c.use, c.family) for c in competing if c.setup in seeded}
     best: dict[tuple[str, str], ModelCard] = {}
-    for card in cards.values():
-        if not card.validation.get("stress"):
-            continue
+    for card in competing:
         key = (card.use, card.family)
+        if key in replicated and card.setup not in seeded:
+            continue
         incumbent = best.get(key)
         if incumbent is None or _better(_score(card), _score(incumbent)):
             best[key] = card
@@ -533,7 +544,6 @@ class ModelsArgs:
 
 def models_report(args: ModelsArgs, models_dir: Path | None = None) -> str:
     """What ``usvsim models`` prints (the cards checked first: ``UserError`` on a problem)."""
-    from usvsim.evaluation.seed_stats import load_seed_tables
 
     cards = check_cards(models_dir)
     seeds = load_seed_tables()

@@ -146,6 +146,18 @@ def test_recommendation_reads_validation_only_one_per_use_and_family() -> None:
     assert recommendation_mismatches(cards) == ["b", "c", "e"]
 
 
+def test_where_a_use_has_a_model_over_seeds_only_such_models_compete() -> None:
+    ow = "open-water-radar"
+    cards = {
+        "one-seed": _card("one-seed", ow, "RL", {"x": 99.0}, test=99.0),
+        "seeded": _card("seeded", ow, "RL", {"x": 90.0}, test=90.0),
+        "il": _card("il", ow, "IL", {"x": 80.0}, test=80.0),
+    }
+    assert recommend(cards, seeded=set()) == {(ow, "IL"): "il", (ow, "RL"): "one-seed"}
+    assert recommend(cards, seeded={"seeded"}) == {(ow, "IL"): "il", (ow, "RL"): "seeded"}
+    assert recommend(cards, seeded={"il"}) == recommend(cards, seeded={"il", "absent"})
+
+
 def test_shipped_marks_follow_the_rule_at_most_one_per_use_and_family() -> None:
     cards = load_cards()
     assert recommendation_mismatches(cards) == []

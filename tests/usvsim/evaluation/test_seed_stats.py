@@ -122,6 +122,7 @@ def test_table_survives_its_json(tmp_path: Path) -> None:
         ("rl-categorical-scene-ow-ft", 1, (1.0, 1.0, 0.92)),
         ("rl-gaussian-scene-ow-ft", 2, (0.76, 0.95, 1.0)),
         ("rl-gaussian-radar-ow-cont", 0, (0.95, 0.44, 0.74)),
+        ("rl-categorical-radar-ow-cont", 1, (1.0, 0.98, 0.87)),
     ],
 )
 def test_committed_file_agrees_with_its_per_seed_figures(
@@ -170,6 +171,7 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
             "rl-categorical-scene-ow-ft",
             "rl-gaussian-scene-ow-ft",
             "rl-gaussian-radar-ow-cont",
+            "rl-categorical-radar-ow-cont",
         }
     )
     lines = cards_table(cards, seeds).splitlines()
@@ -191,6 +193,7 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
     assert payload["across_seeds"][shipped["rl-categorical-scene-ow-ft"]]["picked_seed"] == 1
     assert payload["across_seeds"][shipped["rl-gaussian-scene-ow-ft"]]["picked_seed"] == 2
     assert payload["across_seeds"][shipped["rl-gaussian-radar-ow-cont"]]["picked_seed"] == 0
+    assert payload["across_seeds"][shipped["rl-categorical-radar-ow-cont"]]["picked_seed"] == 1
 
 
 def test_bench_stress_json_carries_the_seed_figures(
