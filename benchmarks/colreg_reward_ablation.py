@@ -141,10 +141,9 @@ def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]
     setup = variant_setup(variant, args.setup)
     if not args.score_only:
         train_one(variant, seed, args)
-    record = cached(out, args)
-    if record is not None and finished(out) is not None:
+    summary, record = finished(out), cached(out, args)
+    if record is not None and summary is not None:
         return {k: v for k, v in record.items() if k != "scoring"}
-    summary = finished(out)
     wall = None if summary is None else float(summary["wall_time_s"])  # resumed parts included
     files = [p for p in (out / "best.pt", out / "latest.pt") if p.is_file()]
     if not files:

@@ -544,7 +544,6 @@ class ModelsArgs:
 
 def models_report(args: ModelsArgs, models_dir: Path | None = None) -> str:
     """What ``usvsim models`` prints (the cards checked first: ``UserError`` on a problem)."""
-
     cards = check_cards(models_dir)
     seeds = load_seed_tables()
     if args.json:
