@@ -45,7 +45,8 @@ cards without files, and allows at most one recommended model per use and family
 problem is one :class:`usvsim.common.errors.UserError` line naming the model and the field.
 
 The recommended marks follow :data:`RECOMMENDATION_RULE` (:func:`recommend`), written down before
-the validation figures it reads were computed, and read validation figures only.
+the validation figures it reads were computed (its seed condition was added later, after a tie:
+docs/notes/2026-12-seeds.md), and read validation figures only.
 
 Why this module is long: the card format (the table above), its checks and its Markdown
 rendering are one contract with ``models.json``; the checks name each field the format defines.
