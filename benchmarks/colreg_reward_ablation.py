@@ -95,6 +95,18 @@ def _value(p: dict[str, Any]) -> float:
     return float(p["success_rate"]) * float(p["compliance_rate"] or 0.0)
 
 
+def choose_and_test(
+    files: list[Path], args: argparse.Namespace, caller: str
+) -> tuple[Path, dict[str, Any], dict[str, Any]]:
+    """The file of ``files`` with the higher validation score (scored inside
+    :func:`usvsim.common.splits.selection_mode`, so a test draw there fails), every file's
+    validation figures, and the chosen file's test figures."""
+    with selection_mode(caller):  # validation chooses: no test episode here
+        val = {p.name: score(p, args, "validation", args.val_episodes) for p in files}
+    chosen = max(files, key=lambda p: _value(val[p.name]))
+    return chosen, val, score(chosen, args, "test", args.test_episodes)
+
+
 def finished(out: Path) -> dict[str, Any] | None:
     """The ``summary.json`` of a run in ``out`` that ended by its rules (not interrupted),
     else None."""
@@ -148,10 +160,7 @@ def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]
     files = [p for p in (out / "best.pt", out / "latest.pt") if p.is_file()]
     if not files:
         raise SystemExit(f"{out}: no best.pt or latest.pt (train first, without --score-only)")
-    with selection_mode("colreg_reward_ablation"):  # validation chooses: no test episode here
-        val = {p.name: score(p, args, "validation", args.val_episodes) for p in files}
-    chosen = max(files, key=lambda p: _value(val[p.name]))
-    test = score(chosen, args, "test", args.test_episodes)
+    chosen, val, test = choose_and_test(files, args, "colreg_reward_ablation")
     record = {"variant": variant, "seed": seed, "colreg_reward": setup.colreg_reward,
               "train_wall_s": wall, "chosen": chosen.name, "validation": val,
               "test": test}  # fmt: skip
@@ -161,7 +170,7 @@ def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]
     return record
 
 
-def _fmt(rate: float | None, ci: list[float] | None) -> str:
+def fmt_rate(rate: float | None, ci: list[float] | None) -> str:
     if rate is None or ci is None:
         return "–"
     return f"{100 * rate:.0f} % [{100 * ci[0]:.0f}, {100 * ci[1]:.0f}]"
@@ -213,8 +222,9 @@ def markdown(runs: list[dict[str, Any]], args: argparse.Namespace) -> str:
         wall = "–" if r["train_wall_s"] is None else f"{r['train_wall_s']:.0f}"
         lines.append(
             f"| {r['variant']} | {r['seed']} | {r['colreg_reward'] or '(none)'} | {r['chosen']} "
-            f"| {_fmt(t['success_rate'], t['success_ci95'])} "
-            f"| {_fmt(t['compliance_rate'], t['compliance_ci95'])} | {t['collisions']} | {wall} |"
+            f"| {fmt_rate(t['success_rate'], t['success_ci95'])} "
+            f"| {fmt_rate(t['compliance_rate'], t['compliance_ci95'])} "
+            f"| {t['collisions']} | {wall} |"
         )
     summary = across_seeds(runs)
     if summary:
@@ -230,8 +240,8 @@ def markdown(runs: list[dict[str, Any]], args: argparse.Namespace) -> str:
             seeds = ",".join(str(k) for k in r["seeds"])
             lines.append(
                 f"| {r['variant']} | {seeds} "
-                f"| {_fmt(r['success_rate'], r['success_rate_ci95'])} "
-                f"| {_fmt(r['compliance_rate'], r['compliance_rate_ci95'])} "
+                f"| {fmt_rate(r['success_rate'], r['success_rate_ci95'])} "
+                f"| {fmt_rate(r['compliance_rate'], r['compliance_rate_ci95'])} "
                 f"| {r['collisions']} |"
             )
     return "\n".join(lines) + "\n"
