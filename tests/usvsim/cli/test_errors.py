@@ -148,10 +148,16 @@ def test_outputs_are_checked_before_the_work(tmp_path: Path, capsys) -> None:
 
 
 def test_resume_refuses_a_conflicting_seed_or_n_envs(tmp_path: Path, capsys) -> None:
-    shutil.copy(MODEL, tmp_path / "latest.pt")  # seed 0, the setup's 32 boats
+    from usvsim.helm.registry import checkpoint_facts
+
+    shutil.copy(MODEL, tmp_path / "latest.pt")  # the setup's 32 boats
+    stored = checkpoint_facts(str(MODEL))["seed"]
+    other = stored + 9
     base = ["train", "rl-gaussian-positional", "--out", str(tmp_path), "--resume"]
-    assert main([*base, "--seed", "9"]) == 2
-    _one_line_error(capsys, "--seed 9 contradicts", "(--seed 0)", "--resume continues")
+    assert main([*base, "--seed", str(other)]) == 2
+    _one_line_error(
+        capsys, f"--seed {other} contradicts", f"(--seed {stored})", "--resume continues"
+    )
     assert main([*base, "--n-envs", "4"]) == 2
     _one_line_error(capsys, "--n-envs 4 contradicts", "(--n-envs 32)")
 

@@ -76,7 +76,7 @@ def _edit_card(folder: Path, **changes: object) -> None:
         ({"observation": "scene"}, "field 'observation' is 'scene', the file says 'positional'"),
         ({"action": "categorical"}, "field 'action' is 'categorical', the file says 'gaussian'"),
         ({"setup": "rl-gaussian-radar"}, "field 'setup' is 'rl-gaussian-radar'"),
-        ({"best_iteration": 7}, "field 'best_iteration' is 7, the file says 25"),
+        ({"best_iteration": 7}, "field 'best_iteration' is 7, the file says "),  # its iteration
         ({"use": "anywhere"}, "field 'use' is 'anywhere'; allowed: study-positional"),
         ({"recommended": ["open-water-scene"]}, "field 'recommended' names 'open-water-scene'"),
     ],

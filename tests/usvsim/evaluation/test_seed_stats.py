@@ -172,6 +172,9 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
             "rl-gaussian-scene-ow-ft",
             "rl-gaussian-radar-ow-cont",
             "rl-categorical-radar-ow-cont",
+            "rl-gaussian-positional",
+            "il-categorical-positional",
+            "rl-categorical-radar",
         }
     )
     lines = cards_table(cards, seeds).splitlines()
