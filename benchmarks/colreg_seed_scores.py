@@ -55,7 +55,9 @@ def seed_record(label: str, run: Path, args: argparse.Namespace) -> dict[str, An
     if kept.is_file():
         record: dict[str, Any] = json.loads(kept.read_text())
         if _same_scoring(record, args):
-            return {**{k: v for k, v in record.items() if k != "scoring"}, "variant": label}
+            setup = record.get("setup") or (summary or {}).get("setup", "")  # ablation records
+            kept_record = {k: v for k, v in record.items() if k != "scoring"}
+            return {**kept_record, "variant": label, "setup": setup}
     if summary is None:
         raise SystemExit(f"{run}: not a finished run (summary.json with interrupted: false)")
     files = [p for p in (run / "best.pt", run / "latest.pt") if p.is_file()]
