@@ -109,7 +109,7 @@ RECOMMENDATION_RULE = (
     "(its setup's seed table in usvsim/models/seeds/), only such models compete. Test-split "
     "figures play no part."
 )
-MIN_SEEDS = 3  # issue 37: every recommended open-water model trained over >= 3 seeds
+MIN_SEEDS = 3  # issue 37: every recommended model trained over >= 3 seeds
 CARD_FIELDS = (
     "former_names", "observation", "action", "algorithm", "method", "family", "task", "use",
     "setup", "seed", "code_commit", "date", "best_iteration", "runs", "validation", "test",
