@@ -173,16 +173,22 @@ def markdown(data: dict[str, Any]) -> str:
     if data["across_seeds"]:
         lines += [
             "",
-            "Across seeds (IQM of the per-set rates, rliable's 95 % interval):",
+            "Across seeds (IQM of the per-set rates, rliable's 95 % interval; then every episode "
+            "and encounter of the seeds pooled, Wilson 95 %, as the baselines' rows above):",
             "",
-            "| label | seeds | success | compliance | collisions |",
-            "|---|---|---|---|---|",
+            "| label | seeds | success IQM | compliance IQM | success pooled "
+            "| compliance pooled | collisions |",
+            "|---|---|---|---|---|---|---|",
         ]
         for r in data["across_seeds"]:
+            rows = [row for run in data["runs"] if run["variant"] == r["variant"]
+                    for row in run["test"]["per_set"]]  # fmt: skip
+            pooled_rows = _pool(rows)
             lines.append(
                 f"| {r['variant']} | {','.join(str(k) for k in r['seeds'])} "
                 f"| {fmt_rate(r['success_rate'], r['success_rate_ci95'])} "
                 f"| {fmt_rate(r['compliance_rate'], r['compliance_rate_ci95'])} "
+                f"| {_cell(pooled_rows['success'])} | {_cell(pooled_rows['compliance'])} "
                 f"| {r['collisions']} |"
             )
     table = data["per_set"]
