@@ -379,7 +379,7 @@ def _run_il(args: TrainArgs) -> int:
         lambda: train_il(
             setup,
             out,
-            demos_dir=args.demos or None,
+            demos_dirs=(args.demos,) if args.demos else None,
             seed=args.seed,
             iterations=args.iterations or None,
             resume=args.resume,

@@ -39,6 +39,11 @@ were recorded in (:func:`learning.experiments.colreg_demos.colreg_demo_family`; 
                                                         (it reads the true scene, as the expert)
 ============================  ===========  ===========  ===========================================
 
+``il-gaussian-radar-ow-colreg`` (radar+goal, gaussian) is il-gaussian-radar-colreg's recipe on
+both demonstration sets (the open-water expert's and the SB-MPC expert's) and both families (the
+open-water family with :data:`COLREG_EPISODE_SHARE` of COLREG encounters): the obstacles and the
+rules in one policy.
+
 Their runs are validated on the study's 15 episodes and the family set
 (:func:`learning.experiments.validation.family_validation_episodes`); ``best.pt`` is chosen by
 successes there and on the 60 selection episodes (:func:`learning.experiments.train_il.train_il`),
@@ -93,6 +98,7 @@ from usvsim.task.openwater_env import (
 __all__ = [
     "IL_GAIL",
     "IL_SETUPS",
+    "COLREG_EPISODE_SHARE",
     "IL_TRPO",
     "MAX_HARSH_RADAR_COPIES",
     "TRAINING_FAMILIES",
@@ -103,10 +109,21 @@ __all__ = [
 IL_TRPO = dataclasses.replace(RL_TRPO, iterations=120, num_envs=16)  # B = N·T = 1024
 IL_GAIL = GAILConfig(bc_epochs=50)
 MAX_HARSH_RADAR_COPIES = 8  # ILSetup.harsh_radar_copies: 8 copies = 89 % of the data harsh
-# ILSetup.family: the open-water family (issue 18) or the COLREG encounters (issue 41)
-TRAINING_FAMILIES = ("open-water", "colreg")
-# ILSetup.demos: the shipped demonstration sets (folders under usvsim/demos)
-_DEMO_SETS = {"study": DEMOS_DIR, "open-water": FAMILY_DEMOS_DIR, "colreg": COLREG_DEMOS_DIR}
+# ILSetup.family: the open-water family (issue 18), the COLREG encounters (issue 41), or both
+TRAINING_FAMILIES = ("open-water", "colreg", "open-water+colreg")
+# ILSetup.demos: the shipped demonstration sets (folders under usvsim/demos); a "+" set learns
+# from both folders' runs together
+_DEMO_SETS: dict[str, tuple[Path, ...]] = {
+    "study": (DEMOS_DIR,),
+    "open-water": (FAMILY_DEMOS_DIR,),
+    "colreg": (COLREG_DEMOS_DIR,),
+    "open-water+colreg": (FAMILY_DEMOS_DIR, COLREG_DEMOS_DIR),
+}
+# family "open-water+colreg": the share of the COLREG encounters among the training episodes,
+# that of the COLREG runs among the kept demonstrations of both sets (the quality filter keeps
+# 785 of the open-water expert's 960 runs and 201 of the SB-MPC expert's 250: 201 / 986 = 0.20),
+# so the expert's and the policy's data hold the two kinds of episode in the same proportion
+COLREG_EPISODE_SHARE = 201 / 986
 
 
 @dataclass(frozen=True)
@@ -170,18 +187,23 @@ class ILSetup:
         return k / (k + 1)
 
     @property
-    def demos_dir(self) -> Path:
-        """The folder of the shipped demonstrations the setup learns from (:attr:`demos`)."""
+    def demos_dirs(self) -> tuple[Path, ...]:
+        """The folders of the shipped demonstrations the setup learns from (:attr:`demos`)."""
         if self.demos:
             return _DEMO_SETS[self.demos]
-        return FAMILY_DEMOS_DIR if self.task == "open-water" else DEMOS_DIR
+        return (FAMILY_DEMOS_DIR,) if self.task == "open-water" else (DEMOS_DIR,)
 
     @property
     def training_family(self) -> ScenarioMixture:
         """The open-water training distribution: the family (:attr:`family`), mixed with its
         harsh-radar form (:func:`usvsim.task.openwater_env.harsh_radar_family`) at
-        :attr:`harsh_radar_share`."""
-        base = colreg_demo_family() if self.family == "colreg" else OPEN_WATER_FAMILY
+        :attr:`harsh_radar_share`. ``"open-water+colreg"``: the open-water family with the
+        COLREG encounters drawn in :data:`COLREG_EPISODE_SHARE` of the episodes."""
+        base = OPEN_WATER_FAMILY
+        if self.family == "colreg":
+            base = colreg_demo_family()
+        elif self.family == "open-water+colreg":
+            base = mix_families(base, colreg_demo_family(), COLREG_EPISODE_SHARE, "colreg-")
         if not self.harsh_radar_copies:
             return base
         harsh = harsh_radar_family(base)
@@ -341,6 +363,16 @@ IL_SETUPS: dict[str, ILSetup] = {
         _on_colreg(_IL_GAUSSIAN_RADAR_OW, "il-gaussian-radar-colreg"),
         # the upper bound: the true scene, as the expert sees it (il-gaussian-scene-ow's recipe)
         _on_colreg(_IL_GAUSSIAN_SCENE_OW, "il-gaussian-scene-colreg"),
+        # both: the obstacles of the open-water family and the rules of the COLREG encounters
+        # (docs/notes/2026-12-traffic.md: trained on the COLREG runs alone, the policy failed
+        # the stress suite; on both demonstration sets in the open-water family alone, it never
+        # reached the far goals of the trafficgen situations)
+        dataclasses.replace(
+            _IL_GAUSSIAN_RADAR_OW,
+            name="il-gaussian-radar-ow-colreg",
+            demos="open-water+colreg",
+            family="open-water+colreg",
+        ),
     )
 }
 

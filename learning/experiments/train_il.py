@@ -52,6 +52,7 @@ from learning.experiments.validation import (
 from learning.imitation.demonstrations import (
     DemoFormatError,
     LoadReport,
+    Recording,
     load_recordings,
     quality_check,
 )
@@ -299,7 +300,7 @@ def train_il(
     time_budget_s: float = 0.0,
     quiet: bool = True,
     command: str = "",
-    demos_dir: str | Path | None = None,
+    demos_dirs: Sequence[str | Path] | None = None,
     log: Callable[[str], None] = print,
     tensorboard: str | Path = "",
     device: str = "cpu",
@@ -328,8 +329,7 @@ def train_il(
     goes non-finite; nothing is saved after such a failure.
     """
     torch.set_num_threads(max(1, threads))
-    if demos_dir is None:
-        demos_dir = setup.demos_dir
+    folders = tuple(Path(d) for d in (setup.demos_dirs if demos_dirs is None else demos_dirs))
     out = Path(out_dir)
     state: dict[str, Any] | None = None
     history: list[dict[str, Any]] = []
@@ -340,13 +340,13 @@ def train_il(
         rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # half-written files of a killed earlier run
-    data, n_demos, n_skipped = expert_pairs(setup, demos_dir, log)
+    data, n_demos, n_skipped = expert_pairs(setup, folders, log)
     cfg = setup.run_config(seed, iterations)
     train_args = {
         "seed": seed,
         "iterations": iterations,
         "demos": n_demos,
-        "demos_dir": str(demos_dir),
+        "demos_dir": " + ".join(str(d) for d in folders),
         "demos_skipped": n_skipped,
         "validate_every": validate_every,
         "stop_after": stop_after,
@@ -420,9 +420,10 @@ def train_il(
 
 
 def expert_pairs(
-    setup: ILSetup, demos_dir: str | Path, log: Callable[[str], None]
+    setup: ILSetup, demos_dirs: Sequence[str | Path], log: Callable[[str], None]
 ) -> tuple[ExpertData, int, int]:
-    """The (s, a) pairs of the demonstrations in ``demos_dir`` that pass the quality check, in
+    """The (s, a) pairs of the demonstrations in the folders ``demos_dirs`` (their runs
+    together) that pass the quality check, in
     ``setup``'s observation and action kinds; how many demonstrations that is, and how many
     files were skipped as unreadable or implausible (each named in a warning through ``log``).
 
@@ -431,10 +432,15 @@ def expert_pairs(
     DemoFormatError
         If no demonstration is left (the folder is empty, or every file is bad or rejected).
     """
-    report = load_recordings(demos_dir)
-    errors = dict(report.errors)
+    where = " + ".join(str(d) for d in demos_dirs)
+    recordings: list[Recording] = []
+    errors: dict[str, str] = {}
+    for folder in demos_dirs:
+        report = load_recordings(folder)
+        recordings += report.recordings
+        errors.update(report.errors)
     plausible = []
-    for rec in report.recordings:
+    for rec in recordings:
         try:
             check_observations(
                 expert_data([rec], setup.observation, setup.action), setup.observation
@@ -450,7 +456,7 @@ def expert_pairs(
     total = len(report.recordings) + len(report.errors)
     if not kept:
         raise DemoFormatError(
-            f"{demos_dir}: no usable demonstration (demo_*.csv files: {total}, unreadable or "
+            f"{where}: no usable demonstration (demo_*.csv files: {total}, unreadable or "
             f"implausible: {len(report.errors)}, rejected by the quality filter: "
             f"{len(report.recordings)})"
         )
@@ -467,7 +473,7 @@ def expert_pairs(
         else ""
     )
     log(
-        f"{setup.name}: using {n_runs} of {total} demonstrations in {demos_dir} "
+        f"{setup.name}: using {n_runs} of {total} demonstrations in {where} "
         f"({len(report.errors)} skipped as unreadable or implausible, "
         f"{len(report.recordings) - n_runs} rejected by the quality filter{copies}), "
         f"{len(data)} pairs"

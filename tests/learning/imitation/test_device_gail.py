@@ -22,7 +22,7 @@ T, N = 24, 16
 
 def _agent_and_batch(setup_name: str) -> tuple[GAILAgent, object]:
     setup = get_il_setup(setup_name)
-    data, _, _ = expert_pairs(setup, setup.demos_dir, lambda _: None)
+    data, _, _ = expert_pairs(setup, setup.demos_dirs, lambda _: None)
     env = TorchPoleAvoidanceEnv(N, action=setup.action, observation=setup.observation)
     cfg = setup.run_config(0, 1)
     agent = GAILAgent(env.single_observation_space, env.single_action_space, cfg, setup.gail, data)
