@@ -68,12 +68,19 @@ def traffic_setups_markdown() -> str:
             f"| {s.init_policy or 'new networks'} "
             f"| {'reactive (vo)' if s.reactive_targets else 'hold course'} |"
         )
+    from learning.experiments.il_setups import COLREG_EPISODE_SHARE
+
     for il in IL_SETUPS.values():
         if "colreg" not in il.name:
             continue
+        demos = " + ".join(f"`usvsim/demos/{d}`" for d in il.demos.split("+"))
+        episodes = "the demonstrations' COLREG encounters"
+        if il.family == "open-water+colreg":
+            share = COLREG_EPISODE_SHARE
+            episodes = f"{1 - share:.0%} open-water family, {share:.0%} COLREG"
         lines.append(
-            f"| `{il.name}` | IL (GAIL on `usvsim/demos/{il.demos}`) | {il.observation} "
-            f"| the demonstrations' COLREG encounters | – | new networks | hold course |"
+            f"| `{il.name}` | IL (GAIL on {demos}) | {il.observation} "
+            f"| {episodes} | – | new networks | hold course |"
         )
     return "\n".join(lines) + "\n"
 

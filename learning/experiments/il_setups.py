@@ -96,9 +96,9 @@ from usvsim.task.openwater_env import (
 )
 
 __all__ = [
+    "COLREG_EPISODE_SHARE",
     "IL_GAIL",
     "IL_SETUPS",
-    "COLREG_EPISODE_SHARE",
     "IL_TRPO",
     "MAX_HARSH_RADAR_COPIES",
     "TRAINING_FAMILIES",

@@ -420,7 +420,7 @@ def train_il(
 
 
 def expert_pairs(
-    setup: ILSetup, demos_dirs: Sequence[str | Path], log: Callable[[str], None]
+    setup: ILSetup, demos_dirs: str | Path | Sequence[str | Path], log: Callable[[str], None]
 ) -> tuple[ExpertData, int, int]:
     """The (s, a) pairs of the demonstrations in the folders ``demos_dirs`` (their runs
     together) that pass the quality check, in
@@ -432,6 +432,8 @@ def expert_pairs(
     DemoFormatError
         If no demonstration is left (the folder is empty, or every file is bad or rejected).
     """
+    if isinstance(demos_dirs, str | Path):  # one folder
+        demos_dirs = (demos_dirs,)
     where = " + ".join(str(d) for d in demos_dirs)
     recordings: list[Recording] = []
     errors: dict[str, str] = {}

@@ -87,7 +87,7 @@ def test_training_skips_bad_files_and_says_how_many_it_used(tmp_path: Path) -> N
     _edit_meta(SHIPPED[1], tmp_path / SHIPPED[1].name, origin_lat_deg=999)
     said: list[str] = []
     data, used, skipped = expert_pairs(
-        get_il_setup("il-gaussian-positional"), tmp_path, said.append
+        get_il_setup("il-gaussian-positional"), (tmp_path,), said.append
     )
     assert (used, skipped) == (3, 2)
     assert sum(line.startswith("warning: skipping") for line in said) == 2
@@ -97,7 +97,7 @@ def test_training_skips_bad_files_and_says_how_many_it_used(tmp_path: Path) -> N
 
 def test_a_folder_without_usable_demonstrations_is_an_error(tmp_path: Path) -> None:
     with pytest.raises(DemoFormatError, match="no usable demonstration"):
-        expert_pairs(get_il_setup("il-gaussian-positional"), tmp_path, lambda _: None)
+        expert_pairs(get_il_setup("il-gaussian-positional"), (tmp_path,), lambda _: None)
 
 
 def test_the_recorder_never_writes_into_the_package_unasked(capsys) -> None:

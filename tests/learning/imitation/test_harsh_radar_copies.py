@@ -72,9 +72,9 @@ def test_harsh_copies_add_the_same_actions_and_scene_behind_a_noisier_image(
 ) -> None:
     save_recordings(recordings, tmp_path)
     base = get_il_setup("il-gaussian-radar-ow").replace(harsh_radar_copies=0)
-    plain, n_plain, _ = expert_pairs(base, tmp_path, lambda _: None)
+    plain, n_plain, _ = expert_pairs(base, (tmp_path,), lambda _: None)
     said: list[str] = []
-    data, n_runs, _ = expert_pairs(base.replace(harsh_radar_copies=2), tmp_path, said.append)
+    data, n_runs, _ = expert_pairs(base.replace(harsh_radar_copies=2), (tmp_path,), said.append)
     assert n_runs == n_plain  # the recorded runs, not the copies
     m = len(plain)
     assert len(data) == 3 * m and "each also 2× at the harshest radar level" in said[0]
