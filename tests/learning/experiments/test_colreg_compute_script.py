@@ -37,3 +37,16 @@ def test_no_run_is_an_error(tmp_path: Path) -> None:
     with pytest.raises(SystemExit) as exc:
         compute.main([str(tmp_path)])
     assert exc.value.code == 2
+
+
+def test_a_run_resumed_in_a_copy_counts_once_at_its_whole_length(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = "iteration,wall_time_s\n1,10.0\n"
+    for name, wall in (("seed0", 1000.0), ("seed0-300", 1800.0), ("seed1", 900.0)):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "summary.json").write_text(
+            json.dumps({"setup": "x", "seed": int(name[4]), "wall_time_s": wall})
+        )
+        (tmp_path / name / "log.csv").write_text(log)
+    assert [r[2] for r in compute.runs([tmp_path])] == [1800.0, 900.0]
