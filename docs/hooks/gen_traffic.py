@@ -62,10 +62,13 @@ def traffic_setups_markdown() -> str:
         if "colreg" not in s.name:
             continue
         family = f"{1 - s.colreg_share:.0%} open-water family, {s.colreg_share:.0%} COLREG"
+        start = s.init_policy or "new networks"
+        if s.init_policy_required:
+            start = "a trained checkpoint (`--init-policy FILE`)"
         lines.append(
             f"| `{s.name}` | RL ({type(s.algorithm_config).__name__.removesuffix('Config')}) "
             f"| {s.observation} | {family} | {s.colreg_reward or '(none)'} "
-            f"| {s.init_policy or 'new networks'} "
+            f"| {start} "
             f"| {'reactive (vo)' if s.reactive_targets else 'hold course'} |"
         )
     from learning.experiments.il_setups import COLREG_EPISODE_SHARE

@@ -180,6 +180,12 @@ class TrainArgs:
             raise UserError("--init-policy starts a new run; --resume continues one: not both")
         if self.init_policy and not Path(self.init_policy).is_file():
             raise UserError(f"--init-policy {self.init_policy}: no such file")
+        rl_setup = SETUPS.get(self.setup)
+        if rl_setup and rl_setup.init_policy_required and not (self.init_policy or self.resume):
+            raise UserError(
+                f"{self.setup} starts from a trained checkpoint: give --init-policy FILE "
+                "(e.g. an il-gaussian-radar-ow-colreg seed's best.pt)"
+            )
         if self.crowded_share:
             if self.setup not in SETUPS or SETUPS[self.setup].task != "open-water":
                 raise UserError(

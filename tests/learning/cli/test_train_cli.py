@@ -239,3 +239,11 @@ def test_harsh_radar_share_is_for_new_radar_rl_runs_on_the_family(tmp_path: Path
     with pytest.raises(SystemExit, match="must be > 0 and < 1"):
         run(_args(tmp_path / "d", setup="rl-gaussian-radar-ow", harsh_radar_share=1.0))
     assert not any(tmp_path.rglob("*.pt"))
+
+
+def test_a_setup_that_starts_from_a_trained_file_refuses_to_start_without_one(
+    tmp_path: Path,
+) -> None:
+    with pytest.raises(SystemExit, match="give --init-policy FILE"):
+        run(_args(tmp_path / "a", setup="rl-gaussian-radar-colreg-ilft"))
+    assert not any(tmp_path.rglob("*.pt"))

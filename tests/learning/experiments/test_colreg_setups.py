@@ -70,3 +70,13 @@ def test_colreg_setups_round_trip_through_a_checkpoint(name: str) -> None:
     setup = get_setup(name)
     back = setup_from_params(get_setup("rl-gaussian-radar-ow"), setup_params(setup))
     assert back == dataclasses.replace(setup)
+
+
+def test_the_il_fine_tuning_keeps_the_input_statistics_and_needs_a_start_file() -> None:
+    ilft, on = get_setup("rl-gaussian-radar-colreg-ilft"), get_setup(NAMES[0])
+    assert ilft.init_policy_required and not ilft.init_policy
+    assert ilft.algorithm_config.fixed_input_stats and not on.algorithm_config.fixed_input_stats
+    assert ilft.training_family == on.training_family and ilft.colreg_reward == "all"
+    assert dataclasses.replace(ilft.algorithm_config, fixed_input_stats=False) == (
+        on.algorithm_config
+    )
