@@ -438,9 +438,9 @@ def expert_pairs(
     recordings: list[Recording] = []
     errors: dict[str, str] = {}
     for folder in demos_dirs:
-        report = load_recordings(folder)
-        recordings += report.recordings
-        errors.update(report.errors)
+        found = load_recordings(folder)
+        recordings += found.recordings
+        errors.update(found.errors)
     plausible = []
     for rec in recordings:
         try:
