@@ -39,9 +39,8 @@ per-decision COLREG reward terms added (:mod:`usvsim.task.colreg_reward`,
 :attr:`RLSetup.colreg_reward`: the terms on, ``"all"`` or names; ``""`` off).
 ``rl-gaussian-radar-colreg`` is rl-gaussian-radar-ow's recipe so trained;
 ``-colreg-noreward`` the same family and budget with the study's reward alone (the ablation's
-baseline); ``-colreg-ft`` starts from the shipped ``rl-gaussian-radar-ow``; ``-colreg-ilft``
-from a trained IL traffic seed the user names (``usvsim train --init-policy FILE``), its input
-statistics kept;
+baseline); ``-colreg-ft`` starts from the shipped ``rl-gaussian-radar-ow``, ``-colreg-ilft``
+from a trained IL seed (``usvsim train --init-policy FILE``), its input statistics kept;
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -214,8 +213,7 @@ class RLSetup:
     task: str = "pole"  # one of TASKS: the training environment (make_vector_env)
     # a shipped model (usvsim/models/<name>.pt) whose policy a run starts from; "": new networks
     init_policy: str = ""
-    # a new run must start from a checkpoint given by the user (usvsim train --init-policy FILE,
-    # e.g. a trained IL seed, where no model is shipped to start from); never from new networks
+    # a new run starts only from a checkpoint the user gives (usvsim train --init-policy FILE)
     init_policy_required: bool = False
     # open-water: the share of training episodes drawn from the crowded family (every member at
     # its most obstacles and vessels, usvsim.task.openwater_env.crowded_family), the rest from
@@ -334,6 +332,9 @@ COLREG_RADAR = RLSetup(
     harsh_radar_share=0.3, colreg_share=0.5, colreg_reward="all",
 )  # fmt: skip
 
+# RL from an IL traffic seed (--init-policy FILE), its input statistics kept as -ow-ft's
+COLREG_ILFT = COLREG_RADAR.replace(name="rl-gaussian-radar-colreg-ilft",
+    algorithm_config=OW_RADAR_FT_TRPO, init_policy_required=True)  # fmt: skip
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
     harsh_radar_share=0.0,
@@ -419,14 +420,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-noreward", colreg_reward=""),
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-ft", init_policy="rl-gaussian-radar-ow"),
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-reactive", reactive_targets=True),
-        # RL fine-tuning of an IL traffic seed (il-gaussian-radar-ow-colreg, --init-policy): the
-        # input statistics kept, as rl-gaussian-radar-ow-ft (docs/notes/2026-12-openwater-
-        # training.md: refreshed from the rollouts, an IL radar policy fell from 14/15 to 0/15)
-        COLREG_RADAR.replace(
-            name=COLREG_RADAR.name + "-ilft",
-            algorithm_config=OW_RADAR_FT_TRPO,
-            init_policy_required=True,
-        ),
+        COLREG_ILFT,
         COLREG_SCENE,
     )
 }
