@@ -100,3 +100,12 @@ def test_the_mixed_setup_learns_from_the_runs_of_both_folders(tmp_path: Path) ->
     both, n_runs, skipped = expert_pairs(SCENE, folders, lambda _: None)
     assert n_runs == each[0][1] + each[1][1] and skipped == 0
     assert len(both) == len(each[0][0]) + len(each[1][0])
+
+
+def test_the_colreg_share_is_that_of_the_kept_demonstrations() -> None:
+    from learning.imitation.demonstrations import load_recordings, quality_check
+
+    kept = [
+        sum(not quality_check(r) for r in load_recordings(d).recordings) for d in BOTH.demos_dirs
+    ]
+    assert COLREG_EPISODE_SHARE == pytest.approx(kept[1] / sum(kept))
