@@ -41,6 +41,8 @@ per-decision COLREG reward terms added (:mod:`usvsim.task.colreg_reward`,
 ``-colreg-noreward`` the same family and budget with the study's reward alone (the ablation's
 baseline); ``-colreg-ft`` starts from the shipped ``rl-gaussian-radar-ow``, ``-colreg-ilft``
 from a trained IL seed (``usvsim train --init-policy FILE``), its input statistics kept;
+``-colreg-ilft-far`` the same with the COLREG members' goals 250-850 m ahead, as far as the
+COLREG suite's (:attr:`RLSetup.colreg_suite_goals`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -94,6 +96,10 @@ crowded share (each stored in the run's checkpoints), so a setup name plus a see
 options reproduces a run. :func:`setup_params` and :func:`setup_from_params` store a setup in a
 checkpoint and read it back (also the flat form of checkpoints written before the setups held
 their configs).
+
+Why this module is long: the registry is one table: every setup, the dataclass whose fields
+define a setup and the documentation of what each field changes belong together, so that a
+setup's name in a note or a checkpoint leads to one place.
 """
 
 from __future__ import annotations
@@ -111,7 +117,7 @@ from learning.algorithms.ppo import PPOConfig
 from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
-from usvsim.task.colreg_family import COLREG_FAMILY
+from usvsim.task.colreg_family import COLREG_FAMILY, COLREG_FAMILY_SUITE_GOALS
 from usvsim.task.colreg_reward import ColregRewardWeights, colreg_weights
 from usvsim.task.observations import ObservationKind
 from usvsim.task.openwater_env import (
@@ -233,13 +239,19 @@ class RLSetup:
     # (the training env's on_decision hook, learning.experiments.train_rl.env_maker: the
     # evaluation is not imported here); False: they hold course
     reactive_targets: bool = False
+    # open-water: the COLREG members' goals 250-850 m ahead, so that the COLREG suite's (600 m,
+    # 797 m) lie inside (usvsim.task.colreg_family.COLREG_FAMILY_SUITE_GOALS); False: 250-500 m
+    colreg_suite_goals: bool = False
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.colreg_share < 1.0:
             raise ValueError(f"RLSetup.colreg_share must be in [0, 1), got {self.colreg_share!r}")
-        if (self.colreg_share or self.colreg_reward or self.reactive_targets) and (
-            self.task != "open-water"
-        ):
+        if (
+            self.colreg_share
+            or self.colreg_reward
+            or self.reactive_targets
+            or self.colreg_suite_goals
+        ) and (self.task != "open-water"):
             raise ValueError("RLSetup.colreg_* and reactive_targets need task='open-water'")
         self.colreg_weights  # noqa: B018 -- raises ValueError for an unknown term
         if self.task not in TASKS:
@@ -275,7 +287,8 @@ class RLSetup:
         if self.crowded_share:
             family = mix_families(family, crowded_family(), self.crowded_share)
         if self.colreg_share:
-            family = mix_families(family, COLREG_FAMILY, self.colreg_share, prefix="colreg-")
+            colreg = COLREG_FAMILY_SUITE_GOALS if self.colreg_suite_goals else COLREG_FAMILY
+            family = mix_families(family, colreg, self.colreg_share, prefix="colreg-")
         if self.harsh_radar_share:
             harsh = harsh_radar_family(family)
             family = mix_families(family, harsh, self.harsh_radar_share, prefix="harsh-")
@@ -335,6 +348,8 @@ COLREG_RADAR = RLSetup(
 # RL from an IL traffic seed (--init-policy FILE), its input statistics kept as -ow-ft's
 COLREG_ILFT = COLREG_RADAR.replace(name="rl-gaussian-radar-colreg-ilft",
     algorithm_config=OW_RADAR_FT_TRPO, init_policy_required=True)  # fmt: skip
+# the same with the COLREG members' goals as far as the suite's (600 and 797 m)
+COLREG_ILFT_FAR = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-far", colreg_suite_goals=True)
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
     harsh_radar_share=0.0,
@@ -421,6 +436,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-ft", init_policy="rl-gaussian-radar-ow"),
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-reactive", reactive_targets=True),
         COLREG_ILFT,
+        COLREG_ILFT_FAR,
         COLREG_SCENE,
     )
 }

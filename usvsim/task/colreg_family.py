@@ -17,7 +17,9 @@ other draw of the episode):
 Every other range (own cruise speed, current, GNSS quality and outages, radar degradation) is
 that of the open-water family's ``traffic`` member (:data:`OPEN_WATER_FAMILY`), so the
 disturbances stay those of the family; the own ship starts heading within ±15° of its goal
-(a goal 250-500 m away, no static obstacle), so that the encounter meets it under way. Use
+(a goal 250-500 m away, no static obstacle), so that the encounter meets it under way;
+:data:`COLREG_FAMILY_SUITE_GOALS` puts the goal 250-850 m away, so that the COLREG suite's goals
+(Imazu 600 m, trafficgen 797 m) lie inside the training range. Use
 :func:`colreg_training_family` for the training mixture (the open-water family with a share of
 these members, :func:`usvsim.task.openwater_env.mix_families`).
 
@@ -171,15 +173,24 @@ def _traffic_member() -> OpenWaterScenario:
     return OPEN_WATER_FAMILY.members[OPEN_WATER_FAMILY.names.index("traffic")]
 
 
-def colreg_member(traffic: ColregTraffic) -> OpenWaterScenario:
+# the goal distances of the COLREG suite's episodes (usvsim.evaluation.colreg_suite): Imazu's
+# problems 600 m ahead (usvsim.evaluation.imazu), trafficgen's baseline situations 797 m (the
+# own ship's 8 min run at ship scale, usvsim.evaluation.trafficgen_io); measured on the suite
+GOAL_DISTANCE_RANGE_M: Range = (250.0, 500.0)  # m, the members' default (COLREG_FAMILY)
+SUITE_GOAL_DISTANCE_RANGE_M: Range = (250.0, 850.0)  # m, covers both of the suite's goals
+
+
+def colreg_member(
+    traffic: ColregTraffic, goal_distance_range_m: Range = GOAL_DISTANCE_RANGE_M
+) -> OpenWaterScenario:
     """A COLREG member with ``traffic`` (module docstring): the family's ``traffic`` member's
-    disturbances, no static obstacle, no route vessel, the goal 250-500 m ahead of a start
-    heading within ±15° of it."""
+    disturbances, no static obstacle, no route vessel, the goal ``goal_distance_range_m``
+    (default 250-500 m) ahead of a start heading within ±15° of it."""
     return replace(
         _traffic_member(),
         primary_obstacle=False,
         n_vessels_range=(0, 0),
-        goal_distance_range_m=(250.0, 500.0),
+        goal_distance_range_m=goal_distance_range_m,
         goal_bearing_range_rad=(0.0, 0.0),
         goal_lateral_range_m=(0.0, 0.0),
         heading_offset_range_rad=(-15 * DEG, 15 * DEG),
@@ -187,14 +198,27 @@ def colreg_member(traffic: ColregTraffic) -> OpenWaterScenario:
     )
 
 
-COLREG_FAMILY = ScenarioMixture(
-    members=(
-        colreg_member(ColregTraffic(n_targets_range=(1, 4), speed_ratio_range=(0.5, 1.0))),
-        colreg_member(ColregTraffic(n_targets_range=(1, 3), common_meeting=False)),
-    ),
-    weights=(0.5, 0.5),
-    names=("imazu", "trafficgen"),
-)
+def colreg_family(goal_distance_range_m: Range = GOAL_DISTANCE_RANGE_M) -> ScenarioMixture:
+    """The two COLREG members (module docstring), half the episodes each, with their goals
+    ``goal_distance_range_m`` ahead (m)."""
+    return ScenarioMixture(
+        members=(
+            colreg_member(
+                ColregTraffic(n_targets_range=(1, 4), speed_ratio_range=(0.5, 1.0)),
+                goal_distance_range_m,
+            ),
+            colreg_member(
+                ColregTraffic(n_targets_range=(1, 3), common_meeting=False), goal_distance_range_m
+            ),
+        ),
+        weights=(0.5, 0.5),
+        names=("imazu", "trafficgen"),
+    )
+
+
+COLREG_FAMILY = colreg_family()
+# the members with goals as far as the suite's (SUITE_GOAL_DISTANCE_RANGE_M)
+COLREG_FAMILY_SUITE_GOALS = colreg_family(SUITE_GOAL_DISTANCE_RANGE_M)
 
 
 def colreg_training_family(

@@ -13,6 +13,7 @@ from usvsim.evaluation.colreg import EncounterTracks, EncounterType, evaluate_co
 from usvsim.evaluation.colreg_suite import COLREG_SETS, colreg_episodes
 from usvsim.task.colreg_family import (
     COLREG_FAMILY,
+    COLREG_FAMILY_SUITE_GOALS,
     COLREG_KINDS,
     ColregTraffic,
     colreg_training_family,
@@ -129,3 +130,20 @@ def test_bad_traffic_parameters_are_refused() -> None:
         ColregTraffic(n_targets_range=(0, 2))
     with pytest.raises(ValueError, match="kinds"):
         ColregTraffic(kinds=("crossing",))
+
+
+def test_suite_goal_members_reach_as_far_as_the_colreg_suite() -> None:
+    def goal_m(family: object, n: int) -> np.ndarray:
+        eps = draw_family(family, 5, n)
+        return np.array([np.hypot(*(np.asarray(e.goal_ne) - e.start_ne)) for e in eps])
+
+    near, far = goal_m(COLREG_FAMILY, 200), goal_m(COLREG_FAMILY_SUITE_GOALS, 200)
+    suite = [
+        np.hypot(*(np.asarray(e.goal_ne) - e.start_ne))
+        for name in ("imazu-01", "trafficgen-1ts")
+        for e in colreg_episodes(next(s for s in COLREG_SETS if s.name == name), 2, "validation")
+    ]
+    assert near.min() >= 250.0 and near.max() <= 500.0
+    assert far.min() >= 250.0 and far.max() <= 850.0
+    assert max(suite) > near.max()  # the suite's goals (600, 797 m) lie beyond the default
+    assert (far > max(suite)).any() and (far < 500.0).any()  # and inside the far range
