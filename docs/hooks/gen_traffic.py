@@ -62,6 +62,8 @@ def traffic_setups_markdown() -> str:
         if "colreg" not in s.name:
             continue
         family = f"{1 - s.colreg_share:.0%} open-water family, {s.colreg_share:.0%} COLREG"
+        if s.colreg_suite_goals:
+            family += " (goals 250-850 m, as far as the suite's)"
         start = s.init_policy or "new networks"
         if s.init_policy_required:
             start = "a trained checkpoint (`--init-policy FILE`)"

@@ -67,6 +67,7 @@ from usvsim.evaluation.seed_stats import SeedTable, load_seed_tables
 __all__ = [
     "CARD_FIELDS",
     "RECOMMENDATION_RULE",
+    "TRAFFIC_USES",
     "USES",
     "ModelCard",
     "ModelsArgs",
@@ -75,6 +76,7 @@ __all__ = [
     "cards_markdown",
     "cards_table",
     "check_cards",
+    "colreg_summary",
     "default_helmsmen",
     "load_cards",
     "models_report",
@@ -92,13 +94,18 @@ USES: dict[str, str] = {
     "study-radar": "the study's pole task, a radar image and the goal (radar+goal)",
     "open-water-scene": "the open-water family, the true obstacle and vessel list (scene)",
     "open-water-radar": "the open-water family, a radar image and the goal (radar+goal)",
+    "traffic-radar": "traffic under the rules of the road: the open-water family with COLREG "
+    "encounters (Imazu and trafficgen situations), a radar image and the goal (radar+goal)",
 }
+# the uses judged on the COLREG suite (their cards hold validation["colreg"], test["colreg"])
+TRAFFIC_USES = ("traffic-radar",)
 # the stress sets a use's recommendation is judged on first (empty: all of them)
 USE_SETS: dict[str, tuple[str, ...]] = {
     "study-positional": ("study", "waypoints"),
     "study-radar": ("study", "waypoints"),
     "open-water-scene": (),
     "open-water-radar": (),
+    "traffic-radar": (),
 }
 RECOMMENDATION_RULE = (
     "For each use and each family (RL, IL): the model with the highest mean success over the "
@@ -106,8 +113,11 @@ RECOMMENDATION_RULE = (
     "validation) on the use's sets (open-water uses: all sets; study uses: study and waypoints, "
     "the task they were trained for); ties broken by the mean over all sets of the validation "
     "split, then by name. Where a model of the use and family was trained over at least 3 seeds "
-    "(its setup's seed table in usvsim/models/seeds/), only such models compete. Test-split "
-    "figures play no part."
+    "(its setup's seed table in usvsim/models/seeds/), only such models compete. Traffic uses "
+    "(traffic-radar) rank instead by success x compliance over the COLREG suite's validation "
+    "split (25 sets x 5 episodes, usvsim bench --suite colreg --split validation), ties broken "
+    "by the mean over all stress validation sets, then by name (written 2026-12-07, "
+    "docs/notes/2026-12-traffic.md). Test-split figures play no part."
 )
 MIN_SEEDS = 3  # issue 37: every recommended model trained over >= 3 seeds
 CARD_FIELDS = (
@@ -369,27 +379,51 @@ def default_helmsmen(models_dir: Path | None = None) -> list[str]:
     return [n for n in available_helmsmen(folder) if n not in files or n in recommended]
 
 
+def colreg_summary(scores: Mapping[str, Any]) -> dict[str, Any]:
+    """A card's ``validation["colreg"]`` or ``test["colreg"]`` from one split's record of
+    ``benchmarks/colreg_seed_scores.py`` (a seed's ``scores.json``, ``validation[file]`` or
+    ``test``): episodes, success and compliance (%), encounters and collisions."""
+    return {
+        "episodes": int(scores["episodes"]),
+        "success_pct": round(100.0 * scores["success_rate"], 1),
+        "compliance_pct": round(100.0 * scores["compliance_rate"], 1),
+        "encounters": int(scores["encounters"]),
+        "collisions": int(scores["collisions"]),
+    }
+
+
+def _competes(card: ModelCard) -> bool:
+    """Whether the card holds the validation figures its use is ranked on."""
+    return bool(card.validation.get("colreg" if card.use in TRAFFIC_USES else "stress"))
+
+
 def _score(card: ModelCard) -> tuple[float, float, str]:
     """The rule's key (higher first; the name breaks ties alphabetically)."""
     stress = card.validation.get("stress", {})
     per_set: dict[str, float] = stress.get("success_pct", {})
+    everything = sum(per_set.values()) / len(per_set) if per_set else -math.inf
+    if card.use in TRAFFIC_USES:
+        colreg = card.validation.get("colreg", {})
+        if not colreg:
+            return (-math.inf, everything, card.name)
+        return (colreg["success_pct"] * colreg["compliance_pct"] / 100.0, everything, card.name)
     if not per_set:
         return (-math.inf, -math.inf, card.name)
     wanted = [per_set[s] for s in USE_SETS[card.use] if s in per_set] or list(per_set.values())
-    everything = list(per_set.values())
-    return (sum(wanted) / len(wanted), sum(everything) / len(everything), card.name)
+    return (sum(wanted) / len(wanted), everything, card.name)
 
 
 def recommend(
     cards: Mapping[str, ModelCard], seeded: Collection[str] | None = None
 ) -> dict[tuple[str, str], str]:
     """(use, family) -> the recommended model under :data:`RECOMMENDATION_RULE`; only cards
-    with the stress suite's validation figures compete (``validation["stress"]``), and where a
+    with their use's validation figures compete (``validation["stress"]``;
+    ``validation["colreg"]`` for :data:`TRAFFIC_USES`), and where a
     use and family has a card whose setup is in ``seeded`` (default: the setups with a seed
     table of at least :data:`MIN_SEEDS` seeds), only those."""
     if seeded is None:
         seeded = {s for s, t in load_seed_tables().items() if len(t.seeds) >= MIN_SEEDS}
-    competing = [c for c in cards.values() if c.validation.get("stress")]
+    competing = [c for c in cards.values() if _competes(c)]
     replicated = {(c.use, c.family) for c in competing if c.setup in seeded}
     best: dict[tuple[str, str], ModelCard] = {}
     for card in competing:
@@ -507,6 +541,10 @@ def _card_section(name: str, c: ModelCard, seeds: SeedTable | None) -> list[str]
         lines.append("- Validation at `best.pt`: " + _best_pt_text(study))
     lines.append(f"- Stress suite, validation split: {_pct(c.validation.get('stress', {}))}; "
                  f"test split: {_pct(c.test.get('stress', {}))}")  # fmt: skip
+    if c.validation.get("colreg") or c.test.get("colreg"):
+        lines.append(f"- COLREG suite (success, compliance, collisions), validation split: "
+                     f"{_colreg_text(c.validation.get('colreg', {}))}; test split: "
+                     f"{_colreg_text(c.test.get('colreg', {}))}")  # fmt: skip
     if seeds is not None:
         each = " / ".join(f"{100 * v:.1f}" for v in seeds.original.per_seed)
         lines.append(
@@ -521,6 +559,14 @@ def _card_section(name: str, c: ModelCard, seeds: SeedTable | None) -> list[str]
     if c.notes:
         lines.append(f"- Notes: {c.notes}")
     return [*lines, ""]
+
+
+def _colreg_text(summary: Mapping[str, Any]) -> str:
+    if not summary:
+        return "–"
+    return (f"{summary['success_pct']:.1f} %, {summary['compliance_pct']:.1f} % of "
+            f"{summary['encounters']} encounters, {summary['collisions']} in "
+            f"{summary['episodes']} episodes")  # fmt: skip
 
 
 def _run_line(run: TrainingRun) -> str:

@@ -158,6 +158,33 @@ def test_where_a_use_has_a_model_over_seeds_only_such_models_compete() -> None:
     assert recommend(cards, seeded={"il"}) == recommend(cards, seeded={"il", "absent"})
 
 
+def test_traffic_use_ranks_by_colreg_validation_success_times_compliance() -> None:
+    """traffic-radar ranks on the COLREG suite's validation split, not on the stress suite;
+    a traffic card without COLREG validation figures does not compete."""
+    tr = "traffic-radar"
+
+    def traffic(name: str, stress: float, success: float, compliance: float | None) -> ModelCard:
+        card = _card(name, tr, "RL", {"x": stress}, test=stress)
+        colreg = {} if compliance is None else {"colreg": {
+            "episodes": 125, "success_pct": success, "compliance_pct": compliance,
+            "encounters": 250, "collisions": 0}}  # fmt: skip
+        return replace(card, validation={**card.validation, **colreg})
+
+    cards = {
+        "safe": traffic("safe", 99.0, 84.0, 92.0),  # 77.3: the best stress figures
+        "keeps-rules": traffic("keeps-rules", 90.0, 96.0, 88.0),  # 84.5
+        "no-colreg": traffic("no-colreg", 100.0, 0.0, None),
+    }
+    assert recommend(cards, seeded=set()) == {(tr, "RL"): "keeps-rules"}
+    tie = {**cards, "tie": traffic("tie", 95.0, 88.0, 96.0)}  # 84.5 too, better stress
+    assert recommend(tie, seeded=set()) == {(tr, "RL"): "tie"}
+    assert model_cards.colreg_summary(
+        {"episodes": 125, "success_rate": 0.84, "compliance_rate": 0.9219, "encounters": 269,
+         "collisions": 3}
+    ) == {"episodes": 125, "success_pct": 84.0, "compliance_pct": 92.2, "encounters": 269,
+          "collisions": 3}  # fmt: skip
+
+
 def test_shipped_marks_follow_the_rule_at_most_one_per_use_and_family() -> None:
     cards = load_cards()
     assert recommendation_mismatches(cards) == []
