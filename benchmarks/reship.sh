@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Re-run every published row of one shipped model after its file was replaced (another seed's
-# weights under the same name: the seed rule of docs/notes/2026-12-seeds.md), and write them into
-# the committed data, guide tables and model card. Run from the repository root, after
+# weights under the same name: the seed rule of docs/notes/2026-12-seeds.md) or first shipped
+# (its rows are then added), and write them into the committed data, guide tables and model card. Run from the repository root, after
 # `python benchmarks/train_rl.py --setups SETUP --ship-only` (or train_il.py) wrote the file:
 #
 #   bash benchmarks/reship.sh radar-categorical-trpo-openwater-continued R
@@ -49,13 +49,19 @@ run colreg.json usvsim bench --suite colreg --helmsmen "$model" --colreg-episode
   --no-plots
 run bench.json usvsim bench --helmsmen "$model" --json --no-plots
 
+merge() { # DATA NEW: replace the model's rows in DATA, or add them where DATA has none (new model)
+  if python -c "import json, sys; rows = json.load(open(sys.argv[1]))['rows']
+sys.exit(0 if any(r['helmsman'] == sys.argv[2] for r in rows) else 1)" "$1" "$model"; then
+    python benchmarks/stress_merge.py --replace-helmsmen "$model" "$1" "$2"
+  else
+    python benchmarks/stress_merge.py "$1" "$2"
+  fi
+}
 for data in stress stress-weather; do
-  python benchmarks/stress_merge.py --replace-helmsmen "$model" "docs/data/$data.json" \
-    "$out/stress-test.json"
+  merge "docs/data/$data.json" "$out/stress-test.json"
 done
-python benchmarks/stress_merge.py --replace-helmsmen "$model" docs/data/stress-weather-calm.json \
-  "$out/calm-twin.json"
-python benchmarks/stress_merge.py --replace-helmsmen "$model" docs/data/bench.json "$out/bench.json"
+merge docs/data/stress-weather-calm.json "$out/calm-twin.json"
+merge docs/data/bench.json "$out/bench.json"
 python benchmarks/colreg_table.py "$out/colreg.json" --replace docs/guide/colreg-suite.md
 python benchmarks/colreg_table.py "$out/stress-test.json" --replace docs/guide/colreg-suite.md
 python benchmarks/reship_docs.py "$model"

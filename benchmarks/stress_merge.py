@@ -56,12 +56,21 @@ def _same(a: dict[str, Any], b: dict[str, Any]) -> bool:
     return all(a.get(k) == b.get(k) for k in keys)
 
 
+def _sets(run: dict[str, Any]) -> list[str]:
+    """A run's sets in order (the study bench's file has no ``sets`` list: from its rows)."""
+    return run.get("sets") or list(dict.fromkeys(r["episode_set"] for r in run["rows"]))
+
+
+def _helmsmen(run: dict[str, Any]) -> list[str]:
+    return run.get("helmsmen") or list(dict.fromkeys(r["helmsman"] for r in run["rows"]))
+
+
 def merge(base: dict[str, Any], new: dict[str, Any], order: list[str]) -> list[str]:
     """Merge ``new``'s helmsmen into ``base`` in place (module docstring); the helmsmen added.
     ``order``: the registry's order of helmsmen. ``SystemExit`` where the runs disagree."""
-    if not set(base["sets"]) <= set(new["sets"]):
+    if not set(_sets(base)) <= set(_sets(new)):
         raise SystemExit(
-            f"stress_merge: the new run lacks sets {set(base['sets']) - set(new['sets'])}"
+            f"stress_merge: the new run lacks sets {set(_sets(base)) - set(_sets(new))}"
         )
     for key in ("suite", "split", "episodes_per_set"):
         if base.get(key) != new.get(key):
@@ -69,14 +78,14 @@ def merge(base: dict[str, Any], new: dict[str, Any], order: list[str]) -> list[s
                 f"stress_merge: the runs differ in {key} ({base.get(key)!r}, {new.get(key)!r})"
             )
     by = {(r["episode_set"], r["helmsman"]): r for r in base["rows"]}
-    sets = {s: i for i, s in enumerate(base["sets"])}
+    sets = {s: i for i, s in enumerate(_sets(base))}
     new_rows = [r for r in new["rows"] if r["episode_set"] in sets]
-    added = [h for h in new["helmsmen"] if h not in base["helmsmen"]]
+    added = [h for h in _helmsmen(new) if h not in _helmsmen(base)]
     for r in new_rows:
         old = by.get((r["episode_set"], r["helmsman"]))
         if r["helmsman"] not in added and (old is None or not _same(old, r)):
             raise SystemExit(f"stress_merge: {r['helmsman']} on {r['episode_set']} differs")
-    helmsmen = list(base["helmsmen"])
+    helmsmen = _helmsmen(base)
     for h in added:
         before = order[: order.index(h)] if h in order else order
         anchor = next((a for a in reversed(before) if a in helmsmen), None)
@@ -84,9 +93,10 @@ def merge(base: dict[str, Any], new: dict[str, Any], order: list[str]) -> list[s
     rank = {h: i for i, h in enumerate(helmsmen)}
     rows = base["rows"] + [r for r in new_rows if r["helmsman"] in added]
     base["rows"] = sorted(rows, key=lambda r: (sets[r["episode_set"]], rank[r["helmsman"]]))
-    base["helmsmen"] = helmsmen
+    if "helmsmen" in base:
+        base["helmsmen"] = helmsmen
     if added:
-        merged = {"helmsmen": added, "run_helmsmen": new["helmsmen"], "wall_s": new["wall_s"]}
+        merged = {"helmsmen": added, "run_helmsmen": _helmsmen(new), "wall_s": new["wall_s"]}
         base["merged"] = [*base.get("merged", []), merged]
     return added
 
