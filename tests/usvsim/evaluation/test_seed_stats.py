@@ -177,11 +177,12 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
             "rl-categorical-radar",
             "il-gaussian-radar",
             "il-gaussian-radar-ow-colreg",
+            "rl-gaussian-radar-colreg-ilft",
         }
     )
     # issue 37: every recommended model's setup was trained over >= 3 seeds
     recommended = {c.setup for c in cards.values() if c.recommended}
-    assert len(recommended) == 9 and recommended <= set(seeds)
+    assert len(recommended) == 10 and recommended <= set(seeds)
     lines = cards_table(cards, seeds).splitlines()
     assert "stress test: IQM over N seeds [95 % CI]" in lines[0]
     with_iqm = [line for line in lines if "(3 seeds)" in line]
