@@ -197,7 +197,9 @@ def test_shipped_model_reproduces_its_recorded_validation(path: Path) -> None:
     rl = setup.startswith("rl-")  # expected_setup knows the RL setups only
     ckpt = load_checkpoint(path, expected_setup=setup if rl else None)
     assert ckpt.setup == setup and recorded["card"]["former_names"] == [setup]
-    assert ckpt.slim and path.stat().st_size < 3_500_000
+    # slim copies: float16 radar CNNs ~2.8 MB; the traffic models keep float32 (5.7 MB), as
+    # float16 weights moved a traffic file's COLREG validation (benchmarks/ship_traffic.py)
+    assert ckpt.slim and path.stat().st_size < 6_000_000
     helmsman = load_helmsman(path)
     records = evaluate(
         helmsman, validation_episodes(), observation=ckpt.observation, action=ckpt.action
