@@ -31,6 +31,7 @@ import os
 import shutil
 import sys
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -112,8 +113,8 @@ def main(argv: list[str] | None = None) -> int:
     save_checkpoint(slim_copy(load_checkpoint(args.file), half=False), part)
     facts = checkpoint_facts(part)
     with selection_mode("ship_traffic"):
-        val = score(part, SimpleNamespace(**vars(COLREG_SCORING)), "validation", 5)
-    test = score(part, SimpleNamespace(**vars(COLREG_SCORING)), "test", 10)
+        val = score(part, COLREG_SCORING, "validation", 5)
+    test = score(part, COLREG_SCORING, "test", 10)
     stress = stress_figures(args.stress, args.label, args.name)
     summary = json.loads((args.run / "summary.json").read_text())
     seeds = json.loads(args.seed_table.read_text())
@@ -130,14 +131,13 @@ def main(argv: list[str] | None = None) -> int:
         validation={"stress": stress["validation"], "colreg": colreg_summary(val)},
         test={"stress": stress["test"], "colreg": colreg_summary(test)}, notes=args.notes,
     )  # fmt: skip
+    evaluation = evaluate_checkpoint(part)
+    heldout = evaluation["held-out"]
+    study_heldout = {k: heldout[k] for k in ("successes", "episodes", "collisions")}
+    card = replace(card, test={**card.test, "study_heldout": study_heldout})
     shutil.copyfile(part, target.with_suffix(".pt.part"))
     os.replace(target.with_suffix(".pt.part"), target)
     shutil.rmtree(scratch)
-    evaluation = evaluate_checkpoint(target)
-    heldout = evaluation["held-out"]
-    card = ModelCard(**{**vars(card), "test": {**card.test, "study_heldout": {
-        "successes": heldout["successes"], "episodes": heldout["episodes"],
-        "collisions": heldout["collisions"]}}})  # fmt: skip
     index = MODELS_DIR / "models.json"
     data = json.loads(index.read_text())
     data["models"][args.name] = {
