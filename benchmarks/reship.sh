@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Re-run every published row of one shipped model after its file was replaced (another seed's
 # weights under the same name: the seed rule of docs/notes/2026-12-seeds.md) or first shipped
-# (its rows are then added), and write them into the committed data, guide tables and model card. Run from the repository root, after
-# `python benchmarks/train_rl.py --setups SETUP --ship-only` (or train_il.py) wrote the file:
+# (its rows are then added), and write them into the committed data, guide tables and model
+# card. Run from the repository root, after `python benchmarks/train_rl.py --setups SETUP
+# --ship-only` (or train_il.py, or benchmarks/ship_traffic.py) wrote the file:
 #
 #   bash benchmarks/reship.sh radar-categorical-trpo-openwater-continued R
 #

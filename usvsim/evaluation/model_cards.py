@@ -32,9 +32,11 @@ field                  meaning
                        unknown) and a note (what it started from)
 ``validation``         figures on validation episodes: the run's own validation record at
                        ``best.pt`` (the study's 15, the family, crowded and harsh-radar sets)
-                       and the stress suite's validation split (mean success, sets >= 95 %)
+                       and the stress suite's validation split (mean success, sets >= 95 %);
+                       traffic uses also the COLREG suite's (``colreg``: success, compliance)
 ``test``               figures on test episodes, computed after selection: the study's 200
-                       held-out episodes and the stress suite's test split
+                       held-out episodes, the stress suite's test split and, for traffic uses,
+                       the COLREG suite's
 ``recommended``        the uses it is recommended for (empty or ``[use]``)
 ``notes``              anything else a user should know (free text)
 =====================  ===========================================================================
