@@ -42,7 +42,9 @@ per-decision COLREG reward terms added (:mod:`usvsim.task.colreg_reward`,
 baseline); ``-colreg-ft`` starts from the shipped ``rl-gaussian-radar-ow``, ``-colreg-ilft``
 from a trained IL seed (``usvsim train --init-policy FILE``), its input statistics kept;
 ``-colreg-ilft-far`` the same with the COLREG members' goals 250-850 m ahead, as far as the
-COLREG suite's (:attr:`RLSetup.colreg_suite_goals`);
+COLREG suite's (:attr:`RLSetup.colreg_suite_goals`); ``-colreg-ilft-safe`` the same as
+``-colreg-ilft`` with a penalty for each decision period inside the success rule's safety
+distance (:attr:`RLSetup.safety_reward`, :class:`usvsim.task.reward.SafetyMarginReward`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -105,6 +107,7 @@ setup's name in a note or a checkpoint leads to one place.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
@@ -128,6 +131,7 @@ from usvsim.task.openwater_env import (
     harsh_radar_family,
     mix_families,
 )
+from usvsim.task.reward import SafetyMarginReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 __all__ = [
@@ -242,6 +246,10 @@ class RLSetup:
     # open-water: the COLREG members' goals 250-850 m ahead, so that the COLREG suite's (600 m,
     # 797 m) lie inside (usvsim.task.colreg_family.COLREG_FAMILY_SUITE_GOALS); False: 250-500 m
     colreg_suite_goals: bool = False
+    # open-water: the weight (> 0) of the safety-margin penalty (usvsim.task.reward.
+    # SafetyMarginReward, a 5 m ramp to -w at the success rule's safety distance, on each
+    # decision period's nearest obstacle); 0: off (the study's reward alone)
+    safety_reward: float = 0.0
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.colreg_share < 1.0:
@@ -251,8 +259,16 @@ class RLSetup:
             or self.colreg_reward
             or self.reactive_targets
             or self.colreg_suite_goals
+            or self.safety_reward
         ) and (self.task != "open-water"):
-            raise ValueError("RLSetup.colreg_* and reactive_targets need task='open-water'")
+            raise ValueError(
+                "RLSetup.colreg_*, reactive_targets and safety_reward need task='open-water'"
+            )
+        if not (math.isfinite(self.safety_reward) and self.safety_reward >= 0.0):
+            raise ValueError(
+                f"RLSetup.safety_reward must be a finite weight >= 0 (0: off), "
+                f"got {self.safety_reward!r}"
+            )
         self.colreg_weights  # noqa: B018 -- raises ValueError for an unknown term
         if self.task not in TASKS:
             raise ValueError(f"RLSetup.task must be one of {TASKS}, got {self.task!r}")
@@ -311,6 +327,8 @@ class RLSetup:
         if self.task == "open-water":
             env_kwargs.setdefault("family", self.training_family)
             env_kwargs.setdefault("colreg_reward", self.colreg_weights)
+            if self.safety_reward:
+                env_kwargs.setdefault("safety_reward", SafetyMarginReward(self.safety_reward))
             return OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,
@@ -350,6 +368,8 @@ COLREG_ILFT = COLREG_RADAR.replace(name="rl-gaussian-radar-colreg-ilft",
     algorithm_config=OW_RADAR_FT_TRPO, init_policy_required=True)  # fmt: skip
 # the same with the COLREG members' goals as far as the suite's (600 and 797 m)
 COLREG_ILFT_FAR = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-far", colreg_suite_goals=True)
+# the same with the safety-margin penalty (w = 2): passes inside the safety distance paid for
+COLREG_ILFT_SAFE = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-safe", safety_reward=2.0)
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
     harsh_radar_share=0.0,
@@ -437,6 +457,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_RADAR.replace(name=COLREG_RADAR.name + "-reactive", reactive_targets=True),
         COLREG_ILFT,
         COLREG_ILFT_FAR,
+        COLREG_ILFT_SAFE,
         COLREG_SCENE,
     )
 }

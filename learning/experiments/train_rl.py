@@ -95,7 +95,8 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
     :data:`OPEN_WATER_TABLE_EPISODES` episodes in all; the fixed reward horizon with each
     episode's own time limit; the setup's COLREG reward terms, :mod:`usvsim.task.torch_colreg`;
     reactive targets steered on the host, :mod:`usvsim.evaluation.torch_reactive`).
-    ``ValueError`` for a setup it cannot train (the study task's radar, PPO)."""
+    ``ValueError`` for a setup it cannot train (the study task's radar, PPO, a safety-margin
+    reward)."""
     if device not in DEVICE_DTYPES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
     trainable = setup.algorithm == "trpo" and (
@@ -107,6 +108,11 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
             f"--device {device} is for the TRPO positional setups (rl-gaussian-positional, "
             "rl-categorical-positional) and the open-water scene and radar setups (rl-*-scene-ow, "
             f"rl-*-radar-ow and their -ft, -cont; the -colreg setups), not {setup.name!r}"
+        )
+    if setup.safety_reward:
+        raise ValueError(
+            f"--device {device}: the torch env has no safety-margin reward (RLSetup.safety_reward, "
+            f"{setup.name!r}); train it with --device cpu"
         )
     if setup.task == "open-water":
         from usvsim.evaluation.torch_reactive import DeviceReactiveTargets

@@ -65,6 +65,7 @@ class OpenWaterStep:
     heading_change_rad: FloatArray
     min_distance_m: FloatArray  # pole-equivalent, over every obstacle and plant step so far
     distance_to_obstacle_m: FloatArray  # pole-equivalent, nearest obstacle at the end step
+    period_nearest_m: FloatArray  # pole-equivalent, nearest over this period's plant steps
     distance_to_goal_m: FloatArray  # at the end step
     reached_goal: NDArray[np.bool_]
     collision: NDArray[np.bool_]
@@ -298,6 +299,7 @@ class OpenWaterBatch:
             heading_change_rad=dpsi,
             min_distance_m=self._min_d.copy(),
             distance_to_obstacle_m=judged.distance_to_obstacle_m,
+            period_nearest_m=judged.nearest_m,
             distance_to_goal_m=judged.distance_to_goal_m,
             reached_goal=reached,
             collision=collision,

@@ -57,7 +57,7 @@ from usvsim.task.openwater import OpenWaterEpisode, OpenWaterScenario, draw_open
 from usvsim.task.openwater_batch import OpenWaterBatch
 from usvsim.task.options import EnvOptions, normalized_observation, normalized_positional_space
 from usvsim.task.radar import RadarConfig
-from usvsim.task.reward import GaussianReward, RewardFunction
+from usvsim.task.reward import GaussianReward, RewardFunction, SafetyMarginReward
 from usvsim.task.vector_env import boat_generators, episodes_option
 from usvsim.task.weather_draw import WEATHER_SETS, WeatherRanges
 from usvsim.vessel.plant import Plant
@@ -287,7 +287,10 @@ class OpenWaterVectorEnv(VectorEnv):
     own time limit, as in :class:`usvsim.task.env.PoleAvoidanceEnv`. ``colreg_reward``
     (:class:`usvsim.task.colreg_reward.ColregRewardWeights`; default None: off) adds the
     per-decision COLREG terms of :mod:`usvsim.task.colreg_reward` (``info["reward_colreg"]``
-    and ``info["reward_colreg_<term>"]``).
+    and ``info["reward_colreg_<term>"]``). ``safety_reward``
+    (:class:`usvsim.task.reward.SafetyMarginReward`; default None: off) adds a penalty for every
+    decision period that comes within the success rule's safety distance, over all its plant
+    steps (``info["reward_safety"]``).
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
@@ -303,7 +306,7 @@ class OpenWaterVectorEnv(VectorEnv):
     ## Arguments
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
-    ``plant``, ``radar``, ``backend``, ``colreg_reward`` (wind and waves:
+    ``plant``, ``radar``, ``backend``, ``colreg_reward``, ``safety_reward`` (wind and waves:
     ``family=weather_family()``; the default family is calm). ``render_mode`` must be
     ``None``: the top view draws one pole (:mod:`usvsim.task.render`). ``info_observation``
     (e.g. ``"scene"``): ``reset`` and every ``step`` also return that form of the returned
@@ -334,6 +337,7 @@ class OpenWaterVectorEnv(VectorEnv):
         info_observation: ObservationKind | None = None,
         colreg_reward: ColregRewardWeights | None = None,
         on_decision: Any = None,
+        safety_reward: SafetyMarginReward | None = None,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -346,6 +350,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self.family = OPEN_WATER_FAMILY if family is None else family
         self.reward: RewardFunction = reward or GaussianReward()
         self.colreg = None if colreg_reward is None else ColregReward(colreg_reward, num_envs)
+        self.safety = safety_reward
         self.on_decision = on_decision
         self.sim = OpenWaterBatch(
             num_envs, observation=observation, action=action, plant=plant, radar=radar,
@@ -434,6 +439,10 @@ class OpenWaterVectorEnv(VectorEnv):
             total = total + colreg.total
             extra = {f"reward_colreg_{t}": getattr(colreg, t) for t in COLREG_TERMS}
             extra["reward_colreg"] = colreg.total
+        if self.safety is not None:
+            safety = self.safety(res.period_nearest_m, self.sim.base.safety_distance_m)
+            total = total + safety
+            extra["reward_safety"] = safety
         reward, terminated, truncated = apply_reward_horizon(
             o.reward_horizon, o.gamma, self._horizon, total, res.terminated, res.truncated,
             res.out_of_area, shifted,

@@ -23,7 +23,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["GaussianReward", "RewardFunction", "RewardTerms"]
+__all__ = ["GaussianReward", "RewardFunction", "RewardTerms", "SafetyMarginReward"]
 
 FloatArray = NDArray[np.float64]
 
@@ -73,3 +73,40 @@ class GaussianReward:
             np.exp(-0.5 * (np.asarray(d_goal_m) / self.goal_sigma_m) ** 2) - 1.0
         )
         return RewardTerms(pole=pole, goal=goal)
+
+
+@dataclass(frozen=True)
+class SafetyMarginReward:
+    """A per-decision penalty for coming within the success rule's safety distance (usvsim's
+    own term, not the study's; off unless an env is given one).
+
+    The study's pole term sees the nearest obstacle only at the end of each 2 s decision period
+    and is weak at the safety distance (-0.33 at 10 m with σ_pole = 5 m), so a policy can pass
+    an obstacle at 4-9 m, mid-period, almost unpaid, and still reach the goal: an episode the
+    success rule (never closer than the safety distance) counts as failed. This term sees the
+    period's nearest pole-equivalent distance over every plant step, ``d_min`` (m), and pays::
+
+        r_safe = -w · clip((d_safe + m - d_min) / m, 0, 1)
+
+    0 beyond ``d_safe + m``, a linear ramp over the margin ``m``, and -w at and inside the
+    safety distance ``d_safe`` (the scenario's ``safety_distance_m``).
+
+    >>> SafetyMarginReward()(np.array([20.0, 12.5, 10.0, 3.0]), 10.0).round(2).tolist()
+    [-0.0, -1.0, -2.0, -2.0]
+    """
+
+    weight: float = 2.0  # the study's pole weight: the scale of one unsafe period
+    margin_m: float = 5.0  # m; the study's σ_pole
+
+    def __post_init__(self) -> None:
+        for name in ("weight", "margin_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"SafetyMarginReward.{name} must be finite and > 0, got {value!r}")
+
+    def __call__(self, period_nearest_m: FloatArray, safety_distance_m: float) -> FloatArray:
+        """The penalty (N,) of N boats whose period came within ``period_nearest_m`` (N,) m of
+        an obstacle (``inf``: none), for a safety distance ``safety_distance_m`` (m)."""
+        d = np.asarray(period_nearest_m, dtype=np.float64)
+        ramp = np.clip((safety_distance_m + self.margin_m - d) / self.margin_m, 0.0, 1.0)
+        return -self.weight * ramp

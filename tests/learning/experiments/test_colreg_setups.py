@@ -16,6 +16,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ft",
     "rl-gaussian-scene-colreg",
     "rl-gaussian-radar-colreg-reactive",
+    "rl-gaussian-radar-colreg-ilft-safe",
 )
 
 
@@ -80,3 +81,25 @@ def test_the_il_fine_tuning_keeps_the_input_statistics_and_needs_a_start_file() 
     assert dataclasses.replace(ilft.algorithm_config, fixed_input_stats=False) == (
         on.algorithm_config
     )
+
+
+def test_the_safe_setup_adds_the_safety_margin_reward_and_nothing_else() -> None:
+    from learning.experiments.train_rl import device_env_maker
+    from usvsim.task.reward import SafetyMarginReward
+
+    safe, ilft = (
+        get_setup("rl-gaussian-radar-colreg-ilft-safe"),
+        get_setup("rl-gaussian-radar-colreg-ilft"),
+    )
+    assert safe.replace(name=ilft.name, safety_reward=0.0) == ilft
+    env = safe.make_vector_env(2)
+    assert env.safety == SafetyMarginReward(weight=2.0) and ilft.make_vector_env(2).safety is None
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(np.zeros((2, 1)))
+    assert "reward_safety" in info and np.all(np.isfinite(reward))
+    with pytest.raises(ValueError, match="safety_reward must be a finite weight >= 0"):
+        ilft.replace(safety_reward=-1.0)
+    with pytest.raises(ValueError, match="task='open-water'"):
+        RLSetup("x", "positional", "gaussian", safety_reward=1.0)
+    with pytest.raises(ValueError, match="no safety-margin reward"):
+        device_env_maker(safe, "torch-cpu")

@@ -25,7 +25,7 @@ from usvsim.task.openwater_env import (
     draw_family,
     draw_family_episode,
 )
-from usvsim.task.reward import GaussianReward
+from usvsim.task.reward import GaussianReward, SafetyMarginReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 from usvsim.vessel.plant import Plant
 
@@ -237,6 +237,35 @@ def test_reward_sees_the_nearest_obstacle_by_pole_equivalent_distance(plant):
         assert info["reward_pole"][0] == pytest.approx(pole, abs=1e-12)
         seen.append(d)
     assert len(seen) > 5 and min(seen) < 30.0  # the pole term was not negligible
+
+
+def test_safety_reward_pays_each_period_that_comes_inside_the_safety_distance(plant):
+    """Straight at the study's pole: the safety term is the margin ramp of the period's nearest
+    distance over all its plant steps (at most the end step's), the reward grows by exactly it,
+    and it is 0 far out and -w inside the safety distance."""
+    ep = from_pole_episodes(validation_episodes()[:1])[0]
+    safety = SafetyMarginReward(weight=2.0, margin_m=5.0)
+    plain = OpenWaterVectorEnv(1, observation="scene", plant=plant)
+    paid = OpenWaterVectorEnv(1, observation="scene", plant=plant, safety_reward=safety)
+    d_safe = paid.sim.base.safety_distance_m
+    for env in (plain, paid):
+        env.reset(seed=0, options={"episodes": [ep]})
+    terms, last_min = [], math.inf
+    for _ in range(60):
+        action = np.zeros((1, 1), dtype=np.float32)
+        _, r0, *_ = plain.step(action)
+        _, r1, terminated, truncated, info = paid.step(action)
+        s = info["reward_safety"][0]
+        assert r1[0] == pytest.approx(r0[0] + s, abs=1e-12)
+        at_end = safety(info["distance_to_obstacle_m"], d_safe)[0]
+        assert s <= at_end + 1e-12  # the period's nearest is no farther than its end
+        if info["min_distance_m"][0] < last_min:  # this period set the episode's minimum
+            assert s == pytest.approx(safety(info["min_distance_m"], d_safe)[0], abs=1e-12)
+        last_min = float(info["min_distance_m"][0])
+        terms.append(s)
+        if terminated[0] or truncated[0]:
+            break
+    assert terms[0] == 0.0 and min(terms) == -2.0
 
 
 def test_normalized_positional_observation(plant):

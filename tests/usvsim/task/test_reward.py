@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.task.reward import GaussianReward, RewardTerms
+from usvsim.task.reward import GaussianReward, RewardTerms, SafetyMarginReward
 
 
 def test_values_at_known_distances():
@@ -40,3 +40,17 @@ def test_invalid_parameters_raise():
 def test_terms_dataclass_sum():
     terms = RewardTerms(pole=np.array([-1.0]), goal=np.array([-0.25]))
     assert terms.total.tolist() == [-1.25]
+
+
+def test_safety_margin_is_zero_beyond_the_margin_and_full_inside_the_safety_distance():
+    r = SafetyMarginReward(weight=2.0, margin_m=5.0)
+    d = np.array([np.inf, 16.0, 15.0, 13.75, 12.5, 10.0, 9.99, 0.0])
+    np.testing.assert_allclose(r(d, 10.0), [0.0, 0.0, 0.0, -0.5, -1.0, -2.0, -2.0, -2.0])
+    assert r(np.array([12.5]), 8.0)[0] == pytest.approx(-0.2)  # the scenario's distance
+
+
+@pytest.mark.parametrize("name", ["weight", "margin_m"])
+@pytest.mark.parametrize("value", [0.0, -1.0, math.inf, math.nan])
+def test_safety_margin_invalid_parameters_raise(name, value):
+    with pytest.raises(ValueError, match=f"SafetyMarginReward.{name}"):
+        SafetyMarginReward(**{name: value})
