@@ -1,0 +1,82 @@
+"""How helmsmen fail on stress sets: each episode's outcome (success, collision, goal reached
+after passing inside the safety distance, out of the area, time limit) counted per set and
+helmsman, with the nearest distances of the unsafe passes; JSON and a Markdown table::
+
+    python benchmarks/stress_outcomes.py --sets several-obstacles,everything \\
+        --helmsmen vo-radar,run/seed0.pt --split test --out benchmarks/data/il-owcr/outcomes
+
+The episodes are the stress suite's (:func:`usvsim.evaluation.stress.stress_episodes`, 100 a
+set unless ``--episodes``), so the success counts equal ``usvsim bench --suite stress``'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import Counter
+from pathlib import Path
+
+from usvsim.evaluation.stress import evaluate_set, select_sets, stress_episodes
+from usvsim.helm.registry import make_helmsman
+
+OUTCOMES = ("success", "goal-unsafe", "collision", "time-limit", "out-of-area")
+
+
+def tally(sets: list[str], helmsmen: list[str], split: str, episodes: int) -> list[dict]:
+    """One row per set and helmsman: outcome counts and the unsafe passes' nearest distances."""
+    rows = []
+    for stress_set in select_sets(sets):
+        drawn = stress_episodes(stress_set, episodes, split)  # type: ignore[arg-type]
+        for name in helmsmen:
+            records = evaluate_set(make_helmsman(name), stress_set, drawn)
+            counts = Counter(r.outcome for r in records)
+            unsafe = sorted(
+                round(float(r.min_pole_distance_m), 2)
+                for r in records
+                if r.outcome == "goal-unsafe"
+            )
+            rows.append(
+                {
+                    "set": stress_set.name,
+                    "helmsman": Path(name).stem if name.endswith(".pt") else name,
+                    "episodes": len(records),
+                    **{o: counts.get(o, 0) for o in OUTCOMES},
+                    "unsafe_nearest_m": unsafe,
+                }
+            )
+    return rows
+
+
+def markdown(rows: list[dict]) -> str:
+    head = "| set | helmsman | " + " | ".join(OUTCOMES) + " | unsafe passes: nearest (m) |"
+    lines = [head, "|" + "---|" * (len(OUTCOMES) + 3)]
+    for r in rows:
+        near = ", ".join(f"{d:.1f}" for d in r["unsafe_nearest_m"]) or "–"
+        counts = " | ".join(str(r[o]) for o in OUTCOMES)
+        lines.append(f"| {r['set']} | {r['helmsman']} | {counts} | {near} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sets", required=True, help="stress sets, comma-separated")
+    parser.add_argument("--helmsmen", required=True, help="names or checkpoint files")
+    parser.add_argument("--split", choices=("validation", "test"), default="test")
+    parser.add_argument("--episodes", type=int, default=100, help="per set")
+    parser.add_argument("--out", type=Path, required=True, help="folder: outcomes.json, .md")
+    args = parser.parse_args()
+    if args.episodes < 1:
+        parser.error(f"--episodes must be >= 1, got {args.episodes}")
+    rows = tally(args.sets.split(","), args.helmsmen.split(","), args.split, args.episodes)
+    args.out.mkdir(parents=True, exist_ok=True)
+    record = {"split": args.split, "episodes_per_set": args.episodes, "rows": rows}
+    files = {"outcomes.json": json.dumps(record, indent=1), "outcomes.md": markdown(rows)}
+    for name, text in files.items():
+        part = args.out / (name + ".part")
+        part.write_text(text)
+        part.replace(args.out / name)
+    print(markdown(rows), end="")
+
+
+if __name__ == "__main__":
+    main()
