@@ -64,12 +64,13 @@ def traffic_setups_markdown() -> str:
         family = f"{1 - s.colreg_share:.0%} open-water family, {s.colreg_share:.0%} COLREG"
         if s.colreg_suite_goals:
             family += " (goals 250-850 m, as far as the suite's)"
+        safety = f" + safety margin (w = {s.safety_reward:g})" if s.safety_reward else ""
         start = s.init_policy or "new networks"
         if s.init_policy_required:
             start = "a trained checkpoint (`--init-policy FILE`)"
         lines.append(
             f"| `{s.name}` | RL ({type(s.algorithm_config).__name__.removesuffix('Config')}) "
-            f"| {s.observation} | {family} | {s.colreg_reward or '(none)'} "
+            f"| {s.observation} | {family} | {s.colreg_reward or '(none)'}{safety} "
             f"| {start} "
             f"| {'reactive (vo)' if s.reactive_targets else 'hold course'} |"
         )
