@@ -216,8 +216,27 @@ def merge_block(
         rows = [list(c) for c in zip(*rows, strict=True)]
     body = [_line(r) if set(r) != {"---"} else "|---" * len(r) + "|" for r in rows]
     end = table[-1] + 1
-    out = [*old_lines[: table[0]], *body, "", note.format(", ".join(added)), *old_lines[end:]]
+    tail = _without_replaced_notes(old_lines[end:], added) if replace else old_lines[end:]
+    out = [*old_lines[: table[0]], *body, "", note.format(", ".join(added)), *tail]
     return "\n".join(out) + "\n"
+
+
+def _without_replaced_notes(lines: list[str], replaced: list[str]) -> list[str]:
+    """``lines`` without the earlier replacement notes of helmsmen whose rows are replaced now
+    (each with the blank line after it): the table says what is true now, one note per row."""
+    kept: list[str] = []
+    skip_blank = False
+    for line in lines:
+        named, sep, _ = line.partition(" replaced (`benchmarks/colreg_table.py --replace`")
+        if sep and set(named.split(", ")) <= set(replaced):
+            skip_blank = True
+            continue
+        if skip_blank and not line.strip():
+            skip_blank = False
+            continue
+        skip_blank = False
+        kept.append(line)
+    return kept
 
 
 def _note(payload: dict[str, Any], replace: bool = False) -> str:

@@ -127,6 +127,24 @@ def test_colreg_table_merge_adds_a_row_and_a_column_and_refuses_a_changed_row() 
     )
 
 
+def test_colreg_table_replace_keeps_one_note_per_replaced_row() -> None:
+    merge_block = _script("colreg_table").merge_block
+    note = "{} replaced (`benchmarks/colreg_table.py --replace`; run %d)."
+    old = "| helmsman | x |\n|---|---|\n| `m` | 3 |\n| `n` | 4 |\n"
+    once = merge_block(old, "| helmsman | x |\n|---|---|\n| `m` | 5 |\n", note % 1, ORDER,
+                       replace=True)  # fmt: skip
+    twice = merge_block(once, "| helmsman | x |\n|---|---|\n| `n` | 6 |\n", note % 2, ORDER,
+                        replace=True)  # fmt: skip
+    thrice = merge_block(twice, "| helmsman | x |\n|---|---|\n| `m` | 7 |\n", note % 3, ORDER,
+                         replace=True)  # fmt: skip
+    notes = [ln for ln in thrice.splitlines() if "replaced" in ln]
+    assert notes == [
+        "`m` replaced (`benchmarks/colreg_table.py --replace`; run 3).",
+        "`n` replaced (`benchmarks/colreg_table.py --replace`; run 2).",
+    ]
+    assert "| `m` | 7 |" in thrice and "| `n` | 6 |" in thrice and "\n\n\n" not in thrice
+
+
 def test_committed_data_and_page_hold_the_same_sb_mpc_radar_rows() -> None:
     stress = json.loads((ROOT / "docs" / "data" / "stress.json").read_text())
     helmsmen = stress["helmsmen"]
