@@ -44,7 +44,8 @@ from a trained IL seed (``usvsim train --init-policy FILE``), its input statisti
 ``-colreg-ilft-far`` the same with the COLREG members' goals 250-850 m ahead, as far as the
 COLREG suite's (:attr:`RLSetup.colreg_suite_goals`); ``-colreg-ilft-safe`` the same as
 ``-colreg-ilft`` with a penalty for each decision period inside the success rule's safety
-distance (:attr:`RLSetup.safety_reward`, :class:`usvsim.task.reward.SafetyMarginReward`);
+distance (:attr:`RLSetup.safety_reward`, :class:`usvsim.task.reward.SafetyMarginReward`),
+``-colreg-ilft-safe-ow`` that with a quarter of the episodes COLREG encounters, not half;
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -370,6 +371,11 @@ COLREG_ILFT = COLREG_RADAR.replace(name="rl-gaussian-radar-colreg-ilft",
 COLREG_ILFT_FAR = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-far", colreg_suite_goals=True)
 # the same with the safety-margin penalty (w = 2): passes inside the safety distance paid for
 COLREG_ILFT_SAFE = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-safe", safety_reward=2.0)
+# the same with a quarter of the episodes COLREG encounters (the open-water family's obstacles
+# in the rest)
+COLREG_ILFT_SAFE_OW = COLREG_ILFT_SAFE.replace(
+    name=COLREG_ILFT_SAFE.name + "-ow", colreg_share=0.25
+)
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
     harsh_radar_share=0.0,
@@ -458,6 +464,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT,
         COLREG_ILFT_FAR,
         COLREG_ILFT_SAFE,
+        COLREG_ILFT_SAFE_OW,
         COLREG_SCENE,
     )
 }

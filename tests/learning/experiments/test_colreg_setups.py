@@ -17,6 +17,7 @@ NAMES = (
     "rl-gaussian-scene-colreg",
     "rl-gaussian-radar-colreg-reactive",
     "rl-gaussian-radar-colreg-ilft-safe",
+    "rl-gaussian-radar-colreg-ilft-safe-ow",
 )
 
 
@@ -103,3 +104,14 @@ def test_the_safe_setup_adds_the_safety_margin_reward_and_nothing_else() -> None
         RLSetup("x", "positional", "gaussian", safety_reward=1.0)
     with pytest.raises(ValueError, match="no safety-margin reward"):
         device_env_maker(safe, "torch-cpu")
+
+
+def test_the_safe_ow_setup_draws_a_quarter_of_its_episodes_from_the_colreg_members() -> None:
+    safe, ow = (
+        get_setup("rl-gaussian-radar-colreg-ilft-safe"),
+        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow"),
+    )
+    assert ow.replace(name=safe.name, colreg_share=0.5) == safe
+    family = ow.training_family
+    colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
+    np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25)
