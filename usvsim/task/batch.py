@@ -353,6 +353,19 @@ class PoleAvoidanceBatch:
         batch to the weather plant, :meth:`_start_weather`). Returns the first observation of
         the reset boats only (leading axis ``len(specs)``).
         """
+        idx = self.start(boats, specs, disturbances)
+        return self._observe(idx)
+
+    def start(
+        self,
+        boats: NDArray[np.intp] | None,
+        specs: Sequence[EpisodeSpec],
+        disturbances: Sequence[EpisodeDisturbance | None] | None = None,
+    ) -> NDArray[np.intp]:
+        """:meth:`reset` without the first observation (for a caller that observes a scene of
+        its own, as the open-water batch does); returns the started boats' indices. A radar
+        observation draws from the boats' streams; a positional or scene one does not, so a
+        positional batch started this way has every number of one reset."""
         idx = np.arange(self.n_boats) if boats is None else np.asarray(boats, dtype=np.intp)
         if len(specs) != idx.size:
             raise ValueError(f"need one EpisodeSpec per reset boat ({idx.size}), got {len(specs)}")
@@ -385,7 +398,7 @@ class PoleAvoidanceBatch:
         self._min_pole[idx] = [s.start_distance_m for s in specs]
         self._t_goal[idx] = np.inf
         self._ready[idx] = True
-        return self._observe(idx)
+        return idx
 
     def _rng_view(self, idx: NDArray[np.intp] | None) -> np.random.Generator:
         """The per-boat noise streams of ``idx``, passed where a ``Generator`` is expected.

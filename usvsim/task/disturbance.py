@@ -212,12 +212,15 @@ class BoatDisturbances:
 
     def perturb_normals(self, normals: FloatArray, gnss_index: NDArray[np.intp]) -> FloatArray:
         """``normals`` (N, M) with the GNSS columns ``gnss_index`` scaled (noise, outliers)."""
-        faulty = self.active & ((self.noise_scale != 1.0) | (self.outlier_p > 0))
-        if not faulty.any() or gnss_index.size == 0:
+        active = self.active
+        faulty = active & ((self.noise_scale != 1.0) | (self.outlier_p > 0))
+        if gnss_index.size == 0 or not faulty.any():
             return normals
         out = normals.copy()
-        scale = np.broadcast_to(self.noise_scale[:, None], (normals.shape[0], gnss_index.size))
-        drawing = np.flatnonzero(self.active & (self.outlier_p > 0))
+        # (N, G) scales; a boat without faults is scaled by exactly 1 (x · 1 = x in IEEE
+        # arithmetic, so its columns keep their bits)
+        scale = np.repeat(np.where(faulty, self.noise_scale, 1.0)[:, None], gnss_index.size, 1)
+        drawing = np.flatnonzero(active & (self.outlier_p > 0))
         if drawing.size:
             # one draw per GNSS error entry, from the boat's own stream: every boat with
             # outliers draws every period, so its draws do not depend on its neighbours. The
@@ -225,12 +228,10 @@ class BoatDisturbances:
             # monotone: one quantile per boat instead of Φ of every draw)
             z = self._noise.for_boats(drawing).standard_normal((drawing.size, gnss_index.size))
             self._noise.for_boats(None)
-            jump = np.zeros(scale.shape, dtype=bool)
-            jump[drawing] = z < ndtri(self.outlier_p[drawing])[:, None]
-            scale = np.where(jump, scale * self.outlier_scale[:, None], scale)
-        out[:, gnss_index] = np.where(
-            faulty[:, None], normals[:, gnss_index] * scale, normals[:, gnss_index]
-        )
+            rows = scale[drawing]
+            jump = z < ndtri(self.outlier_p[drawing])[:, None]
+            scale[drawing] = np.where(jump, rows * self.outlier_scale[drawing, None], rows)
+        out[:, gnss_index] = normals[:, gnss_index] * scale
         return out
 
 

@@ -191,7 +191,7 @@ class OpenWaterBatch:
             inner.scenario, poles_ne=tuple(e.anchor_ne for e in episodes), time_limit_s=limit
         )
         specs = [replace(e.start, pole_index=j) for j, e in enumerate(episodes)]
-        inner.reset(idx, specs, [e.disturbance for e in episodes])
+        inner.start(idx, specs, [e.disturbance for e in episodes])  # the scene observes below
         inner.pole_ne[idx] = 1e9  # the inner single-pole flags are not used
         self._set_scene(idx.tolist(), episodes)
         inner.goal_ne[idx] = self.goal_ne[idx]

@@ -53,7 +53,12 @@ from usvsim.task.batch import ActionKind, Observation, observation_rows, write_o
 from usvsim.task.colreg_reward import COLREG_TERMS, ColregReward, ColregRewardWeights
 from usvsim.task.horizon import RewardHorizon, apply_reward_horizon
 from usvsim.task.observations import OBSERVATION_KINDS, ObservationKind
-from usvsim.task.openwater import OpenWaterEpisode, OpenWaterScenario, draw_open_water
+from usvsim.task.openwater import (
+    OpenWaterEpisode,
+    OpenWaterScenario,
+    draw_open_water,
+    seeds63,
+)
 from usvsim.task.openwater_batch import OpenWaterBatch
 from usvsim.task.options import EnvOptions, normalized_observation, normalized_positional_space
 from usvsim.task.radar import RadarConfig
@@ -242,7 +247,7 @@ def draw_family_episode(
     """One episode of ``family`` from ``rng``: the member (a mixture only), then an episode
     seed, then :func:`usvsim.task.openwater.draw_open_water` of that member with that seed."""
     member = family if isinstance(family, OpenWaterScenario) else family.pick(rng)
-    return draw_open_water(member, int(rng.integers(2**63)), 1)[0]
+    return draw_open_water(member, seeds63(rng, 1)[0], 1)[0]
 
 
 def draw_family(

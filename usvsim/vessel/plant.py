@@ -39,6 +39,7 @@ from usvsim.vessel.autopilot import (
 )
 from usvsim.vessel.codegen import Backend, BatchStepper
 from usvsim.vessel.model import NX, build_dynamics, rk4_expr, surge_trim
+from usvsim.vessel.sx_eval import numpy_function
 from usvsim.vessel.vessels import VesselParams, get_vessel
 
 __all__ = ["NS", "Plant", "PlantState", "build_closed_loop_step"]
@@ -137,6 +138,8 @@ class Plant:
         self._stepper = BatchStepper(self.step_function, backend)
         u = ca.SX.sym("u")
         self._surge_drag = ca.Function("drag", [u], [surge_trim(self.vessel, u)])
+        # the same numbers for a handful of boats without a CasADi call (usvsim.vessel.sx_eval)
+        self._surge_drag_numpy = numpy_function(self._surge_drag)
         self._trim_a1: dict[float, float] = {}  # surge trim per speed (m/s), see trim_actuator
 
     @property
@@ -169,6 +172,8 @@ class Plant:
             # ±0 excluded: a dict cannot tell them apart
             self._trim_a1[first] = float(np.asarray(self._surge_drag(first)).item())
             a1 = np.full(speed.shape, self._trim_a1[first])
+        elif self._surge_drag_numpy is not None:
+            a1 = self._surge_drag_numpy(speed)
         else:
             # a function of one scalar called with a (1, N) row evaluates element-wise
             a1 = np.asarray(self._surge_drag(speed[None, :])).ravel()

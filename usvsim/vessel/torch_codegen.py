@@ -23,13 +23,13 @@ memory when CasADi is there (:mod:`usvsim.vessel.torch_plant`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from usvsim.vessel.sx_eval import EXACT_OPS
 from usvsim.vessel.torch_plant import vessel_fingerprint
 from usvsim.vessel.vessels import VesselParams
 
@@ -110,19 +110,7 @@ _LOGIC: dict[int, str] = {
     _op("OP_OR"): "{0} | {1}",
 }
 # NumPy twins, to fold an operation whose operands are all constants at generation time
-_FOLD: dict[int, Callable[..., Any]] = {
-    _op("OP_ADD"): np.add,
-    _op("OP_SUB"): np.subtract,
-    _op("OP_MUL"): np.multiply,
-    _op("OP_DIV"): np.divide,
-    _op("OP_NEG"): np.negative,
-    _op("OP_TWICE"): lambda a: 2.0 * a,
-    _op("OP_SQ"): lambda a: a * a,
-    _op("OP_SQRT"): np.sqrt,
-    _op("OP_FABS"): np.abs,
-    _op("OP_FMIN"): np.fmin,
-    _op("OP_FMAX"): np.fmax,
-}
+_FOLD = EXACT_OPS
 
 
 def _literal(value: float) -> str:

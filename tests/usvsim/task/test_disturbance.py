@@ -7,10 +7,11 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from scipy.special import ndtri
 
 from usvsim.helm.protocol import StraightAheadHelmsman
 from usvsim.task.batch import PoleAvoidanceBatch
-from usvsim.task.disturbance import EpisodeDisturbance
+from usvsim.task.disturbance import BoatDisturbances, EpisodeDisturbance
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.vessel.autopilot import IDLE_DRAG_FRACTION, IDLE_THRUST_FRACTION
 from usvsim.vessel.model import damping_forces
@@ -111,3 +112,47 @@ def test_bad_disturbance_is_refused():
         EpisodeDisturbance(current_speed_mps=-1.0)
     with pytest.raises(ValueError, match="speed_mps"):
         EpisodeDisturbance(speed_mps=0.0)
+
+
+def _perturbed_reference(dist, normals, gnss_index, z):
+    """The GNSS columns scaled element by element (the definition): noise scale, times the
+    outlier scale where the boat's draw z < Φ⁻¹(p); boats without faults untouched."""
+    out = normals.copy()
+    drawing = list(np.flatnonzero(dist.active & (dist.outlier_p > 0)))
+    for i in range(normals.shape[0]):
+        if not (dist.active[i] and (dist.noise_scale[i] != 1.0 or dist.outlier_p[i] > 0)):
+            continue
+        for k, col in enumerate(gnss_index):
+            s = dist.noise_scale[i]
+            if i in drawing and z[drawing.index(i), k] < ndtri(dist.outlier_p[i]):
+                s = s * dist.outlier_scale[i]
+            out[i, col] = normals[i, col] * s
+    return out
+
+
+def test_perturb_normals_scales_each_gnss_entry_as_defined():
+    rng = np.random.default_rng(4)
+    n, m = 12, 30
+    items = [
+        None,
+        EpisodeDisturbance(gnss_noise_scale=2.5, seed=1),
+        EpisodeDisturbance(gnss_outlier_probability=0.3, seed=2),
+        EpisodeDisturbance(gnss_noise_scale=0.5, gnss_outlier_probability=0.6, seed=3),
+        EpisodeDisturbance(seed=4),
+    ] * 2 + [None, EpisodeDisturbance(gnss_noise_scale=3.0, gnss_outlier_probability=0.9, seed=5)]
+    twins = []
+    for _ in range(2):
+        d = BoatDisturbances(n, 3.0, (0.0, 0.0))
+        d.set(np.arange(n), items)
+        twins.append(d)
+    normals = rng.standard_normal((n, m))
+    gnss_index = np.array([1, 4, 5, 9, 20, 29])
+    drawing = np.flatnonzero(twins[1].active & (twins[1].outlier_p > 0))
+    z = twins[1]._noise.for_boats(drawing).standard_normal((drawing.size, gnss_index.size))
+    got = twins[0].perturb_normals(normals, gnss_index)
+    want = _perturbed_reference(twins[1], normals, gnss_index, z)
+    assert np.array_equal(got, want)
+    ratio = got[:, gnss_index] / normals[:, gnss_index]
+    assert np.any(ratio[3] == 0.5) and np.any(ratio[3] == 0.5 * 10.0)  # noise, and outliers
+    others = np.setdiff1d(np.arange(m), gnss_index)
+    assert np.array_equal(got[:, others], normals[:, others])

@@ -21,6 +21,8 @@ from usvsim.task.openwater import (
     Vessel,
     draw_open_water,
     from_pole_episodes,
+    integer_in,
+    seeds63,
     vessel_motion,
 )
 from usvsim.task.openwater_batch import OpenWaterBatch
@@ -215,3 +217,21 @@ def test_degradation_needs_a_noise_source():
             np.ones((1, 1)), np.zeros((1, 1)), np.ones((1, 1)), np.ones((1, 1), bool), None, q
         )
     assert RadarQuality().clean and not RadarQuality(speckle=0.1).clean
+
+
+def test_seeds63_are_numpys_bounded_integers() -> None:
+    """The episode seeds: raw draws shifted right by one are ``integers(2**63)``, bit for bit,
+    and leave the generator where NumPy's call leaves it."""
+    for seed in range(500):
+        a, b = np.random.default_rng([seed, 9]), np.random.default_rng([seed, 9])
+        assert seeds63(a, 3) == b.integers(2**63, size=3).tolist()
+        assert seeds63(a, 1)[0] == int(b.integers(2**63))
+        assert a.random() == b.random()
+
+
+def test_integer_in_is_numpys_integers() -> None:
+    for seed in range(200):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        for lo, hi in ((0, 0), (2, 2), (0, 1), (1, 6), (0, 12)):
+            assert integer_in(a, lo, hi) == int(b.integers(lo, hi + 1))
+        assert a.random() == b.random()  # an empty span draws nothing in either
