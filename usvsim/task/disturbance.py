@@ -33,12 +33,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import ndtri
 
+from usvsim.task.gnss_fault_kernel import load_gnss_fault_kernel
 from usvsim.task.scenario import BoatNoise
 from usvsim.task.weather_draw import CALM, Weather, sea_conditions
 from usvsim.vessel.plant import PlantState
@@ -210,17 +211,21 @@ class BoatDisturbances:
         dropped = (t >= self.dropout[:, 0:1]) & (t < self.dropout[:, 1:2])
         return self.speed_mps, self.current, (~dropped if dropped.any() else None)
 
-    def perturb_normals(self, normals: FloatArray, gnss_index: NDArray[np.intp]) -> FloatArray:
-        """``normals`` (N, M) with the GNSS columns ``gnss_index`` scaled (noise, outliers)."""
+    def perturb_normals(
+        self,
+        normals: FloatArray,
+        gnss_index: NDArray[np.intp],
+        backend: Literal["auto", "numpy"] = "auto",
+    ) -> FloatArray:
+        """``normals`` (N, M) with the GNSS columns ``gnss_index`` scaled (noise, outliers);
+        in one C call (:mod:`usvsim.task.gnss_fault_kernel`) where it builds, else (or with
+        ``backend="numpy"``, the reference) in NumPy: the same numbers."""
         active = self.active
         faulty = active & ((self.noise_scale != 1.0) | (self.outlier_p > 0))
         if gnss_index.size == 0 or not faulty.any():
             return normals
-        out = normals.copy()
-        # (N, G) scales; a boat without faults is scaled by exactly 1 (x · 1 = x in IEEE
-        # arithmetic, so its columns keep their bits)
-        scale = np.repeat(np.where(faulty, self.noise_scale, 1.0)[:, None], gnss_index.size, 1)
         drawing = np.flatnonzero(active & (self.outlier_p > 0))
+        z = np.empty((0, gnss_index.size))
         if drawing.size:
             # one draw per GNSS error entry, from the boat's own stream: every boat with
             # outliers draws every period, so its draws do not depend on its neighbours. The
@@ -228,9 +233,33 @@ class BoatDisturbances:
             # monotone: one quantile per boat instead of Φ of every draw)
             z = self._noise.for_boats(drawing).standard_normal((drawing.size, gnss_index.size))
             self._noise.for_boats(None)
-            rows = scale[drawing]
-            jump = z < ndtri(self.outlier_p[drawing])[:, None]
-            scale[drawing] = np.where(jump, rows * self.outlier_scale[drawing, None], rows)
+        threshold = np.full(faulty.size, -np.inf)
+        threshold[drawing] = ndtri(self.outlier_p[drawing])
+        kernel = load_gnss_fault_kernel() if backend == "auto" else None
+        out = normals.copy()
+        if kernel is not None and normals.dtype == np.float64 and normals.flags.c_contiguous:
+            rows = np.flatnonzero(faulty)
+            draw_row = np.full(faulty.size, -1, dtype=np.int64)  # boat -> its row of z
+            draw_row[drawing] = np.arange(drawing.size)
+            arrays = [
+                np.ascontiguousarray(a, dtype=dtype)
+                for a, dtype in ((rows, np.int64), (gnss_index, np.int64),
+                                 (self.noise_scale, np.float64),
+                                 (self.outlier_scale, np.float64), (draw_row[rows], np.int64),
+                                 (z, np.float64), (threshold, np.float64))
+            ]  # fmt: skip
+            kernel(
+                rows.size, normals.shape[1], gnss_index.size,
+                *(a.ctypes.data for a in arrays), out.ctypes.data,
+            )  # fmt: skip
+            return out
+        # (N, G) scales; a boat without faults is scaled by exactly 1 (x · 1 = x in IEEE
+        # arithmetic, so its columns keep their bits)
+        scale = np.repeat(np.where(faulty, self.noise_scale, 1.0)[:, None], gnss_index.size, 1)
+        if drawing.size:
+            rows_ = scale[drawing]
+            jump = z < threshold[drawing, None]
+            scale[drawing] = np.where(jump, rows_ * self.outlier_scale[drawing, None], rows_)
         out[:, gnss_index] = normals[:, gnss_index] * scale
         return out
 

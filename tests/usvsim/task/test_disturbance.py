@@ -12,6 +12,7 @@ from scipy.special import ndtri
 from usvsim.helm.protocol import StraightAheadHelmsman
 from usvsim.task.batch import PoleAvoidanceBatch
 from usvsim.task.disturbance import BoatDisturbances, EpisodeDisturbance
+from usvsim.task.gnss_fault_kernel import load_gnss_fault_kernel
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.vessel.autopilot import IDLE_DRAG_FRACTION, IDLE_THRUST_FRACTION
 from usvsim.vessel.model import damping_forces
@@ -130,7 +131,8 @@ def _perturbed_reference(dist, normals, gnss_index, z):
     return out
 
 
-def test_perturb_normals_scales_each_gnss_entry_as_defined():
+@pytest.mark.parametrize("backend", ["auto", "numpy"])
+def test_perturb_normals_scales_each_gnss_entry_as_defined(backend):
     rng = np.random.default_rng(4)
     n, m = 12, 30
     items = [
@@ -149,10 +151,15 @@ def test_perturb_normals_scales_each_gnss_entry_as_defined():
     gnss_index = np.array([1, 4, 5, 9, 20, 29])
     drawing = np.flatnonzero(twins[1].active & (twins[1].outlier_p > 0))
     z = twins[1]._noise.for_boats(drawing).standard_normal((drawing.size, gnss_index.size))
-    got = twins[0].perturb_normals(normals, gnss_index)
+    got = twins[0].perturb_normals(normals, gnss_index, backend=backend)
     want = _perturbed_reference(twins[1], normals, gnss_index, z)
     assert np.array_equal(got, want)
     ratio = got[:, gnss_index] / normals[:, gnss_index]
     assert np.any(ratio[3] == 0.5) and np.any(ratio[3] == 0.5 * 10.0)  # noise, and outliers
     others = np.setdiff1d(np.arange(m), gnss_index)
     assert np.array_equal(got[:, others], normals[:, others])
+
+
+def test_gnss_fault_kernel_builds_here():
+    """The C path is the one the tests above exercise with backend="auto" on this machine."""
+    assert load_gnss_fault_kernel() is not None
