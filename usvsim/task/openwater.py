@@ -277,7 +277,7 @@ def _place_extras(
                 cy = sy + along * uy + across * ux
             edge_s = _hypot(cx - sx, cy - sy) - radius
             edge_g = _hypot(cx - gx, cy - gy) - radius
-            if min(edge_s, edge_g) < sc.clearance_m:
+            if not min(edge_s, edge_g) >= sc.clearance_m:  # (a NaN edge fails, as before)
                 continue
             # every gap in one call: np.hypot element-wise, then (h - radius) - r in the
             # order of the scalar expression, so the same numbers
