@@ -62,13 +62,14 @@ import torch
 from numpy.typing import NDArray
 
 from learning.algorithms.base import Agent
-from learning.algorithms.networks import space_to_spec
+from learning.algorithms.networks import space_from_spec, space_to_spec
 from learning.algorithms.registry import get_algorithm
 from learning.experiments.setups import RLSetup, get_setup, setup_params
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_open
 from usvsim.task.batch import ActionKind, action_space
 from usvsim.task.observations import ObservationKind, observation_space
+from usvsim.task.radar_memory import RadarMemory, memory_frames, stacked_space
 
 __all__ = [
     "FORMAT",
@@ -82,9 +83,11 @@ __all__ = [
     "load_agent",
     "load_checkpoint",
     "load_helmsman",
+    "policy_observation_space",
     "save_checkpoint",
     "slim_copy",
     "starting_policy",
+    "widened_policy_state",
 ]
 
 FORMAT = "usvsim.checkpoint"
@@ -208,7 +211,7 @@ class Checkpoint:
         state = self.agent
         observation, action = checkpoint_kinds(self)
         agent = algorithm.make_agent(
-            observation_space(observation),
+            policy_observation_space(observation, self.setup_params),
             action_space(action),
             algorithm.config_from_dict(state["config"]),
         )
@@ -216,6 +219,34 @@ class Checkpoint:
         agent.normalizer.load_state_dict(state["normalizer"])
         agent.iteration, agent.env_steps = int(state["iteration"]), int(state["env_steps"])
         return agent
+
+
+def policy_observation_space(kind: str, setup_params: dict[str, Any]) -> Any:
+    """The single-boat observation space a policy of observation ``kind`` reads: the kind's,
+    with the setup's radar memory (``radar_frames`` in ``setup_params``; absent: 1) stacked."""
+    space = observation_space(cast(ObservationKind, kind))
+    frames = int(setup_params.get("radar_frames", 1) or 1)
+    return stacked_space(space, frames) if frames > 1 else space
+
+
+def widened_policy_state(state: dict[str, Any], frames: int) -> dict[str, Any]:
+    """A one-image ``radar+goal`` agent state for a policy with radar memory of ``frames``
+    images: the convolution's weights for the earlier images start at zero, so the widened
+    policy is the same function of the image now (its actions are those of the original,
+    whatever the earlier images), and the observation space is the stacked one."""
+    space = space_from_spec(state["observation_space"])
+    have = memory_frames(space)
+    if have != 1:
+        raise ValueError(f"only a one-image policy can be widened, this one reads {have}")
+    policy = dict(state["policy"])
+    convs = [k for k, v in policy.items() if k.endswith("conv.weight") and v.ndim == 4]
+    if len(convs) != 1:
+        raise ValueError(f"expected one convolution in the policy, found {convs}")
+    weight = policy[convs[0]]
+    extra = weight.new_zeros((weight.shape[0], frames - 1, *weight.shape[2:]))
+    policy[convs[0]] = torch.cat([weight, extra], dim=1)
+    spec = space_to_spec(stacked_space(space, frames))
+    return {**state, "policy": policy, "observation_space": spec}
 
 
 def save_checkpoint(checkpoint: Checkpoint, path: str | os.PathLike[str]) -> None:
@@ -336,7 +367,12 @@ def _check_types(path: Path, data: dict[str, Any]) -> None:
 def _check_spaces(path: Path, data: dict[str, Any]) -> None:
     """The stored spaces must be those of the stored observation/action kinds."""
     try:
-        obs_spec = space_to_spec(observation_space(data["observation"]))
+        params = data.get("setup_params")
+        obs_spec = space_to_spec(
+            policy_observation_space(
+                data["observation"], params if isinstance(params, dict) else {}
+            )
+        )
         act_spec = space_to_spec(action_space(data["action"]))
     except ValueError as err:
         raise CheckpointError(f"{path}: {err}") from None
@@ -415,7 +451,16 @@ def starting_policy(path: str | os.PathLike[str], setup: RLSetup) -> dict[str, A
             f"{path}: a {ckpt.observation}/{ckpt.action} policy ({ckpt.setup}) cannot start a "
             f"{setup.observation}/{setup.action} run ({setup.name})"
         )
-    return {**ckpt.agent, "policy": _cast_floats(ckpt.agent["policy"], torch.float32)}
+    state = {**ckpt.agent, "policy": _cast_floats(ckpt.agent["policy"], torch.float32)}
+    frames = int(getattr(setup, "radar_frames", 1))
+    have = memory_frames(space_from_spec(state["observation_space"]))
+    if frames == have:
+        return state
+    if have != 1:
+        raise CheckpointError(
+            f"{path}: a policy of {have} radar images cannot start a run of {frames} ({setup.name})"
+        )
+    return widened_policy_state(state, frames)
 
 
 def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>") -> Agent:
@@ -443,10 +488,20 @@ class PolicyHelmsman:
     action: ActionKind
     name: str = "policy"
 
+    def __post_init__(self) -> None:
+        # a policy with radar memory (usvsim.task.radar_memory) keeps each boat's earlier
+        # images itself: the simulations give the image now
+        frames = memory_frames(self.agent.observation_space)
+        self.memory = RadarMemory(frames) if frames > 1 else None
+
     def reset(self, n_boats: int) -> None:
         self._n = n_boats
+        if self.memory is not None:
+            self.memory.reset(n_boats)
 
     def act(self, observation: Any) -> NDArray[Any]:
+        if self.memory is not None:
+            observation = self.memory(observation)
         return self.agent.act(observation, deterministic=True)
 
 

@@ -46,7 +46,10 @@ COLREG suite's (:attr:`RLSetup.colreg_suite_goals`); ``-colreg-ilft-safe`` the s
 ``-colreg-ilft`` with a penalty for each decision period inside the success rule's safety
 distance (:attr:`RLSetup.safety_reward`, :class:`usvsim.task.reward.SafetyMarginReward`),
 ``-colreg-ilft-safe-ow`` that with a quarter of the episodes COLREG encounters, not half;
-``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
+``-colreg-ilft-safe-ow-mem`` that with radar memory, the images of the last two decisions as two
+channels (:attr:`RLSetup.radar_frames`, :mod:`usvsim.task.radar_memory`; started from a
+one-image policy, the new channel's weights start at zero, so the run starts from the same
+function); ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -132,6 +135,7 @@ from usvsim.task.openwater_env import (
     harsh_radar_family,
     mix_families,
 )
+from usvsim.task.radar_memory import RadarMemoryVectorEnv
 from usvsim.task.reward import SafetyMarginReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
@@ -251,8 +255,17 @@ class RLSetup:
     # SafetyMarginReward, a 5 m ramp to -w at the success rule's safety distance, on each
     # decision period's nearest obstacle); 0: off (the study's reward alone)
     safety_reward: float = 0.0
+    # radar+goal: the radar images of the last K decisions as K channels, the newest first
+    # (usvsim.task.radar_memory); 1: the image now only (memoryless, the study's)
+    radar_frames: int = 1
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.radar_frames, int) and self.radar_frames >= 1):
+            raise ValueError(f"RLSetup.radar_frames must be an int >= 1, got {self.radar_frames!r}")
+        if self.radar_frames > 1 and self.observation != "radar+goal":
+            raise ValueError(
+                f"RLSetup.radar_frames > 1 needs observation='radar+goal', got {self.observation!r}"
+            )
         if not 0.0 <= self.colreg_share < 1.0:
             raise ValueError(f"RLSetup.colreg_share must be in [0, 1), got {self.colreg_share!r}")
         if (
@@ -330,7 +343,7 @@ class RLSetup:
             env_kwargs.setdefault("colreg_reward", self.colreg_weights)
             if self.safety_reward:
                 env_kwargs.setdefault("safety_reward", SafetyMarginReward(self.safety_reward))
-            return OpenWaterVectorEnv(
+            env: VectorEnv = OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,
                 action=self.action,
@@ -338,14 +351,18 @@ class RLSetup:
                 gamma=self.algorithm_config.gamma,
                 **env_kwargs,
             )
-        return PoleAvoidanceVectorEnv(
-            num_envs,
-            observation=self.observation,
-            action=self.action,
-            reward_horizon="fixed",
-            gamma=self.algorithm_config.gamma,
-            **env_kwargs,
-        )
+        else:
+            env = PoleAvoidanceVectorEnv(
+                num_envs,
+                observation=self.observation,
+                action=self.action,
+                reward_horizon="fixed",
+                gamma=self.algorithm_config.gamma,
+                **env_kwargs,
+            )
+        if self.radar_frames > 1:
+            env = RadarMemoryVectorEnv(env, self.radar_frames)
+        return env
 
     def with_num_envs(self, num_envs: int) -> RLSetup:
         """A copy whose runs step ``num_envs`` boats together."""
@@ -375,6 +392,10 @@ COLREG_ILFT_SAFE = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-safe", safety_r
 # in the rest)
 COLREG_ILFT_SAFE_OW = COLREG_ILFT_SAFE.replace(
     name=COLREG_ILFT_SAFE.name + "-ow", colreg_share=0.25
+)
+# the same with radar memory: the images of this and the previous decision (2 s) as two channels
+COLREG_ILFT_SAFE_OW_MEM = COLREG_ILFT_SAFE_OW.replace(
+    name=COLREG_ILFT_SAFE_OW.name + "-mem", radar_frames=2
 )
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
@@ -465,6 +486,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_FAR,
         COLREG_ILFT_SAFE,
         COLREG_ILFT_SAFE_OW,
+        COLREG_ILFT_SAFE_OW_MEM,
         COLREG_SCENE,
     )
 }

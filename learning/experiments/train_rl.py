@@ -45,6 +45,7 @@ from learning.experiments.validation import (
     validate,
     validation_record,
 )
+from usvsim.common.errors import UserError
 from usvsim.common.fileio import remove_stale_temporaries
 from usvsim.common.splits import selection_mode
 
@@ -408,6 +409,11 @@ def train_rl(
     trainer: Any = train
     make_env: Any = env_maker(setup)
     if device != "cpu":
+        if setup.radar_frames > 1:
+            raise UserError(
+                f"{setup.name}: radar memory (radar_frames {setup.radar_frames}) trains on "
+                f"--device cpu only, got --device {device}"
+            )
         from learning.algorithms.device_loop import train_on_device
 
         trainer, make_env = train_on_device, device_env_maker(setup, device)
