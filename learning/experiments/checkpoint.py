@@ -64,12 +64,13 @@ from numpy.typing import NDArray
 from learning.algorithms.base import Agent
 from learning.algorithms.networks import space_from_spec, space_to_spec
 from learning.algorithms.registry import get_algorithm
+from learning.experiments.memory_start import policy_observation_space, widened_policy_state
 from learning.experiments.setups import RLSetup, get_setup, setup_params
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_open
 from usvsim.task.batch import ActionKind, action_space
-from usvsim.task.observations import ObservationKind, observation_space
-from usvsim.task.radar_memory import RadarMemory, memory_frames, stacked_space
+from usvsim.task.observations import ObservationKind
+from usvsim.task.radar_memory import RadarMemory, memory_frames
 
 __all__ = [
     "FORMAT",
@@ -83,11 +84,9 @@ __all__ = [
     "load_agent",
     "load_checkpoint",
     "load_helmsman",
-    "policy_observation_space",
     "save_checkpoint",
     "slim_copy",
     "starting_policy",
-    "widened_policy_state",
 ]
 
 FORMAT = "usvsim.checkpoint"
@@ -219,34 +218,6 @@ class Checkpoint:
         agent.normalizer.load_state_dict(state["normalizer"])
         agent.iteration, agent.env_steps = int(state["iteration"]), int(state["env_steps"])
         return agent
-
-
-def policy_observation_space(kind: str, setup_params: dict[str, Any]) -> Any:
-    """The single-boat observation space a policy of observation ``kind`` reads: the kind's,
-    with the setup's radar memory (``radar_frames`` in ``setup_params``; absent: 1) stacked."""
-    space = observation_space(cast(ObservationKind, kind))
-    frames = int(setup_params.get("radar_frames", 1) or 1)
-    return stacked_space(space, frames) if frames > 1 else space
-
-
-def widened_policy_state(state: dict[str, Any], frames: int) -> dict[str, Any]:
-    """A one-image ``radar+goal`` agent state for a policy with radar memory of ``frames``
-    images: the convolution's weights for the earlier images start at zero, so the widened
-    policy is the same function of the image now (its actions are those of the original,
-    whatever the earlier images), and the observation space is the stacked one."""
-    space = space_from_spec(state["observation_space"])
-    have = memory_frames(space)
-    if have != 1:
-        raise ValueError(f"only a one-image policy can be widened, this one reads {have}")
-    policy = dict(state["policy"])
-    convs = [k for k, v in policy.items() if k.endswith("conv.weight") and v.ndim == 4]
-    if len(convs) != 1:
-        raise ValueError(f"expected one convolution in the policy, found {convs}")
-    weight = policy[convs[0]]
-    extra = weight.new_zeros((weight.shape[0], frames - 1, *weight.shape[2:]))
-    policy[convs[0]] = torch.cat([weight, extra], dim=1)
-    spec = space_to_spec(stacked_space(space, frames))
-    return {**state, "policy": policy, "observation_space": spec}
 
 
 def save_checkpoint(checkpoint: Checkpoint, path: str | os.PathLike[str]) -> None:

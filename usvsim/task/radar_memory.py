@@ -51,7 +51,7 @@ def stacked_space(space: spaces.Space, frames: int) -> spaces.Dict:
     if image.shape[0] != 1:
         raise ValueError(f"radar memory stacks one-channel images, got shape {image.shape}")
     shape = (frames, *image.shape[1:])
-    widened = spaces.Box(0, 255, shape, dtype=image.dtype)
+    widened = spaces.Box(0, 255, shape, dtype=np.uint8)
     return spaces.Dict({**space.spaces, IMAGE_KEY: widened})
 
 
@@ -129,18 +129,21 @@ class RadarMemoryVectorEnv(VectorWrapper):
                 f"{env.metadata.get('autoreset_mode')!r}"
             )
         self.memory = RadarMemory(frames)
-        self.single_observation_space = stacked_space(env.single_observation_space, frames)
+        single = stacked_space(env.single_observation_space, frames)
+        image_shape: tuple[int, ...] = tuple(single.spaces[IMAGE_KEY].shape or ())
+        shape = (self.num_envs, *image_shape)
+        batched = env.observation_space
+        assert isinstance(batched, spaces.Dict)
+        self.single_observation_space = single
         self.observation_space = spaces.Dict(
             {
-                k: spaces.Box(0, 255, (self.num_envs, *s.shape), dtype=s.dtype)
-                if k == IMAGE_KEY
-                else env.observation_space[k]
-                for k, s in self.single_observation_space.spaces.items()
+                **batched.spaces,
+                IMAGE_KEY: spaces.Box(0, 255, shape, dtype=np.uint8),
             }
         )
 
     def reset(
-        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self.memory.reset(self.num_envs)

@@ -1,0 +1,141 @@
+"""Radar memory in training and in checkpoints: the widened warm start is the same policy, a
+memory checkpoint round-trips, and its helmsman keeps the earlier images itself."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import torch
+
+from learning.algorithms.registry import get_algorithm
+from learning.experiments.checkpoint import (
+    Checkpoint,
+    CheckpointError,
+    load_checkpoint,
+    load_helmsman,
+    save_checkpoint,
+    slim_copy,
+    starting_policy,
+)
+from learning.experiments.setups import RLSetup, get_setup
+from learning.experiments.train_rl import train_rl
+from usvsim.common.errors import UserError
+from usvsim.task.batch import action_space
+from usvsim.task.observations import observation_space
+from usvsim.task.openwater_env import OpenWaterVectorEnv
+from usvsim.task.radar_memory import RadarMemory, RadarMemoryVectorEnv
+
+MEM = "rl-gaussian-radar-colreg-ilft-safe-ow-mem"
+ONE = "rl-gaussian-radar-colreg-ilft-safe-ow"
+
+
+def _one_image_checkpoint(tmp_path: Path) -> Path:
+    """A one-image radar+goal policy (random weights, non-zero biases) saved as a checkpoint."""
+    setup = get_setup(ONE)
+    agent = get_algorithm(setup.algorithm).make_agent(
+        observation_space("radar+goal"), action_space("gaussian"), setup.run_config(4)
+    )
+    with torch.no_grad():
+        for p in agent.policy.parameters():
+            p.add_(0.05 * torch.randn_like(p))
+    path = tmp_path / "one.pt"
+    save_checkpoint(Checkpoint.from_agent(agent, setup), path)
+    return path
+
+
+def _radar_obs(n: int = 5, steps: int = 3) -> list[dict[str, Any]]:
+    env = OpenWaterVectorEnv(n, observation="radar+goal")
+    obs, _ = env.reset(seed=2)
+    out = [obs]
+    rng = np.random.default_rng(1)
+    for _ in range(steps - 1):
+        obs = env.step(rng.uniform(-1, 1, (n, 1)).astype(np.float32))[0]
+        out.append({k: v.copy() for k, v in obs.items()})
+    return out
+
+
+def test_the_memory_setup_differs_from_its_parent_by_the_frames_only() -> None:
+    mem, one = get_setup(MEM), get_setup(ONE)
+    assert mem.radar_frames == 2 and one.radar_frames == 1
+    assert mem.replace(name=ONE, radar_frames=1) == one
+    env = mem.make_vector_env(2)
+    assert isinstance(env, RadarMemoryVectorEnv)
+    assert env.single_observation_space["radar"].shape == (2, 50, 119)
+
+
+@pytest.mark.parametrize("frames", [0, 1.5])
+def test_radar_frames_must_be_a_positive_int(frames: Any) -> None:
+    with pytest.raises(ValueError, match="radar_frames"):
+        get_setup(ONE).replace(radar_frames=frames)
+
+
+def test_radar_memory_needs_the_radar_observation() -> None:
+    with pytest.raises(ValueError, match="radar\\+goal"):
+        RLSetup("x", "positional", "gaussian", radar_frames=2)
+
+
+def test_the_widened_start_is_the_same_policy_whatever_the_earlier_image(tmp_path: Path) -> None:
+    path = _one_image_checkpoint(tmp_path)
+    setup = get_setup(MEM)
+    env = setup.make_vector_env(5)
+    agent = get_algorithm(setup.algorithm).make_agent(
+        env.single_observation_space, env.single_action_space, setup.run_config(0)
+    )
+    agent.load_policy(starting_policy(path, setup))
+    original = load_helmsman(path)
+    assert original.memory is None
+    first, later = _radar_obs()[0], _radar_obs()[2]
+    stacked = {"radar": np.concatenate([first["radar"], later["radar"]], axis=1), **{
+        "goal": first["goal"]}}  # fmt: skip
+    expected = original.agent.act(first, deterministic=True)
+    assert np.array_equal(agent.act(stacked, deterministic=True), expected)
+    assert not np.array_equal(first["radar"], later["radar"])  # the earlier image differs
+
+
+def test_a_memory_policy_cannot_start_a_one_image_run(tmp_path: Path) -> None:
+    setup = get_setup(MEM)
+    env = setup.make_vector_env(2)
+    agent = get_algorithm(setup.algorithm).make_agent(
+        env.single_observation_space, env.single_action_space, setup.run_config(0)
+    )
+    path = tmp_path / "mem.pt"
+    save_checkpoint(Checkpoint.from_agent(agent, setup), path)
+    with pytest.raises(CheckpointError, match="2 radar images cannot start a run of 1"):
+        starting_policy(path, get_setup(ONE))
+
+
+def test_a_memory_checkpoint_round_trips_and_its_helmsman_remembers(tmp_path: Path) -> None:
+    setup = get_setup(MEM)
+    env = setup.make_vector_env(2)
+    agent = get_algorithm(setup.algorithm).make_agent(
+        env.single_observation_space, env.single_action_space, setup.run_config(0)
+    )
+    with torch.no_grad():
+        agent.policy.trunk.conv.weight[:, 1].normal_(0.0, 0.5)  # the earlier image matters
+    path = tmp_path / "mem.pt"
+    ckpt = Checkpoint.from_agent(agent, setup)
+    save_checkpoint(ckpt, path)
+    save_checkpoint(slim_copy(ckpt), tmp_path / "slim.pt")
+    observations = _radar_obs()
+    for file in (path, tmp_path / "slim.pt"):
+        assert load_checkpoint(file).setup_params["radar_frames"] == 2
+        helmsman = load_helmsman(file)
+        assert helmsman.memory is not None and helmsman.memory.frames == 2
+        helmsman.reset(5)
+        memory = RadarMemory(2)
+        memory.reset(5)
+        for obs in observations:
+            expected = agent.act(memory(obs), deterministic=True)
+            assert np.array_equal(helmsman.act(obs), expected)
+    # without its memory (the image now twice) the policy acts otherwise: the memory is used
+    twice = {**observations[2], "radar": np.repeat(observations[2]["radar"], 2, axis=1)}
+    assert not np.array_equal(agent.act(twice, deterministic=True), expected)
+
+
+def test_radar_memory_is_refused_on_the_device_backend(tmp_path: Path) -> None:
+    with pytest.raises(UserError, match=r"radar memory .* --device cpu only"):
+        train_rl(get_setup(MEM), tmp_path / "run", iterations=1, device="torch-cpu",
+                 init_policy=_one_image_checkpoint(tmp_path))  # fmt: skip
