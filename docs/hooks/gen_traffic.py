@@ -68,9 +68,12 @@ def traffic_setups_markdown() -> str:
         start = s.init_policy or "new networks"
         if s.init_policy_required:
             start = "a trained checkpoint (`--init-policy FILE`)"
+        observation = s.observation
+        if s.radar_frames > 1:
+            observation += f", the last {s.radar_frames} images (radar memory)"
         lines.append(
             f"| `{s.name}` | RL ({type(s.algorithm_config).__name__.removesuffix('Config')}) "
-            f"| {s.observation} | {family} | {s.colreg_reward or '(none)'}{safety} "
+            f"| {observation} | {family} | {s.colreg_reward or '(none)'}{safety} "
             f"| {start} "
             f"| {'reactive (vo)' if s.reactive_targets else 'hold course'} |"
         )
