@@ -148,8 +148,17 @@ class ILSetup:
     # study's 46 runs for "pole", the family expert's for "open-water")
     demos: str = ""
     family: str = "open-water"  # open-water setups: the episodes trained on (TRAINING_FAMILIES)
+    # radar+goal: the radar images of the last K decisions as K channels (RLSetup.radar_frames;
+    # the demonstrations' images stacked along each run alike); 1: the image now only
+    radar_frames: int = 1
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.radar_frames, int) and self.radar_frames >= 1):
+            raise ValueError(f"ILSetup.radar_frames must be an int >= 1, got {self.radar_frames!r}")
+        if self.radar_frames > 1 and self.observation != "radar+goal":
+            raise ValueError(
+                f"ILSetup.radar_frames > 1 needs observation='radar+goal', got {self.observation!r}"
+            )
         if self.task not in TASKS:
             raise ValueError(f"ILSetup.task must be one of {TASKS}, got {self.task!r}")
         if self.demos and self.demos not in _DEMO_SETS:
@@ -372,6 +381,14 @@ IL_SETUPS: dict[str, ILSetup] = {
             name="il-gaussian-radar-ow-colreg",
             demos="open-water+colreg",
             family="open-water+colreg",
+        ),
+        # the same with radar memory: the images of this and the previous decision
+        dataclasses.replace(
+            _IL_GAUSSIAN_RADAR_OW,
+            name="il-gaussian-radar-ow-colreg-mem",
+            demos="open-water+colreg",
+            family="open-water+colreg",
+            radar_frames=2,
         ),
     )
 }

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import torch
+from gymnasium.vector import VectorEnv
 
 from learning.algorithms.base import log_row
 from learning.algorithms.loop import TIME_FIELDS, IterationStats, time_row
@@ -63,11 +64,13 @@ from learning.imitation.preprocess import (
     expert_data,
     harsh_radar_runs,
 )
+from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_open, remove_stale_temporaries
 from usvsim.common.splits import selection_mode
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
 from usvsim.task.openwater_env import OpenWaterVectorEnv
+from usvsim.task.radar_memory import RadarMemoryVectorEnv, stack_episode_frames
 from usvsim.task.scenario import EpisodeSpec
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
@@ -383,19 +386,27 @@ def train_il(
 
     view = setup.gail.disc_observation
 
-    def make_env(n: int) -> PoleAvoidanceVectorEnv | OpenWaterVectorEnv:
+    def make_env(n: int) -> VectorEnv:
+        env: VectorEnv
         if setup.task == "open-water":
-            return OpenWaterVectorEnv(
+            env = OpenWaterVectorEnv(
                 n,
                 observation=setup.observation,
                 action=setup.action,
                 family=setup.training_family,
                 info_observation=None if view == "policy" else view,
             )
-        return PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
+        else:
+            env = PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
+        return RadarMemoryVectorEnv(env, setup.radar_frames) if setup.radar_frames > 1 else env
 
     trainer: Any = train_gail
     if device != "cpu":
+        if setup.radar_frames > 1:
+            raise UserError(
+                f"{setup.name}: radar memory (radar_frames {setup.radar_frames}) trains on "
+                f"--device cpu only, got --device {device}"
+            )
         trainer, make_env = train_gail_on_device, il_device_env_maker(setup, device)
     run.start = time.perf_counter()  # the clock counts GAIL, warm start included
     try:
@@ -468,6 +479,10 @@ def expert_pairs(
     if setup.gail.disc_observation != "policy":  # an asymmetric discriminator's view
         disc = expert_data(kept, setup.gail.disc_observation, setup.action)
         data = dataclasses.replace(data, disc_obs=disc.obs)
+    if setup.radar_frames > 1:  # the images of each run stacked as the policy's memory will
+        assert isinstance(data.obs, dict)
+        stacked = stack_episode_frames(data.obs["radar"], data.episode, setup.radar_frames)
+        data = dataclasses.replace(data, obs={**data.obs, "radar": stacked})
     n_runs = len(kept) // (setup.harsh_radar_copies + 1)
     copies = (
         f", each also {setup.harsh_radar_copies}× at the harshest radar level"

@@ -34,7 +34,13 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv, VectorWrapper
 from numpy.typing import NDArray
 
-__all__ = ["RadarMemory", "RadarMemoryVectorEnv", "memory_frames", "stacked_space"]
+__all__ = [
+    "RadarMemory",
+    "RadarMemoryVectorEnv",
+    "memory_frames",
+    "stack_episode_frames",
+    "stacked_space",
+]
 
 IMAGE_KEY = "radar"  # the image part of a radar+goal observation
 
@@ -62,6 +68,29 @@ def memory_frames(space: spaces.Space) -> int:
         shape = space.spaces[IMAGE_KEY].shape
         return int(shape[0]) if shape else 1
     return 1
+
+
+def stack_episode_frames(
+    images: NDArray[np.uint8], episode: NDArray[np.integer], frames: int
+) -> NDArray[np.uint8]:
+    """Recorded runs' images with memory: ``images`` (M, 1, H, W) of consecutive decisions,
+    ``episode`` (M,) the run of each (a run's rows together, in time order) → (M, frames, H, W),
+    what :class:`RadarMemory` gives along each run (an expert's demonstrations as the policy
+    will see its own episodes)."""
+    episode = np.asarray(episode)
+    m = images.shape[0]
+    if images.ndim != 4 or images.shape[1] != 1 or episode.shape != (m,):
+        raise ValueError(
+            f"stack_episode_frames takes images (M, 1, H, W) and episode (M,), got "
+            f"{images.shape} and {episode.shape}"
+        )
+    row = np.arange(m)
+    first = np.ones(m, dtype=bool)
+    first[1:] = episode[1:] != episode[:-1]
+    if np.unique(episode[first]).size != int(first.sum()):
+        raise ValueError("stack_episode_frames needs each run's rows together")
+    start = np.maximum.accumulate(np.where(first, row, 0))
+    return np.concatenate([images[np.maximum(row - j, start)] for j in range(frames)], axis=1)
 
 
 class RadarMemory:
