@@ -139,3 +139,40 @@ def test_radar_memory_is_refused_on_the_device_backend(tmp_path: Path) -> None:
     with pytest.raises(UserError, match=r"radar memory .* --device cpu only"):
         train_rl(get_setup(MEM), tmp_path / "run", iterations=1, device="torch-cpu",
                  init_policy=_one_image_checkpoint(tmp_path))  # fmt: skip
+
+
+def test_the_il_memory_setup_differs_from_its_parent_by_the_frames_only() -> None:
+    from learning.experiments.il_setups import get_il_setup
+
+    mem, one = (
+        get_il_setup("il-gaussian-radar-ow-colreg-mem"),
+        get_il_setup("il-gaussian-radar-ow-colreg"),
+    )
+    assert (mem.radar_frames, one.radar_frames) == (2, 1)
+    assert mem.replace(name=one.name, radar_frames=1) == one
+    with pytest.raises(ValueError, match="radar_frames"):
+        one.replace(observation="scene", radar_frames=2)
+
+
+def test_the_expert_pairs_of_a_memory_setup_stack_each_runs_images(tmp_path: Path) -> None:
+    """The same demonstrations, one image or two: channel 0 is the one-image data's image,
+    channel 1 the image of the decision before in the same run (its first image at a start)."""
+    from learning.experiments.il_setups import get_il_setup
+    from learning.experiments.train_il import expert_pairs
+    from learning.imitation.demonstrations import save_recordings
+    from learning.imitation.family_demos import record_family_demonstrations
+
+    save_recordings(record_family_demonstrations(3, seed=5), tmp_path)
+    one = get_il_setup("il-gaussian-radar-ow").replace(harsh_radar_copies=0)
+    plain, _, _ = expert_pairs(one, (tmp_path,), lambda _: None)
+    data, _, _ = expert_pairs(one.replace(radar_frames=2), (tmp_path,), lambda _: None)
+    assert isinstance(plain.obs, dict) and isinstance(data.obs, dict)
+    now, before = data.obs["radar"][:, 0:1], data.obs["radar"][:, 1:2]
+    assert np.array_equal(now, plain.obs["radar"])
+    first = np.r_[True, plain.episode[1:] != plain.episode[:-1]]
+    assert np.array_equal(before[first], now[first])
+    assert np.array_equal(before[~first], plain.obs["radar"][np.flatnonzero(~first) - 1])
+    assert np.array_equal(data.actions, plain.actions) and np.array_equal(
+        data.obs["goal"], plain.obs["goal"]
+    )
+    assert first.sum() == 3 and (~first).sum() > 0

@@ -12,6 +12,7 @@ from usvsim.task.radar_memory import (
     RadarMemory,
     RadarMemoryVectorEnv,
     memory_frames,
+    stack_episode_frames,
     stacked_space,
 )
 
@@ -118,3 +119,30 @@ def test_the_vector_env_needs_same_step_autoreset() -> None:
     env.metadata = {**env.metadata, "autoreset_mode": None}
     with pytest.raises(ValueError, match="SAME_STEP"):
         RadarMemoryVectorEnv(env, 2)
+
+
+def test_recorded_runs_are_stacked_as_the_memory_stacks_an_episode() -> None:
+    """Three runs of 4, 1 and 3 decisions: each row's channels are those RadarMemory gives at
+    that decision of its run."""
+    values = [1, 2, 3, 4, 10, 20, 21, 22]
+    episode = np.array([0, 0, 0, 0, 1, 2, 2, 2])
+    images = np.stack([np.full((1, 2, 2), v, dtype=np.uint8) for v in values])
+    stacked = stack_episode_frames(images, episode, 3)
+    expected = []
+    for run in (0, 1, 2):
+        memory = RadarMemory(3)
+        memory.reset(1)
+        for i in np.flatnonzero(episode == run):
+            expected.append(memory({"radar": images[i : i + 1]})["radar"][0])
+    assert np.array_equal(stacked, np.stack(expected))
+    assert stacked[:, :, 0, 0].tolist()[:5] == [
+        [1, 1, 1], [2, 1, 1], [3, 2, 1], [4, 3, 2], [10, 10, 10]
+    ]  # fmt: skip
+
+
+def test_runs_must_be_contiguous_to_be_stacked() -> None:
+    images = np.zeros((3, 1, 2, 2), dtype=np.uint8)
+    with pytest.raises(ValueError, match="together"):
+        stack_episode_frames(images, np.array([0, 1, 0]), 2)
+    with pytest.raises(ValueError, match=r"\(M, 1, H, W\)"):
+        stack_episode_frames(images[:, 0], np.array([0, 1, 0]), 2)
