@@ -87,8 +87,11 @@ def traffic_setups_markdown() -> str:
         if il.family == "open-water+colreg":
             share = COLREG_EPISODE_SHARE
             episodes = f"{1 - share:.0%} open-water family, {share:.0%} COLREG"
+        observation = il.observation
+        if il.radar_frames > 1:
+            observation += f", the last {il.radar_frames} images (radar memory)"
         lines.append(
-            f"| `{il.name}` | IL (GAIL on {demos}) | {il.observation} "
+            f"| `{il.name}` | IL (GAIL on {demos}) | {observation} "
             f"| {episodes} | – | new networks | hold course |"
         )
     return "\n".join(lines) + "\n"
