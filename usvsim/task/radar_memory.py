@@ -90,7 +90,10 @@ def stack_episode_frames(
     if np.unique(episode[first]).size != int(first.sum()):
         raise ValueError("stack_episode_frames needs each run's rows together")
     start = np.maximum.accumulate(np.where(first, row, 0))
-    return np.concatenate([images[np.maximum(row - j, start)] for j in range(frames)], axis=1)
+    out = np.empty((m, frames, *images.shape[2:]), dtype=images.dtype)  # one allocation
+    for j in range(frames):  # channels, not rows: K array operations
+        out[:, j] = images[np.maximum(row - j, start), 0]
+    return out
 
 
 class RadarMemory:
