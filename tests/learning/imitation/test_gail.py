@@ -203,3 +203,43 @@ def test_il_run_validates_checkpoints_and_resumes(tmp_path) -> None:  # type: ig
     assert int(load_checkpoint(tmp_path / "latest.pt").agent["iteration"]) == 4
     helmsman = load_helmsman(tmp_path / "best.pt")
     assert (helmsman.observation, helmsman.action) == ("positional", "gaussian")
+
+
+def test_cloning_in_raw_minibatches_is_cloning_the_normalised_set() -> None:
+    """The warm start normalises each minibatch (and each BatchNorm chunk) as it uses it: the
+    cloned weights and statistics equal, bit for bit, those of normalising every observation
+    first (the computation before, kept here as the reference), at a fraction of the memory."""
+    import copy
+
+    from learning.algorithms.networks import refresh_batchnorm
+    from learning.imitation.discriminator import index_obs
+    from learning.imitation.gail import behavioral_cloning
+    from usvsim.task.observations import observation_space
+
+    kept = [r for r in load_recordings().recordings if not quality_check(r)][:8]
+    data = expert_data(kept, "radar+goal", "gaussian")
+    config = GAILConfig(bc_epochs=2, bc_minibatch=64)
+    agent = TRPOAgent(observation_space("radar+goal"), action_space("gaussian"), TRPOConfig())
+    reference = copy.deepcopy(agent)
+    behavioral_cloning(agent, data, config)
+
+    reference.normalizer.update(data.obs)
+    obs = reference.policy_input(data.obs)
+    actions = torch.as_tensor(data.actions)
+    opt = torch.optim.Adam(reference.policy.parameters(), lr=config.bc_lr)
+    for _ in range(config.bc_epochs):
+        for _ in range(8):
+            refresh_batchnorm(reference.policy, obs)
+        perm = torch.randperm(len(data), generator=reference.generator)
+        for i in range(0, len(data), config.bc_minibatch):
+            idx = perm[i : i + config.bc_minibatch]
+            loss = -reference.policy(index_obs(obs, idx)).log_prob(actions[idx]).mean()
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            opt.step()
+    for _ in range(8):
+        refresh_batchnorm(reference.policy, obs)
+    got, want = agent.policy.state_dict(), reference.policy.state_dict()
+    assert len(data) > 256  # BatchNorm refreshed in more than one chunk
+    for key in want:
+        assert torch.equal(got[key], want[key]), key
