@@ -46,10 +46,12 @@ COLREG suite's (:attr:`RLSetup.colreg_suite_goals`); ``-colreg-ilft-safe`` the s
 ``-colreg-ilft`` with a penalty for each decision period inside the success rule's safety
 distance (:attr:`RLSetup.safety_reward`, :class:`usvsim.task.reward.SafetyMarginReward`),
 ``-colreg-ilft-safe-ow`` that with a quarter of the episodes COLREG encounters, not half;
-``-colreg-ilft-safe-ow-mem`` that with radar memory, the images of the last two decisions as two
-channels (:attr:`RLSetup.radar_frames`, :mod:`usvsim.task.radar_memory`; started from a
+``-colreg-ilft-safe-ow-mem`` that with radar memory, the images of the last two decisions as
+two channels (:attr:`RLSetup.radar_frames`, :mod:`usvsim.task.radar_memory`; started from a
 one-image policy, the new channel's weights start at zero, so the run starts from the same
-function); ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
+function), ``-colreg-ilft-mem`` ``-colreg-ilft`` with radar memory (from a two-image IL seed,
+``il-gaussian-radar-ow-colreg-mem``); ``-colreg-reactive`` meets targets steered by vo
+(:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -393,7 +395,10 @@ COLREG_ILFT_SAFE = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-safe", safety_r
 COLREG_ILFT_SAFE_OW = COLREG_ILFT_SAFE.replace(
     name=COLREG_ILFT_SAFE.name + "-ow", colreg_share=0.25
 )
-# the same with radar memory: the images of this and the previous decision (2 s) as two channels
+# radar memory: the images of this and the previous decision (2 s) as two channels; -ilft-mem
+# starts from a two-image IL seed (il-gaussian-radar-ow-colreg-mem), -safe-ow-mem from a one-image
+# file widened (or a two-image one)
+COLREG_ILFT_MEM = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-mem", radar_frames=2)
 COLREG_ILFT_SAFE_OW_MEM = COLREG_ILFT_SAFE_OW.replace(
     name=COLREG_ILFT_SAFE_OW.name + "-mem", radar_frames=2
 )
@@ -487,6 +492,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE,
         COLREG_ILFT_SAFE_OW,
         COLREG_ILFT_SAFE_OW_MEM,
+        COLREG_ILFT_MEM,
         COLREG_SCENE,
     )
 }
