@@ -119,15 +119,21 @@ class RadarMemory:
         """[image (B, 1, H, W), past (B, K - 1, H, W)] → (B, K, H, W), without remembering."""
         return np.concatenate([image, past], axis=1)
 
+    def first_past(self, image: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """The earlier images (B, K - 1, H, W) of an episode's first decision: copies of its
+        ``image`` (B, 1, H, W)."""
+        return np.repeat(image, self.frames - 1, axis=1)
+
     def past_of(self, image: NDArray[np.uint8], fresh: NDArray[np.bool_] | None) -> NDArray[Any]:
         """The earlier images (N, K - 1, H, W) behind ``image`` (N, 1, H, W): the remembered
         ones, or copies of ``image`` for boats starting an episode."""
-        first = np.repeat(image, self.frames - 1, axis=1)
         if self._past is None or self._past.shape[0] != image.shape[0]:
-            return first
+            return self.first_past(image)
         if fresh is None or not fresh.any():
             return self._past
-        return np.where(fresh[:, None, None, None], first, self._past)
+        past = self._past.copy()
+        past[fresh] = self.first_past(image[fresh])
+        return past
 
     def __call__(
         self, observation: dict[str, Any], fresh: NDArray[np.bool_] | None = None
@@ -191,11 +197,7 @@ class RadarMemoryVectorEnv(VectorWrapper):
             for j, i in enumerate(ended.tolist()):
                 row = final[i]
                 image = np.asarray(row[IMAGE_KEY])[None]  # (1, 1, H, W)
-                before = (
-                    past[j : j + 1]
-                    if past is not None
-                    else np.repeat(image, self.memory.frames - 1, axis=1)
-                )
+                before = past[j : j + 1] if past is not None else self.memory.first_past(image)
                 final[i] = {**row, IMAGE_KEY: self.memory.stack(image, before)[0]}
             info = {**info, "final_obs": final}
         return self.memory(obs, fresh=done), reward, terminated, truncated, info
