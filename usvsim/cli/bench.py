@@ -18,6 +18,9 @@ INTERRUPTED = 130  # exit status after Ctrl-C / SIGTERM
 def run_bench_command(args: BenchArgs) -> int:
     """The ``usvsim bench`` command (module docstring); 130 after Ctrl-C (results so far kept)."""
     check_writable_dir(args.out, "--out")  # before the evaluation, not after it
+    import torch  # here: the classical helmsmen need no torch until a learned one is named
+
+    torch.set_num_threads(args.threads)  # BenchArgs.threads: the same figures on any machine
     if args.suite == "stress":
         return _run_stress_command(args)
     if args.suite == "colreg":

@@ -105,6 +105,9 @@ class BenchArgs:
     reactive_targets: bool = False  # --suite colreg: targets steered by vo (default: hold course)
     trafficgen: str = ""  # --suite colreg: trafficgen situation file or folder (trafficgen-user)
     sweep: str = ""  # a usvsim sweep folder: its across-seed held-out IQM beside shipped models
+    # a learned policy's float sums, so its figures to the last episode, depend on torch's
+    # thread count: pinned, so that a command gives the same figures on any machine
+    threads: int = field(default=2, metadata=bounds(ge=1, le=1024))  # torch CPU threads
 
     def check(self) -> None:
         """Rules beyond the ranges (:func:`usvsim.cli.args.check_options` calls it)."""

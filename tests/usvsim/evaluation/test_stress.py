@@ -225,3 +225,31 @@ def test_stress_command_writes_table_heatmap_and_json(tmp_path: Path, capsys):
     md = (tmp_path / "stress.md").read_text()
     assert "| several-obstacles |" in md and "Run time" in md
     assert json.loads(stress_json(run_stress({}, (), 1, progress=False)))["rows"] == []
+
+
+def test_stress_figures_do_not_depend_on_the_machines_thread_count(tmp_path: Path, capsys):
+    """A learned radar policy's float sums depend on torch's thread count; ``--threads`` pins
+    it, so the process's own setting (a machine's core count) changes nothing."""
+    import torch
+
+    args = BenchArgs(
+        suite="stress", sets="several-obstacles", helmsmen="radar-gaussian-gail-trpo-traffic",
+        stress_episodes=4, out=str(tmp_path), json=True, plots=False, threads=2,
+    )  # fmt: skip
+    before = torch.get_num_threads()
+    rows = []
+    try:
+        for machine_threads in (1, 3):
+            torch.set_num_threads(machine_threads)
+            assert run_bench_command(args) == 0
+            assert torch.get_num_threads() == 2
+            payload = json.loads(capsys.readouterr().out)
+            rows.append(
+                [
+                    (r["success_rate"], r["min_pole_distance_median_m"], r["path_length_mean_m"])
+                    for r in payload["rows"]
+                ]
+            )
+    finally:
+        torch.set_num_threads(before)
+    assert rows[0] == rows[1]
