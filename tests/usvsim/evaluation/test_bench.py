@@ -87,6 +87,7 @@ def test_bench_args_follow_the_cli_conventions() -> None:
         "reactive_targets",
         "trafficgen",
         "sweep",
+        "threads",
     }
     assert all(comments.values())
     parser = argparse.ArgumentParser()
