@@ -1,6 +1,9 @@
 """How helmsmen fail on stress sets: each episode's outcome (success, collision, goal reached
 after passing inside the safety distance, out of the area, time limit) counted per set and
-helmsman, with the nearest distances of the unsafe passes; JSON and a Markdown table::
+helmsman, with the nearest distances of the unsafe passes and the time-limit failures that are
+goal orbits (the track came within ``--orbit-m``, default 25 m, of the goal but never inside its
+10 m circle: the boat passed the goal and circled it; ``docs/notes/2026-12-traffic.md``); JSON
+and a Markdown table::
 
     python benchmarks/stress_outcomes.py --sets several-obstacles,everything \\
         --helmsmen vo-radar,run/seed0.pt --split test --out benchmarks/data/il-owcr/outcomes
@@ -15,15 +18,28 @@ import argparse
 import json
 from collections import Counter
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from usvsim.evaluation.stress import evaluate_set, select_sets, stress_episodes
 from usvsim.helm.registry import make_helmsman
 
 OUTCOMES = ("success", "goal-unsafe", "collision", "time-limit", "out-of-area")
+ORBIT_M = 25.0  # m: a time-limit failure that came this close to the goal is a goal orbit
 
 
-def tally(sets: list[str], helmsmen: list[str], split: str, episodes: int) -> list[dict]:
-    """One row per set and helmsman: outcome counts and the unsafe passes' nearest distances."""
+def closest_goal_approach_m(record: Any) -> float:
+    """The least distance (m) between an open-water record's true track and its goal."""
+    track, goal = record.trajectory, np.asarray(record.episode.goal_ne, dtype=float)
+    return float(np.hypot(track[:, 0] - goal[0], track[:, 1] - goal[1]).min())
+
+
+def tally(
+    sets: list[str], helmsmen: list[str], split: str, episodes: int, orbit_m: float = ORBIT_M
+) -> list[dict]:
+    """One row per set and helmsman: outcome counts, the unsafe passes' nearest distances, and
+    the time-limit failures' closest approaches to the goal with the goal orbits among them."""
     rows = []
     for stress_set in select_sets(sets):
         drawn = stress_episodes(stress_set, episodes, split)  # type: ignore[arg-type]
@@ -35,25 +51,34 @@ def tally(sets: list[str], helmsmen: list[str], split: str, episodes: int) -> li
                 for r in records
                 if r.outcome == "goal-unsafe"
             )
+            approach = sorted(
+                round(closest_goal_approach_m(r), 2) for r in records if r.outcome == "time-limit"
+            )
             rows.append(
                 {
                     "set": stress_set.name,
                     "helmsman": Path(name).stem if name.endswith(".pt") else name,
                     "episodes": len(records),
                     **{o: counts.get(o, 0) for o in OUTCOMES},
+                    "goal_orbits": sum(d < orbit_m for d in approach),
                     "unsafe_nearest_m": unsafe,
+                    "time_limit_goal_approach_m": approach,
                 }
             )
     return rows
 
 
 def markdown(rows: list[dict]) -> str:
-    head = "| set | helmsman | " + " | ".join(OUTCOMES) + " | unsafe passes: nearest (m) |"
-    lines = [head, "|" + "---|" * (len(OUTCOMES) + 3)]
+    head = (
+        "| set | helmsman | "
+        + " | ".join(OUTCOMES)
+        + " | of the time limits goal orbits | unsafe passes: nearest (m) |"
+    )
+    lines = [head, "|" + "---|" * (len(OUTCOMES) + 4)]
     for r in rows:
         near = ", ".join(f"{d:.1f}" for d in r["unsafe_nearest_m"]) or "–"
         counts = " | ".join(str(r[o]) for o in OUTCOMES)
-        lines.append(f"| {r['set']} | {r['helmsman']} | {counts} | {near} |")
+        lines.append(f"| {r['set']} | {r['helmsman']} | {counts} | {r['goal_orbits']} | {near} |")
     return "\n".join(lines) + "\n"
 
 
@@ -63,13 +88,25 @@ def main() -> None:
     parser.add_argument("--helmsmen", required=True, help="names or checkpoint files")
     parser.add_argument("--split", choices=("validation", "test"), default="test")
     parser.add_argument("--episodes", type=int, default=100, help="per set")
+    parser.add_argument(
+        "--orbit-m", type=float, default=ORBIT_M, help="goal orbit: closest approach below, m"
+    )
     parser.add_argument("--out", type=Path, required=True, help="folder: outcomes.json, .md")
     args = parser.parse_args()
     if args.episodes < 1:
         parser.error(f"--episodes must be >= 1, got {args.episodes}")
-    rows = tally(args.sets.split(","), args.helmsmen.split(","), args.split, args.episodes)
+    if not 10.0 < args.orbit_m < float("inf"):
+        parser.error(f"--orbit-m must be a distance > 10 m (the goal circle), got {args.orbit_m}")
+    rows = tally(
+        args.sets.split(","), args.helmsmen.split(","), args.split, args.episodes, args.orbit_m
+    )
     args.out.mkdir(parents=True, exist_ok=True)
-    record = {"split": args.split, "episodes_per_set": args.episodes, "rows": rows}
+    record = {
+        "split": args.split,
+        "episodes_per_set": args.episodes,
+        "orbit_m": args.orbit_m,
+        "rows": rows,
+    }
     files = {"outcomes.json": json.dumps(record, indent=1), "outcomes.md": markdown(rows)}
     for name, text in files.items():
         part = args.out / (name + ".part")

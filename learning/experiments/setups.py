@@ -50,8 +50,10 @@ distance (:attr:`RLSetup.safety_reward`, :class:`usvsim.task.reward.SafetyMargin
 two channels (:attr:`RLSetup.radar_frames`, :mod:`usvsim.task.radar_memory`; started from a
 one-image policy, the new channel's weights start at zero, so the run starts from the same
 function), ``-colreg-ilft-mem`` ``-colreg-ilft`` with radar memory (from a two-image IL seed,
-``il-gaussian-radar-ow-colreg-mem``); ``-colreg-reactive`` meets targets steered by vo
-(:attr:`RLSetup.reactive_targets`);
+``il-gaussian-radar-ow-colreg-mem``); ``-colreg-ilft-safe-ow-arrive`` ``-safe-ow`` paid once
+for each episode that ends in success (:attr:`RLSetup.success_reward`,
+:class:`usvsim.task.reward.SuccessReward`: the cure tried for goal orbits);
+``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
 A setup with an ``init_policy`` (``-ft``, fine-tuned) starts its run from that shipped model's
@@ -138,7 +140,7 @@ from usvsim.task.openwater_env import (
     mix_families,
 )
 from usvsim.task.radar_memory import RadarMemoryVectorEnv
-from usvsim.task.reward import SafetyMarginReward
+from usvsim.task.reward import SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 __all__ = [
@@ -257,6 +259,9 @@ class RLSetup:
     # SafetyMarginReward, a 5 m ramp to -w at the success rule's safety distance, on each
     # decision period's nearest obstacle); 0: off (the study's reward alone)
     safety_reward: float = 0.0
+    # open-water: the weight (> 0) of the one-off payment for an episode that ends in success
+    # (usvsim.task.reward.SuccessReward, after the fixed horizon's scaling); 0: off
+    success_reward: float = 0.0
     # radar+goal: the radar images of the last K decisions as K channels, the newest first
     # (usvsim.task.radar_memory); 1: the image now only (memoryless, the study's)
     radar_frames: int = 1
@@ -276,15 +281,18 @@ class RLSetup:
             or self.reactive_targets
             or self.colreg_suite_goals
             or self.safety_reward
+            or self.success_reward
         ) and (self.task != "open-water"):
             raise ValueError(
-                "RLSetup.colreg_*, reactive_targets and safety_reward need task='open-water'"
+                "RLSetup.colreg_*, reactive_targets, safety_reward and success_reward need "
+                "task='open-water'"
             )
-        if not (math.isfinite(self.safety_reward) and self.safety_reward >= 0.0):
-            raise ValueError(
-                f"RLSetup.safety_reward must be a finite weight >= 0 (0: off), "
-                f"got {self.safety_reward!r}"
-            )
+        for name in ("safety_reward", "success_reward"):
+            weight = getattr(self, name)
+            if not (math.isfinite(weight) and weight >= 0.0):
+                raise ValueError(
+                    f"RLSetup.{name} must be a finite weight >= 0 (0: off), got {weight!r}"
+                )
         self.colreg_weights  # noqa: B018 -- raises ValueError for an unknown term
         if self.task not in TASKS:
             raise ValueError(f"RLSetup.task must be one of {TASKS}, got {self.task!r}")
@@ -345,6 +353,8 @@ class RLSetup:
             env_kwargs.setdefault("colreg_reward", self.colreg_weights)
             if self.safety_reward:
                 env_kwargs.setdefault("safety_reward", SafetyMarginReward(self.safety_reward))
+            if self.success_reward:
+                env_kwargs.setdefault("success_reward", SuccessReward(self.success_reward))
             env: VectorEnv = OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,
@@ -401,6 +411,10 @@ COLREG_ILFT_SAFE_OW = COLREG_ILFT_SAFE.replace(
 COLREG_ILFT_MEM = COLREG_ILFT.replace(name=COLREG_ILFT.name + "-mem", radar_frames=2)
 COLREG_ILFT_SAFE_OW_MEM = COLREG_ILFT_SAFE_OW.replace(
     name=COLREG_ILFT_SAFE_OW.name + "-mem", radar_frames=2
+)
+# -safe-ow paid +2 once for each episode that ends in success (SuccessReward: goal orbits)
+COLREG_ILFT_SAFE_OW_ARRIVE = COLREG_ILFT_SAFE_OW.replace(
+    name=COLREG_ILFT_SAFE_OW.name + "-arrive", success_reward=2.0
 )
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
@@ -492,6 +506,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE,
         COLREG_ILFT_SAFE_OW,
         COLREG_ILFT_SAFE_OW_MEM,
+        COLREG_ILFT_SAFE_OW_ARRIVE,
         COLREG_ILFT_MEM,
         COLREG_SCENE,
     )

@@ -62,7 +62,7 @@ from usvsim.task.openwater import (
 from usvsim.task.openwater_batch import OpenWaterBatch
 from usvsim.task.options import EnvOptions, normalized_observation, normalized_positional_space
 from usvsim.task.radar import RadarConfig
-from usvsim.task.reward import GaussianReward, RewardFunction, SafetyMarginReward
+from usvsim.task.reward import GaussianReward, RewardFunction, SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import boat_generators, episodes_option
 from usvsim.task.weather_draw import WEATHER_SETS, WeatherRanges
 from usvsim.vessel.plant import Plant
@@ -295,7 +295,9 @@ class OpenWaterVectorEnv(VectorEnv):
     and ``info["reward_colreg_<term>"]``). ``safety_reward``
     (:class:`usvsim.task.reward.SafetyMarginReward`; default None: off) adds a penalty for every
     decision period that comes within the success rule's safety distance, over all its plant
-    steps (``info["reward_safety"]``).
+    steps (``info["reward_safety"]``). ``success_reward``
+    (:class:`usvsim.task.reward.SuccessReward`; default None: off) pays once at the decision an
+    episode ends in success, after the fixed horizon's scaling (``info["reward_success"]``).
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
@@ -311,7 +313,8 @@ class OpenWaterVectorEnv(VectorEnv):
     ## Arguments
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
-    ``plant``, ``radar``, ``backend``, ``colreg_reward``, ``safety_reward`` (wind and waves:
+    ``plant``, ``radar``, ``backend``, ``colreg_reward``, ``safety_reward``, ``success_reward``
+    (wind and waves:
     ``family=weather_family()``; the default family is calm). ``render_mode`` must be
     ``None``: the top view draws one pole (:mod:`usvsim.task.render`). ``info_observation``
     (e.g. ``"scene"``): ``reset`` and every ``step`` also return that form of the returned
@@ -343,6 +346,7 @@ class OpenWaterVectorEnv(VectorEnv):
         colreg_reward: ColregRewardWeights | None = None,
         on_decision: Any = None,
         safety_reward: SafetyMarginReward | None = None,
+        success_reward: SuccessReward | None = None,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -356,6 +360,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self.reward: RewardFunction = reward or GaussianReward()
         self.colreg = None if colreg_reward is None else ColregReward(colreg_reward, num_envs)
         self.safety = safety_reward
+        self.success = success_reward
         self.on_decision = on_decision
         self.sim = OpenWaterBatch(
             num_envs, observation=observation, action=action, plant=plant, radar=radar,
@@ -452,6 +457,10 @@ class OpenWaterVectorEnv(VectorEnv):
             o.reward_horizon, o.gamma, self._horizon, total, res.terminated, res.truncated,
             res.out_of_area, shifted,
         )  # fmt: skip
+        if self.success is not None:  # after the horizon's scaling (SuccessReward)
+            success = self.success(res.is_success & terminated)
+            reward = reward + success
+            extra["reward_success"] = success
         arrays: dict[str, NDArray[np.generic]] = {
             "reward_pole": terms.pole,
             "reward_goal": terms.goal,

@@ -23,7 +23,13 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["GaussianReward", "RewardFunction", "RewardTerms", "SafetyMarginReward"]
+__all__ = [
+    "GaussianReward",
+    "RewardFunction",
+    "RewardTerms",
+    "SafetyMarginReward",
+    "SuccessReward",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -110,3 +116,37 @@ class SafetyMarginReward:
         d = np.asarray(period_nearest_m, dtype=np.float64)
         ramp = np.clip((safety_distance_m + self.margin_m - d) / self.margin_m, 0.0, 1.0)
         return -self.weight * ramp
+
+
+@dataclass(frozen=True)
+class SuccessReward:
+    """A one-off payment at the decision an episode ends in success (usvsim's own term, not the
+    study's; off unless an env is given one).
+
+    The study's goal term is flat near the goal (``r_goal`` = -0.006 a decision at 11 m, 0 at the
+    goal), and the time limit is a truncation, so a policy that passes the goal 11-15 m off and
+    then circles it outside the 10 m goal circle is paid almost as well as one that enters it:
+    a *goal orbit*, the most common failure of the learned traffic helmsmen on the stress suite's
+    obstacle sets (``docs/notes/2026-12-traffic.md``). This term pays::
+
+        r_success = w · 1[success]
+
+    once, on the terminating decision of an episode that reached the goal without a collision
+    and never came within the safety distance (the success rule itself). Under the fixed reward
+    horizon it is added after the horizon's scaling (not multiplied by the decisions left), so
+    arriving k decisions later costs ``w (1 - γ^k)`` of it through discounting alone.
+
+    >>> SuccessReward()(np.array([True, False])).tolist()
+    [2.0, 0.0]
+    """
+
+    weight: float = 2.0  # the study's pole weight: one decision at the pole costs as much
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.weight) and self.weight > 0):
+            raise ValueError(f"SuccessReward.weight must be finite and > 0, got {self.weight!r}")
+
+    def __call__(self, is_success: NDArray[np.bool_]) -> FloatArray:
+        """The payment (N,) of N boats, ``is_success`` (N,) True where the decision ended an
+        episode in success."""
+        return self.weight * np.asarray(is_success, dtype=np.float64)

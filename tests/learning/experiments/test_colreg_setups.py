@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 
 from learning.experiments.setups import RLSetup, get_setup, setup_from_params, setup_params
 from usvsim.task.colreg_reward import COLREG_TERMS, ColregRewardWeights
+from usvsim.task.reward import SafetyMarginReward, SuccessReward
 
 NAMES = (
     "rl-gaussian-radar-colreg",
@@ -18,6 +20,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-reactive",
     "rl-gaussian-radar-colreg-ilft-safe",
     "rl-gaussian-radar-colreg-ilft-safe-ow",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-arrive",
 )
 
 
@@ -84,26 +87,47 @@ def test_the_il_fine_tuning_keeps_the_input_statistics_and_needs_a_start_file() 
     )
 
 
-def test_the_safe_setup_adds_the_safety_margin_reward_and_nothing_else() -> None:
+@pytest.mark.parametrize(
+    ("name", "parent", "field", "attribute", "term", "says"),
+    [
+        (
+            "rl-gaussian-radar-colreg-ilft-safe",
+            "rl-gaussian-radar-colreg-ilft",
+            "safety_reward",
+            "safety",
+            SafetyMarginReward(weight=2.0),
+            "no safety-margin reward",
+        ),
+        (
+            "rl-gaussian-radar-colreg-ilft-safe-ow-arrive",
+            "rl-gaussian-radar-colreg-ilft-safe-ow",
+            "success_reward",
+            "success",
+            SuccessReward(weight=2.0),
+            "success reward",
+        ),
+    ],
+)
+def test_a_reward_setup_adds_its_term_and_nothing_else(
+    name: str, parent: str, field: str, attribute: str, term: object, says: str
+) -> None:
     from learning.experiments.train_rl import device_env_maker
-    from usvsim.task.reward import SafetyMarginReward
 
-    safe, ilft = (
-        get_setup("rl-gaussian-radar-colreg-ilft-safe"),
-        get_setup("rl-gaussian-radar-colreg-ilft"),
-    )
-    assert safe.replace(name=ilft.name, safety_reward=0.0) == ilft
-    env = safe.make_vector_env(2)
-    assert env.safety == SafetyMarginReward(weight=2.0) and ilft.make_vector_env(2).safety is None
+    setup, base = get_setup(name), get_setup(parent)
+    assert setup.replace(name=base.name, **{field: 0.0}) == base
+    env = setup.make_vector_env(2)
+    assert getattr(env, attribute) == term
+    assert getattr(base.make_vector_env(2), attribute) is None
     env.reset(seed=0)
     _, reward, _, _, info = env.step(np.zeros((2, 1)))
-    assert "reward_safety" in info and np.all(np.isfinite(reward))
-    with pytest.raises(ValueError, match="safety_reward must be a finite weight >= 0"):
-        ilft.replace(safety_reward=-1.0)
+    assert f"reward_{attribute}" in info and np.all(np.isfinite(reward))
+    for bad in (-1.0, math.nan):
+        with pytest.raises(ValueError, match=f"{field} must be a finite weight >= 0"):
+            base.replace(**{field: bad})
     with pytest.raises(ValueError, match="task='open-water'"):
-        RLSetup("x", "positional", "gaussian", safety_reward=1.0)
-    with pytest.raises(ValueError, match="no safety-margin reward"):
-        device_env_maker(safe, "torch-cpu")
+        RLSetup("x", "positional", "gaussian", **{field: 1.0})
+    with pytest.raises(ValueError, match=says):
+        device_env_maker(setup, "torch-cpu")
 
 
 def test_the_safe_ow_setup_draws_a_quarter_of_its_episodes_from_the_colreg_members() -> None:

@@ -25,7 +25,7 @@ from usvsim.task.openwater_env import (
     draw_family,
     draw_family_episode,
 )
-from usvsim.task.reward import GaussianReward, SafetyMarginReward
+from usvsim.task.reward import GaussianReward, SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 from usvsim.vessel.plant import Plant
 
@@ -266,6 +266,30 @@ def test_safety_reward_pays_each_period_that_comes_inside_the_safety_distance(pl
         if terminated[0] or truncated[0]:
             break
     assert terms[0] == 0.0 and min(terms) == -2.0
+
+
+def test_success_reward_is_paid_once_at_the_successful_end_after_the_horizon_scaling(plant):
+    """The study's episode without its pole, sailed straight: the boat reaches the goal. Under
+    the fixed horizon the paid env's reward equals the plain env's at every decision but the
+    last, where it is the plain (horizon-scaled) reward plus exactly w."""
+    ep = replace(from_pole_episodes(validation_episodes()[:1])[0], obstacles=())
+    w = 2.0
+    kwargs = {"observation": "scene", "plant": plant, "reward_horizon": "fixed"}
+    plain = OpenWaterVectorEnv(1, **kwargs)
+    paid = OpenWaterVectorEnv(1, success_reward=SuccessReward(w), **kwargs)
+    for env in (plain, paid):
+        env.reset(seed=0, options={"episodes": [ep]})
+    action = np.zeros((1, 1), dtype=np.float32)
+    for _ in range(200):
+        _, r0, done0, cut0, _ = plain.step(action)
+        _, r1, done1, cut1, info = paid.step(action)
+        assert (done1[0], cut1[0]) == (done0[0], cut0[0])
+        if done1[0] or cut1[0]:
+            break
+        assert r1[0] == r0[0] and info["reward_success"][0] == 0.0
+    assert done1[0] and info["is_success"][0]
+    assert info["reward_success"][0] == w and r1[0] == pytest.approx(r0[0] + w, abs=1e-12)
+    assert r0[0] < 0.0  # the plain terminal reward, scaled by the decisions left, stays < 0
 
 
 def test_normalized_positional_observation(plant):

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.task.reward import GaussianReward, RewardTerms, SafetyMarginReward
+from usvsim.task.reward import GaussianReward, RewardTerms, SafetyMarginReward, SuccessReward
 
 
 def test_values_at_known_distances():
@@ -54,3 +54,15 @@ def test_safety_margin_is_zero_beyond_the_margin_and_full_inside_the_safety_dist
 def test_safety_margin_invalid_parameters_raise(name, value):
     with pytest.raises(ValueError, match=f"SafetyMarginReward.{name}"):
         SafetyMarginReward(**{name: value})
+
+
+def test_success_reward_pays_the_weight_where_an_episode_succeeds_and_nothing_elsewhere():
+    paid = SuccessReward(weight=3.0)(np.array([True, False, True, False]))
+    assert paid.dtype == np.float64 and paid.tolist() == [3.0, 0.0, 3.0, 0.0]
+    assert SuccessReward()(np.zeros(5, dtype=bool)).sum() == 0.0
+
+
+@pytest.mark.parametrize("value", [0.0, -1.0, math.inf, math.nan])
+def test_success_reward_invalid_weight_raises(value):
+    with pytest.raises(ValueError, match=r"SuccessReward\.weight"):
+        SuccessReward(weight=value)
