@@ -52,7 +52,8 @@ one-image policy, the new channel's weights start at zero, so the run starts fro
 function), ``-colreg-ilft-mem`` ``-colreg-ilft`` with radar memory (from a two-image IL seed,
 ``il-gaussian-radar-ow-colreg-mem``); ``-colreg-ilft-safe-ow-arrive`` ``-safe-ow`` paid once
 for each episode that ends in success (:attr:`RLSetup.success_reward`,
-:class:`usvsim.task.reward.SuccessReward`: the cure tried for goal orbits);
+:class:`usvsim.task.reward.SuccessReward`: the cure tried for goal orbits), ``-approach`` that
+with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -136,6 +137,7 @@ from usvsim.task.openwater_env import (
     OpenWaterVectorEnv,
     ScenarioMixture,
     crowded_family,
+    goal_approach_family,
     harsh_radar_family,
     mix_families,
 )
@@ -259,6 +261,9 @@ class RLSetup:
     # SafetyMarginReward, a 5 m ramp to -w at the success rule's safety distance, on each
     # decision period's nearest obstacle); 0: off (the study's reward alone)
     safety_reward: float = 0.0
+    # open-water: the share of training episodes that start near the goal, pointed past it
+    # (usvsim.task.openwater_env.goal_approach_family), mixed in after the COLREG share; 0: none
+    approach_share: float = 0.0
     # open-water: the weight (> 0) of the one-off payment for an episode that ends in success
     # (usvsim.task.reward.SuccessReward, after the fixed horizon's scaling); 0: off
     success_reward: float = 0.0
@@ -282,10 +287,15 @@ class RLSetup:
             or self.colreg_suite_goals
             or self.safety_reward
             or self.success_reward
+            or self.approach_share
         ) and (self.task != "open-water"):
             raise ValueError(
-                "RLSetup.colreg_*, reactive_targets, safety_reward and success_reward need "
-                "task='open-water'"
+                "RLSetup.colreg_*, reactive_targets, safety_reward, success_reward and "
+                "approach_share need task='open-water'"
+            )
+        if not 0.0 <= self.approach_share < 1.0:
+            raise ValueError(
+                f"RLSetup.approach_share must be in [0, 1), got {self.approach_share!r}"
             )
         for name in ("safety_reward", "success_reward"):
             weight = getattr(self, name)
@@ -321,14 +331,16 @@ class RLSetup:
     @property
     def training_family(self) -> ScenarioMixture:
         """The open-water training distribution (:attr:`crowded_share`, then
-        :attr:`colreg_share` of the COLREG members, then :attr:`harsh_radar_share` of that
-        mixture at the harshest radar)."""
+        :attr:`colreg_share` of the COLREG members, then :attr:`approach_share` of goal
+        approaches, then :attr:`harsh_radar_share` of that mixture at the harshest radar)."""
         family = OPEN_WATER_FAMILY
         if self.crowded_share:
             family = mix_families(family, crowded_family(), self.crowded_share)
         if self.colreg_share:
             colreg = COLREG_FAMILY_SUITE_GOALS if self.colreg_suite_goals else COLREG_FAMILY
             family = mix_families(family, colreg, self.colreg_share, prefix="colreg-")
+        if self.approach_share:
+            family = mix_families(family, goal_approach_family(), self.approach_share, prefix="")
         if self.harsh_radar_share:
             harsh = harsh_radar_family(family)
             family = mix_families(family, harsh, self.harsh_radar_share, prefix="harsh-")
@@ -415,6 +427,10 @@ COLREG_ILFT_SAFE_OW_MEM = COLREG_ILFT_SAFE_OW.replace(
 # -safe-ow paid +2 once for each episode that ends in success (SuccessReward: goal orbits)
 COLREG_ILFT_SAFE_OW_ARRIVE = COLREG_ILFT_SAFE_OW.replace(
     name=COLREG_ILFT_SAFE_OW.name + "-arrive", success_reward=2.0
+)
+# -arrive with 15 % of the episodes goal approaches (goal_approach_family: goal orbits)
+COLREG_ILFT_SAFE_OW_APPROACH = COLREG_ILFT_SAFE_OW_ARRIVE.replace(
+    name=COLREG_ILFT_SAFE_OW.name + "-approach", approach_share=0.15
 )
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
@@ -507,6 +523,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW,
         COLREG_ILFT_SAFE_OW_MEM,
         COLREG_ILFT_SAFE_OW_ARRIVE,
+        COLREG_ILFT_SAFE_OW_APPROACH,
         COLREG_ILFT_MEM,
         COLREG_SCENE,
     )

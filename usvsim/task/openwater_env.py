@@ -75,6 +75,7 @@ __all__ = [
     "crowded_family",
     "draw_family",
     "draw_family_episode",
+    "goal_approach_family",
     "harsh_radar_family",
     "mix_families",
     "weather_family",
@@ -191,6 +192,25 @@ def crowded_family(family: ScenarioMixture = OPEN_WATER_FAMILY) -> ScenarioMixtu
         weights=tuple(float(w) for _, w, _ in kept),
         names=tuple(name for _, _, name in kept),
     )
+
+
+# goal approach: no obstacle, the goal just outside its 10 m circle to a few turning circles away
+# (14-40 m), the heading up to 115° off it (the goal ahead, abeam or behind the beam), cruise
+# 2-4 m/s (turning circles of about 8-15 m at the ±30° heading steps); the family's current,
+# GNSS and radar draws. usvsim's curriculum for the goal orbits of docs/notes/2026-12-traffic.md
+# (a boat that passes the goal 10-15 m off and circles it), not tuned.
+_GOAL_APPROACH = replace(
+    _RANGES, primary_obstacle=False, goal_distance_range_m=(14.0, 40.0),
+    goal_bearing_range_rad=(0.0, 0.0), goal_lateral_range_m=(0.0, 0.0),
+    heading_offset_range_rad=(-115 * DEG, 115 * DEG), speed_range_mps=(2.0, 4.0),
+)  # fmt: skip
+
+
+def goal_approach_family() -> ScenarioMixture:
+    """One member, ``goal-approach``: episodes that start near the goal, pointed past it
+    (module constants above), for training the last metres of an approach; mixed into a
+    training family by :func:`mix_families` (``RLSetup.approach_share``)."""
+    return ScenarioMixture(members=(_GOAL_APPROACH,), weights=(1.0,), names=("goal-approach",))
 
 
 RADAR_RANGES = (  # the OpenWaterScenario fields of the radar's degradation

@@ -21,6 +21,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ilft-safe",
     "rl-gaussian-radar-colreg-ilft-safe-ow",
     "rl-gaussian-radar-colreg-ilft-safe-ow-arrive",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-approach",
 )
 
 
@@ -139,3 +140,21 @@ def test_the_safe_ow_setup_draws_a_quarter_of_its_episodes_from_the_colreg_membe
     family = ow.training_family
     colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
     np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25)
+
+
+def test_the_approach_setup_draws_15_percent_goal_approaches_and_keeps_the_payment() -> None:
+    arrive, approach = (
+        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-arrive"),
+        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-approach"),
+    )
+    assert approach.replace(name=arrive.name, approach_share=0.0) == arrive
+    family = approach.training_family
+    near = [n.endswith("goal-approach") for n in family.names]
+    np.testing.assert_allclose(family.probabilities[near].sum(), 0.15)
+    colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
+    np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25 * 0.85)
+    for bad in (-0.1, 1.0):
+        with pytest.raises(ValueError, match="approach_share must be in"):
+            arrive.replace(approach_share=bad)
+    with pytest.raises(ValueError, match="task='open-water'"):
+        RLSetup("x", "positional", "gaussian", approach_share=0.1)

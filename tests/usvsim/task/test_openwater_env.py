@@ -14,6 +14,7 @@ from gymnasium.utils.env_checker import data_equivalence
 
 import usvsim
 from baselines.avoid import AvoidHelmsman
+from usvsim.common.angles import ssa
 from usvsim.evaluation.episodes import validation_episodes
 from usvsim.task.observations import POSITIONAL_STANDARDIZATION
 from usvsim.task.openwater import OpenWaterScenario, Vessel, draw_open_water, from_pole_episodes
@@ -24,6 +25,7 @@ from usvsim.task.openwater_env import (
     ScenarioMixture,
     draw_family,
     draw_family_episode,
+    goal_approach_family,
 )
 from usvsim.task.reward import GaussianReward, SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
@@ -321,3 +323,18 @@ def test_perf_figure_is_a_rate():
 
     rate = open_water_env_throughput("scene", 4, seconds=0.05)
     assert math.isfinite(rate) and rate > 0
+
+
+def test_goal_approach_episodes_start_near_the_goal_pointed_past_it(plant):
+    """The goal-approach member: no obstacle or vessel, the goal 14-40 m from the boat at its
+    start and up to 115° off its heading, from ahead to behind the beam."""
+    episodes = draw_family(goal_approach_family(), 5, 200)
+    assert all(not e.obstacles and not e.vessels for e in episodes)
+    env = OpenWaterVectorEnv(len(episodes), observation="scene", plant=plant)
+    env.reset(seed=0, options={"episodes": list(episodes)})
+    eta, goal = env.sim.inner.state.eta, env.sim.goal_ne
+    distance = np.hypot(goal[:, 0] - eta[:, 0], goal[:, 1] - eta[:, 1])
+    off = np.abs(ssa(np.arctan2(goal[:, 1] - eta[:, 1], goal[:, 0] - eta[:, 0]) - eta[:, 2]))
+    assert distance.min() >= 14.0 - 1e-9 and distance.max() <= 40.0 + 1e-9
+    assert off.max() <= math.radians(115.0) + 1e-9
+    assert np.mean(off > math.radians(60.0)) > 0.3 and np.mean(off < math.radians(30.0)) > 0.1
