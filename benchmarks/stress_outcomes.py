@@ -2,8 +2,9 @@
 after passing inside the safety distance, out of the area, time limit) counted per set and
 helmsman, with the nearest distances of the unsafe passes and the time-limit failures that are
 goal orbits (the track came within ``--orbit-m``, default 25 m, of the goal but never inside its
-10 m circle: the boat passed the goal and circled it; ``docs/notes/2026-12-traffic.md``); JSON
-and a Markdown table::
+10 m circle: the boat passed the goal and circled it; ``docs/notes/2026-12-traffic.md``), and per
+outcome the episodes in which a target vessel passes through the goal circle within the time
+limit (its centre within 15 m of the goal); JSON and a Markdown table::
 
     python benchmarks/stress_outcomes.py --sets several-obstacles,everything \\
         --helmsmen vo-radar,run/seed0.pt --split test --out benchmarks/data/il-owcr/outcomes
@@ -24,6 +25,7 @@ import numpy as np
 
 from usvsim.evaluation.stress import evaluate_set, select_sets, stress_episodes
 from usvsim.helm.registry import make_helmsman
+from usvsim.task.openwater import vessel_motion
 
 OUTCOMES = ("success", "goal-unsafe", "collision", "time-limit", "out-of-area")
 ORBIT_M = 25.0  # m: a time-limit failure that came this close to the goal is a goal orbit
@@ -33,6 +35,26 @@ def closest_goal_approach_m(record: Any) -> float:
     """The least distance (m) between an open-water record's true track and its goal."""
     track, goal = record.trajectory, np.asarray(record.episode.goal_ne, dtype=float)
     return float(np.hypot(track[:, 0] - goal[0], track[:, 1] - goal[1]).min())
+
+
+THROUGH_GOAL_M = 15.0  # m: a vessel centre this close passes through the 10 m goal circle
+
+
+def nearest_vessel_to_goal_m(episode: Any, step_s: float = 0.5) -> float:
+    """The least distance (m) between the goal and any target vessel's centre within the
+    episode's time limit, sampled every ``step_s`` (``inf`` without vessels)."""
+    if not episode.vessels:
+        return float("inf")
+    t_s = np.arange(0.0, episode.time_limit_s + step_s / 2, step_s)
+    v = episode.vessels
+    p0 = np.array([[x.x0_n, x.y0_e] for x in v])[:, None, :]
+    course, speed, turn = (
+        np.array([getattr(x, f) for x in v])[:, None]
+        for f in ("course_rad", "speed_mps", "turn_rate_radps")
+    )
+    pos, _ = vessel_motion(p0, course, speed, turn, t_s[None, :])
+    goal = np.asarray(episode.goal_ne, dtype=float)
+    return float(np.hypot(pos[..., 0] - goal[0], pos[..., 1] - goal[1]).min())
 
 
 def tally(
@@ -51,8 +73,10 @@ def tally(
                 for r in records
                 if r.outcome == "goal-unsafe"
             )
-            approach = sorted(
-                round(closest_goal_approach_m(r), 2) for r in records if r.outcome == "time-limit"
+            failed = [r for r in records if r.outcome == "time-limit"]
+            approach = sorted(round(closest_goal_approach_m(r), 2) for r in failed)
+            through = Counter(
+                r.outcome for r in records if nearest_vessel_to_goal_m(r.episode) < THROUGH_GOAL_M
             )
             rows.append(
                 {
@@ -63,6 +87,7 @@ def tally(
                     "goal_orbits": sum(d < orbit_m for d in approach),
                     "unsafe_nearest_m": unsafe,
                     "time_limit_goal_approach_m": approach,
+                    "traffic_through_goal": {o: through.get(o, 0) for o in OUTCOMES},
                 }
             )
     return rows
