@@ -32,6 +32,11 @@ K_ref − K_i decisions, so m = K_i − (t + 1) as in the pole task.
 The loop over boats that remains is over *finished* boats only, as in the pole task's env:
 drawing their next episodes (scalar, seeded code per episode) and the ``final_obs`` object
 array; the reset itself is one batched call.
+
+Why this module is long: the env's Gymnasium docstring (Description to Arguments, from which its
+documentation page is generated) takes about 110 lines, and the family the env draws from (its
+members, mixtures and the practice members mixed into training) defines the env's episodes, so
+it is kept beside the env.
 """
 
 from __future__ import annotations
