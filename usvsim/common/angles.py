@@ -7,12 +7,13 @@ CasADi expression for the compiled plant and filter steps. Both follow Fossen (2
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ssa", "ssa_casadi"]
+__all__ = ["ssa", "ssa_casadi", "ssa_float"]
 
 
 def ssa(angle_rad: ArrayLike) -> NDArray[np.float64]:
@@ -26,6 +27,20 @@ def ssa(angle_rad: ArrayLike) -> NDArray[np.float64]:
     """
     a = np.asarray(angle_rad, dtype=float)
     return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+
+
+def ssa_float(angle_rad: float) -> float:
+    """:func:`ssa` of one Python float, as a float: the same bits, about 10× cheaper.
+
+    Python's float ``%`` and NumPy's ``mod`` are the same operation (C's ``fmod``, then the
+    divisor added where the signs differ, ``copysign(0, divisor)`` for a zero remainder), and
+    ``np.pi`` is ``math.pi``, so ``(a + π) % 2π − π`` rounds as :func:`ssa` does (tested on
+    random and edge values). For scalar code in hot paths (an episode's draw).
+
+    >>> ssa_float(3 * math.pi / 2)
+    -1.5707963267948966
+    """
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def ssa_casadi(angle_rad: Any) -> Any:

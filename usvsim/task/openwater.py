@@ -59,7 +59,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from usvsim.common.angles import ssa
+from usvsim.common.angles import ssa_float
 from usvsim.task.disturbance import EpisodeDisturbance
 from usvsim.task.scenario import EpisodeSpec, Scenario, episode_geometry
 from usvsim.task.weather_draw import WeatherRanges, draw_weather
@@ -257,9 +257,11 @@ def _place_extras(
     scale = max(length, 1e-9)
     ux, uy = (gx - sx) / scale, (gy - sy) / scale  # unit vector S → G, normal (-uy, ux)
     half_width, gap_m = sc.corridor_half_width_m, sc.min_gap_m
-    placed = np.zeros((len(obstacles) + n, 3))  # the obstacles so far as rows (x, y, r)
+    # rows: the start, the goal, then the obstacles so far (x, y, r): one np.hypot per attempt
+    points = np.zeros((2 + len(obstacles) + n, 3))
+    points[0, :2], points[1, :2] = s, g
     if obstacles:
-        placed[: len(obstacles)] = obstacles
+        points[2 : 2 + len(obstacles)] = obstacles
     for _ in range(n):
         for _attempt in range(200):
             u_islet, u_radius, u_a, u_b = _draws(rng, 4)
@@ -275,15 +277,16 @@ def _place_extras(
                 across = _at((-half_width, half_width), u_b)
                 cx = sx + along * ux + across * -uy
                 cy = sy + along * uy + across * ux
-            edge_s = _hypot(cx - sx, cy - sy) - radius
-            edge_g = _hypot(cx - gx, cy - gy) - radius
+            # the start's, the goal's and every obstacle's distance in one call (np.hypot is
+            # C's hypot element-wise: the numbers of a call per distance)
+            m = 2 + len(obstacles)
+            h = np.hypot(cx - points[:m, 0], cy - points[:m, 1])
+            edge_s, edge_g = float(h[0]) - radius, float(h[1]) - radius
             if not min(edge_s, edge_g) >= sc.clearance_m:  # (a NaN edge fails, as before)
                 continue
-            # every gap in one call: np.hypot element-wise, then (h - radius) - r in the
-            # order of the scalar expression, so the same numbers
-            gaps = np.hypot(cx - placed[: len(obstacles), 0], cy - placed[: len(obstacles), 1])
-            if not obstacles or (gaps - radius - placed[: len(obstacles), 2]).min() >= gap_m:
-                placed[len(obstacles)] = (cx, cy, radius)
+            # then (h - radius) - r in the order of the scalar expression, the same numbers
+            if not obstacles or (h[2:] - radius - points[2:m, 2]).min() >= gap_m:
+                points[m] = (cx, cy, radius)
                 obstacles.append((cx, cy, radius))
                 break
 
@@ -315,7 +318,7 @@ def _vessel(
     meet_x, meet_y = s[0] + run * ux + miss * -uy, s[1] + run * uy + miss * ux
     back = speed * t_c
     x0, y0 = meet_x - back * math.cos(course), meet_y - back * math.sin(course)
-    return Vessel(x0, y0, float(ssa(course)), speed, turn, sc.vessel_radius_m, kind)
+    return Vessel(x0, y0, ssa_float(course), speed, turn, sc.vessel_radius_m, kind)
 
 
 def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpisode:
@@ -363,7 +366,7 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
      *u_radar) = _draws(rng, 11)  # fmt: skip
     current = _at(sc.current_speed_range_mps, u_current)
     turn = current_side * _at(sc.current_direction_range_rad, u_direction)
-    current_dir = float(ssa(chi_g + turn))
+    current_dir = ssa_float(chi_g + turn)
     gnss_scale = _at(sc.gnss_noise_scale_range, u_scale)
     outlier = _at(sc.gnss_outlier_probability_range, u_outlier)
     time_limit = max(150.0, sc.time_factor * length / speed)
@@ -400,10 +403,33 @@ def _draw_one(rng: np.random.Generator, sc: OpenWaterScenario) -> OpenWaterEpiso
     )
 
 
+def _uint32_words(value: int) -> list[int]:
+    """The 32-bit words, least significant first (at least one), that NumPy's
+    ``SeedSequence`` makes of a non-negative int entropy entry."""
+    if value < 0:
+        raise ValueError(f"an episode seed must be >= 0, got {value}")
+    words = [value & 0xFFFFFFFF]
+    value >>= 32
+    while value:
+        words.append(value & 0xFFFFFFFF)
+        value >>= 32
+    return words
+
+
+def episode_rng(*entropy: int) -> np.random.Generator:
+    """``np.random.default_rng([*entropy])`` (e.g. ``[seed, k]``), the same generator about
+    1.5× cheaper: ``SeedSequence`` is given the uint32 words NumPy would make of the list
+    (:func:`_uint32_words`, concatenated) as one array, which skips its coercion of Python
+    ints; drawing a family episode makes one per episode (tested equal)."""
+    words = [w for value in entropy for w in _uint32_words(int(value))]
+    sequence = np.random.SeedSequence(np.array(words, dtype=np.uint32))
+    return np.random.Generator(np.random.PCG64(sequence))
+
+
 def draw_open_water(sc: OpenWaterScenario, seed: int, n: int) -> tuple[OpenWaterEpisode, ...]:
     """``n`` episodes of ``sc``; episode k from ``default_rng([seed, k])``, its traffic and
     weather (if ``sc.traffic``, ``sc.weather``) from their own streams (module docstring)."""
-    episodes = tuple(_draw_one(np.random.default_rng([seed, k]), sc) for k in range(n))
+    episodes = tuple(_draw_one(episode_rng(seed, k), sc) for k in range(n))
     if sc.traffic is not None:
         draw = sc.traffic
         episodes = tuple(
@@ -417,7 +443,7 @@ def draw_open_water(sc: OpenWaterScenario, seed: int, n: int) -> tuple[OpenWater
 
 def _traffic_rng(seed: int, k: int) -> np.random.Generator:
     """The traffic stream of episode k of the set of seed ``seed`` (module docstring)."""
-    return np.random.default_rng([seed, k, TRAFFIC_STREAM])
+    return episode_rng(seed, k, TRAFFIC_STREAM)
 
 
 def _with_weather(

@@ -6,7 +6,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from usvsim.common.angles import ssa, ssa_casadi
+from usvsim.common.angles import ssa, ssa_casadi, ssa_float
 
 
 @pytest.fixture(scope="module")
@@ -38,3 +38,13 @@ def test_casadi_ssa_stays_below_pi_where_numpys_rounds_up(ssa_function: ca.Funct
     a = np.nextafter(-np.pi, -np.inf)
     assert float(ssa(a)) == np.pi
     assert float(ssa_function(a)) == -np.pi
+
+
+def test_scalar_ssa_gives_numpys_bits() -> None:
+    rng = np.random.default_rng(2)
+    a = np.concatenate([
+        rng.uniform(-50.0, 50.0, 20_000), np.arange(-20, 21) * np.pi, [0.0, -0.0, 1e-300],
+        [np.nextafter(-np.pi, -np.inf), np.nextafter(np.pi, np.inf), 1e9, -1e9],
+    ])  # fmt: skip
+    got = np.array([ssa_float(float(x)) for x in a])
+    assert got.view(np.uint64).tolist() == ssa(a).view(np.uint64).tolist()

@@ -20,6 +20,7 @@ from usvsim.task.openwater import (
     RadarQuality,
     Vessel,
     draw_open_water,
+    episode_rng,
     from_pole_episodes,
     integer_in,
     seeds63,
@@ -227,6 +228,22 @@ def test_seeds63_are_numpys_bounded_integers() -> None:
         assert seeds63(a, 3) == b.integers(2**63, size=3).tolist()
         assert seeds63(a, 1)[0] == int(b.integers(2**63))
         assert a.random() == b.random()
+
+
+def test_episode_rng_is_numpys_default_rng() -> None:
+    """The episode generators: the raw stream of ``default_rng([seed, k])`` (and of a third
+    entry), for seeds of one, two and three 32-bit words and zero."""
+    rng = np.random.default_rng(3)
+    seeds = [0, 1, 2**32 - 1, 2**32, 2**63 - 1, 2**64 + 5, *rng.integers(0, 2**63, 300).tolist()]
+    for seed in seeds:
+        for entropy in ((seed, 0), (seed, 7), (seed, 2**32 + 1), (seed, 3, 0x7A11)):
+            ours = episode_rng(*entropy).bit_generator.random_raw(4)
+            assert (
+                ours.tolist()
+                == np.random.default_rng(list(entropy)).bit_generator.random_raw(4).tolist()
+            )
+    with pytest.raises(ValueError, match="must be >= 0"):
+        episode_rng(-1, 0)
 
 
 def test_integer_in_is_numpys_integers() -> None:
