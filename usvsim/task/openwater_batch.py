@@ -43,7 +43,7 @@ from usvsim.task.observations import (
 )
 from usvsim.task.openwater import OpenWaterEpisode, vessel_motion
 from usvsim.task.radar import RadarConfig
-from usvsim.task.scenario import Scenario
+from usvsim.task.scenario import EpisodeSpec, Scenario
 from usvsim.task.scene_distances import PackedDiscs, judge_period, nearest_and_hits
 from usvsim.task.scene_radar import RadarDegradation, RadarStreams, render_scene
 from usvsim.vessel.plant import Plant
@@ -190,7 +190,11 @@ class OpenWaterBatch:
         inner.scenario = replace(
             inner.scenario, poles_ne=tuple(e.anchor_ne for e in episodes), time_limit_s=limit
         )
-        specs = [replace(e.start, pole_index=j) for j, e in enumerate(episodes)]
+        specs = [  # e.start naming pole j (built directly: dataclasses.replace costs ~5 µs)
+            EpisodeSpec(j, e.start.start_distance_m, e.start.start_bearing_rad,
+                        e.start.heading_offset_rad, e.start.noise_seed)
+            for j, e in enumerate(episodes)
+        ]  # fmt: skip
         inner.start(idx, specs, [e.disturbance for e in episodes])  # the scene observes below
         inner.pole_ne[idx] = 1e9  # the inner single-pole flags are not used
         self._set_scene(idx.tolist(), episodes)
