@@ -53,7 +53,9 @@ function), ``-colreg-ilft-mem`` ``-colreg-ilft`` with radar memory (from a two-i
 ``il-gaussian-radar-ow-colreg-mem``); ``-colreg-ilft-safe-ow-arrive`` ``-safe-ow`` paid once
 for each episode that ends in success (:attr:`RLSetup.success_reward`,
 :class:`usvsim.task.reward.SuccessReward`: the cure tried for goal orbits), ``-approach`` that
-with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`);
+with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`),
+``-safe-ow-goaltraffic`` ``-safe-ow`` with 15 % of the episodes overtaking a slow vessel about
+where the goal is (:attr:`RLSetup.goal_traffic_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -129,7 +131,11 @@ from learning.algorithms.ppo import PPOConfig
 from learning.algorithms.registry import algorithm_for, get_algorithm
 from learning.algorithms.trpo import TRPOConfig
 from usvsim.task.batch import ActionKind
-from usvsim.task.colreg_family import COLREG_FAMILY, COLREG_FAMILY_SUITE_GOALS
+from usvsim.task.colreg_family import (
+    COLREG_FAMILY,
+    COLREG_FAMILY_SUITE_GOALS,
+    goal_overtaking_family,
+)
 from usvsim.task.colreg_reward import ColregRewardWeights, colreg_weights
 from usvsim.task.observations import ObservationKind
 from usvsim.task.openwater_env import (
@@ -264,6 +270,9 @@ class RLSetup:
     # open-water: the share of training episodes that start near the goal, pointed past it
     # (usvsim.task.openwater_env.goal_approach_family), mixed in after the COLREG share; 0: none
     approach_share: float = 0.0
+    # open-water: the share of training episodes in which the boat overtakes a slow vessel about
+    # where the goal is (usvsim.task.colreg_family.goal_overtaking_family), mixed in last; 0: none
+    goal_traffic_share: float = 0.0
     # open-water: the weight (> 0) of the one-off payment for an episode that ends in success
     # (usvsim.task.reward.SuccessReward, after the fixed horizon's scaling); 0: off
     success_reward: float = 0.0
@@ -288,15 +297,15 @@ class RLSetup:
             or self.safety_reward
             or self.success_reward
             or self.approach_share
+            or self.goal_traffic_share
         ) and (self.task != "open-water"):
             raise ValueError(
-                "RLSetup.colreg_*, reactive_targets, safety_reward, success_reward and "
-                "approach_share need task='open-water'"
+                "RLSetup.colreg_*, reactive_targets, safety_reward, success_reward, "
+                "approach_share and goal_traffic_share need task='open-water'"
             )
-        if not 0.0 <= self.approach_share < 1.0:
-            raise ValueError(
-                f"RLSetup.approach_share must be in [0, 1), got {self.approach_share!r}"
-            )
+        for share in ("approach_share", "goal_traffic_share"):
+            if not 0.0 <= getattr(self, share) < 1.0:
+                raise ValueError(f"RLSetup.{share} must be in [0, 1), got {getattr(self, share)!r}")
         for name in ("safety_reward", "success_reward"):
             weight = getattr(self, name)
             if not (math.isfinite(weight) and weight >= 0.0):
@@ -332,7 +341,8 @@ class RLSetup:
     def training_family(self) -> ScenarioMixture:
         """The open-water training distribution (:attr:`crowded_share`, then
         :attr:`colreg_share` of the COLREG members, then :attr:`approach_share` of goal
-        approaches, then :attr:`harsh_radar_share` of that mixture at the harshest radar)."""
+        approaches, then :attr:`goal_traffic_share` of goal overtakings, then
+        :attr:`harsh_radar_share` of that mixture at the harshest radar)."""
         family = OPEN_WATER_FAMILY
         if self.crowded_share:
             family = mix_families(family, crowded_family(), self.crowded_share)
@@ -341,6 +351,10 @@ class RLSetup:
             family = mix_families(family, colreg, self.colreg_share, prefix="colreg-")
         if self.approach_share:
             family = mix_families(family, goal_approach_family(), self.approach_share, prefix="")
+        if self.goal_traffic_share:
+            family = mix_families(
+                family, goal_overtaking_family(), self.goal_traffic_share, prefix=""
+            )
         if self.harsh_radar_share:
             harsh = harsh_radar_family(family)
             family = mix_families(family, harsh, self.harsh_radar_share, prefix="harsh-")
@@ -431,6 +445,11 @@ COLREG_ILFT_SAFE_OW_ARRIVE = COLREG_ILFT_SAFE_OW.replace(
 # -arrive with 15 % of the episodes goal approaches (goal_approach_family: goal orbits)
 COLREG_ILFT_SAFE_OW_APPROACH = COLREG_ILFT_SAFE_OW_ARRIVE.replace(
     name=COLREG_ILFT_SAFE_OW.name + "-approach", approach_share=0.15
+)
+# -safe-ow with 15 % of the episodes overtaking a slow vessel at the goal (goal orbits with
+# traffic through the goal; goal_overtaking_family)
+COLREG_ILFT_SAFE_OW_GOALTRAFFIC = COLREG_ILFT_SAFE_OW.replace(
+    name=COLREG_ILFT_SAFE_OW.name + "-goaltraffic", goal_traffic_share=0.15
 )
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
@@ -524,6 +543,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_MEM,
         COLREG_ILFT_SAFE_OW_ARRIVE,
         COLREG_ILFT_SAFE_OW_APPROACH,
+        COLREG_ILFT_SAFE_OW_GOALTRAFFIC,
         COLREG_ILFT_MEM,
         COLREG_SCENE,
     )

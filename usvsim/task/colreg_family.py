@@ -68,6 +68,7 @@ __all__ = [
     "ColregTraffic",
     "colreg_member",
     "colreg_training_family",
+    "goal_overtaking_family",
 ]
 
 Range = tuple[float, float]
@@ -219,6 +220,27 @@ def colreg_family(goal_distance_range_m: Range = GOAL_DISTANCE_RANGE_M) -> Scena
 COLREG_FAMILY = colreg_family()
 # the members with goals as far as the suite's (SUITE_GOAL_DISTANCE_RANGE_M)
 COLREG_FAMILY_SUITE_GOALS = colreg_family(SUITE_GOAL_DISTANCE_RANGE_M)
+
+
+# goal overtaking: one slow vessel on the route that the own boat overtakes about where the goal
+# is (the meeting point 80-110 % of the route, ±10 m across it), goals 120-300 m ahead. The
+# situation of most goal orbits on the stress suite's moving-vessels set (docs/notes/
+# 2026-12-traffic.md: an overtaken vessel that passes within 15 m of the goal); usvsim's
+# practice member for them, not tuned.
+GOAL_OVERTAKING = ColregTraffic(
+    n_targets_range=(1, 1), kinds=("overtaking-give-way",), meet_fraction_range=(0.8, 1.1),
+)  # fmt: skip
+
+
+def goal_overtaking_family() -> ScenarioMixture:
+    """One member, ``goal-overtaking``: :data:`GOAL_OVERTAKING`'s vessel, the goal 120-300 m
+    ahead, the family's traffic disturbances (:func:`colreg_member`); mixed into a training
+    family by :func:`usvsim.task.openwater_env.mix_families` (``RLSetup.goal_traffic_share``)."""
+    return ScenarioMixture(
+        members=(colreg_member(GOAL_OVERTAKING, (120.0, 300.0)),),
+        weights=(1.0,),
+        names=("goal-overtaking",),
+    )
 
 
 def colreg_training_family(

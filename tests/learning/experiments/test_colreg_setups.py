@@ -22,6 +22,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ilft-safe-ow",
     "rl-gaussian-radar-colreg-ilft-safe-ow-arrive",
     "rl-gaussian-radar-colreg-ilft-safe-ow-approach",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-goaltraffic",
 )
 
 
@@ -158,3 +159,21 @@ def test_the_approach_setup_draws_15_percent_goal_approaches_and_keeps_the_payme
             arrive.replace(approach_share=bad)
     with pytest.raises(ValueError, match="task='open-water'"):
         RLSetup("x", "positional", "gaussian", approach_share=0.1)
+
+
+def test_the_goaltraffic_setup_draws_15_percent_goal_overtakings_and_nothing_else_new() -> None:
+    ow, goal = (
+        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow"),
+        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-goaltraffic"),
+    )
+    assert goal.replace(name=ow.name, goal_traffic_share=0.0) == ow
+    family = goal.training_family
+    over = [n.endswith("goal-overtaking") for n in family.names]
+    np.testing.assert_allclose(family.probabilities[over].sum(), 0.15)
+    colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
+    np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25 * 0.85)
+    for bad in (-0.1, 1.0):
+        with pytest.raises(ValueError, match="goal_traffic_share must be in"):
+            ow.replace(goal_traffic_share=bad)
+    with pytest.raises(ValueError, match="task='open-water'"):
+        RLSetup("x", "positional", "gaussian", goal_traffic_share=0.1)

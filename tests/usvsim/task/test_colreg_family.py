@@ -17,6 +17,7 @@ from usvsim.task.colreg_family import (
     COLREG_KINDS,
     ColregTraffic,
     colreg_training_family,
+    goal_overtaking_family,
 )
 from usvsim.task.openwater import OpenWaterEpisode, draw_open_water, vessel_motion
 from usvsim.task.openwater_env import OPEN_WATER_FAMILY, draw_family
@@ -147,3 +148,26 @@ def test_suite_goal_members_reach_as_far_as_the_colreg_suite() -> None:
     assert far.min() >= 250.0 and far.max() <= 850.0
     assert max(suite) > near.max()  # the suite's goals (600, 797 m) lie beyond the default
     assert (far > max(suite)).any() and (far < 500.0).any()  # and inside the far range
+
+
+def test_goal_overtaking_puts_a_slow_vessel_about_at_the_goal_when_the_boat_arrives() -> None:
+    """The practice member for goal orbits: one vessel at 0.25-0.75 of the own speed on the
+    route, near the goal (median within its 10 m circle) at the own boat's nominal arrival
+    L / U, starting at least 40 m from the own start; no static obstacle."""
+    episodes = draw_family(goal_overtaking_family(), 5, 300)
+    to_goal, from_start = [], []
+    for e in episodes:
+        assert len(e.vessels) == 1 and not e.obstacles
+        s, g = e.start_ne, np.asarray(e.goal_ne)
+        length, own = float(np.hypot(*(g - s))), e.disturbance.speed_mps
+        assert 120.0 <= length <= 300.0
+        v = e.vessels[0]
+        assert 0.25 * own <= v.speed_mps <= 0.75 * own
+        p, _ = vessel_motion(
+            np.array([v.x0_n, v.y0_e]), np.array(v.course_rad), np.array(v.speed_mps),
+            np.array(0.0), np.array(length / own),
+        )  # fmt: skip
+        to_goal.append(float(np.hypot(*(p - g))))
+        from_start.append(math.hypot(v.x0_n - s[0], v.y0_e - s[1]))
+    assert np.median(to_goal) < 10.0 and np.percentile(to_goal, 90) < 25.0
+    assert np.mean(np.asarray(from_start) >= 40.0) >= 0.99
