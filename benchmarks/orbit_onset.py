@@ -16,7 +16,9 @@ at the first such moment (the *arrival*):
   0 if the goal was clear; ``inf`` if it stays blocked to the time limit), and for the
   time-limit failures the time left after that (s): how long the boat circled a clear goal.
 
-Printed as JSON, one group per outcome (medians and counts)::
+``--all``: every episode that comes near the goal (the vessel figures of one without vessels
+are NaN, left out of the medians). Printed as JSON, one group per outcome (medians and
+counts)::
 
     nice python benchmarks/orbit_onset.py --helmsman radar-gaussian-gail-trpo-traffic
 """
@@ -77,10 +79,15 @@ def onset(record: Any, near_m: float) -> dict[str, float] | None:
         return None
     dt = record.duration_s / max(len(track) - 1, 1)  # s between recorded states
     t_arrive = float(near[0] * dt)
+    own, psi = track[near[0], 0:2], float(track[near[0], 2])
+    if not record.episode.vessels:  # --all: the approach only
+        nan = float("nan")
+        return {"arrival_s": t_arrive, "vessel_to_goal_m": nan, "blocked": 0.0,
+                "goal_off_deg": _off_deg(goal - own, psi), "vessel_range_m": nan,
+                "vessel_off_deg": nan, "clear_after_s": 0.0, "circled_clear_s": nan}  # fmt: skip
     limit = record.episode.time_limit_s
     t = np.arange(t_arrive, limit + 0.25, 0.5)
     d_vessel = vessel_goal_distances_m(record.episode, t)
-    own, psi = track[near[0], 0:2], float(track[near[0], 2])
     rel = vessel_positions_ne(record.episode, np.array([t_arrive]))[:, 0, :] - own
     j = int(np.argmin(np.hypot(rel[:, 0], rel[:, 1])))
     clear = np.flatnonzero(d_vessel >= BLOCK_M)
@@ -104,6 +111,9 @@ def main() -> None:
     parser.add_argument("--split", choices=("validation", "test"), default="validation")
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--near-m", type=float, default=25.0, help="arrival: within this, m")
+    parser.add_argument(
+        "--all", action="store_true", help="every episode, not only traffic through the goal"
+    )
     args = parser.parse_args()
     if args.episodes < 1 or not args.near_m > 0:
         parser.error("--episodes must be >= 1 and --near-m > 0")
@@ -114,25 +124,26 @@ def main() -> None:
     )  # fmt: skip
     groups: dict[str, list[dict[str, float]]] = {}
     for r in records:
-        if not r.episode.vessels or nearest_vessel_to_goal_m(r.episode) >= THROUGH_GOAL_M:
+        through = bool(r.episode.vessels) and nearest_vessel_to_goal_m(r.episode) < THROUGH_GOAL_M
+        if not (through or args.all):
             continue
         figures = onset(r, args.near_m)
         if figures is not None:
             groups.setdefault(r.outcome, []).append(figures)
-    out = {"helmsman": args.helmsman, "set": args.set, "split": args.split,
+    out = {"helmsman": args.helmsman, "set": args.set, "split": args.split, "all": args.all,
            "near_m": args.near_m, "block_m": BLOCK_M, "groups": {}}  # fmt: skip
     for outcome, rows in sorted(groups.items()):
         cols = {k: np.array([row[k] for row in rows]) for k in rows[0]}
         out["groups"][outcome] = {
             "episodes": len(rows),
             "blocked_at_arrival": int(cols["blocked"].sum()),
-            "median_vessel_to_goal_m": round(float(np.median(cols["vessel_to_goal_m"])), 1),
+            "median_vessel_to_goal_m": round(float(np.nanmedian(cols["vessel_to_goal_m"])), 1),
             "median_clear_after_s": round(float(np.median(cols["clear_after_s"])), 1),
-            "median_circled_clear_s": round(float(np.median(cols["circled_clear_s"])), 1),
+            "median_circled_clear_s": round(float(np.nanmedian(cols["circled_clear_s"])), 1),
             "median_arrival_s": round(float(np.median(cols["arrival_s"])), 1),
             "median_goal_off_deg": round(float(np.median(cols["goal_off_deg"])), 1),
-            "median_vessel_range_m": round(float(np.median(cols["vessel_range_m"])), 1),
-            "median_vessel_off_deg": round(float(np.median(cols["vessel_off_deg"])), 1),
+            "median_vessel_range_m": round(float(np.nanmedian(cols["vessel_range_m"])), 1),
+            "median_vessel_off_deg": round(float(np.nanmedian(cols["vessel_off_deg"])), 1),
         }
     print(json.dumps(out, indent=1))
 
