@@ -36,26 +36,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # stress_outcomes' geometry, shared
 
-from stress_outcomes import THROUGH_GOAL_M, nearest_vessel_to_goal_m
+from stress_outcomes import THROUGH_GOAL_M, nearest_vessel_to_goal_m, vessel_positions_ne
 
 from usvsim.common.angles import ssa_float
 from usvsim.evaluation.stress import evaluate_set, select_sets, stress_episodes
 from usvsim.helm.registry import make_helmsman
-from usvsim.task.openwater import vessel_motion
 
 BLOCK_M = 10.0 + 14.0  # m: goal radius + a 5 m vessel's centre clearance under the success rule
-
-
-def vessel_positions_ne(episode: Any, t_s: np.ndarray) -> np.ndarray:
-    """Every vessel's centre (V, T, 2) m at the times ``t_s`` (T,) s."""
-    v = episode.vessels
-    p0 = np.array([[x.x0_n, x.y0_e] for x in v])[:, None, :]
-    course, speed, turn = (
-        np.array([getattr(x, f) for x in v])[:, None]
-        for f in ("course_rad", "speed_mps", "turn_rate_radps")
-    )
-    pos, _ = vessel_motion(p0, course, speed, turn, t_s[None, :])
-    return pos
 
 
 def vessel_goal_distances_m(episode: Any, t_s: np.ndarray) -> np.ndarray:

@@ -40,12 +40,8 @@ def closest_goal_approach_m(record: Any) -> float:
 THROUGH_GOAL_M = 15.0  # m: a vessel centre this close passes through the 10 m goal circle
 
 
-def nearest_vessel_to_goal_m(episode: Any, step_s: float = 0.5) -> float:
-    """The least distance (m) between the goal and any target vessel's centre within the
-    episode's time limit, sampled every ``step_s`` (``inf`` without vessels)."""
-    if not episode.vessels:
-        return float("inf")
-    t_s = np.arange(0.0, episode.time_limit_s + step_s / 2, step_s)
+def vessel_positions_ne(episode: Any, t_s: np.ndarray) -> np.ndarray:
+    """Every target vessel's centre (V, T, 2) m at the episode times ``t_s`` (T,) s."""
     v = episode.vessels
     p0 = np.array([[x.x0_n, x.y0_e] for x in v])[:, None, :]
     course, speed, turn = (
@@ -53,6 +49,15 @@ def nearest_vessel_to_goal_m(episode: Any, step_s: float = 0.5) -> float:
         for f in ("course_rad", "speed_mps", "turn_rate_radps")
     )
     pos, _ = vessel_motion(p0, course, speed, turn, t_s[None, :])
+    return pos
+
+
+def nearest_vessel_to_goal_m(episode: Any, step_s: float = 0.5) -> float:
+    """The least distance (m) between the goal and any target vessel's centre within the
+    episode's time limit, sampled every ``step_s`` (``inf`` without vessels)."""
+    if not episode.vessels:
+        return float("inf")
+    pos = vessel_positions_ne(episode, np.arange(0.0, episode.time_limit_s + step_s / 2, step_s))
     goal = np.asarray(episode.goal_ne, dtype=float)
     return float(np.hypot(pos[..., 0] - goal[0], pos[..., 1] - goal[1]).min())
 
