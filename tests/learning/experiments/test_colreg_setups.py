@@ -143,37 +143,28 @@ def test_the_safe_ow_setup_draws_a_quarter_of_its_episodes_from_the_colreg_membe
     np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25)
 
 
-def test_the_approach_setup_draws_15_percent_goal_approaches_and_keeps_the_payment() -> None:
-    arrive, approach = (
-        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-arrive"),
-        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-approach"),
-    )
-    assert approach.replace(name=arrive.name, approach_share=0.0) == arrive
-    family = approach.training_family
-    near = [n.endswith("goal-approach") for n in family.names]
-    np.testing.assert_allclose(family.probabilities[near].sum(), 0.15)
+@pytest.mark.parametrize(
+    ("base", "setup", "share", "member"),
+    [
+        ("-arrive", "-approach", "approach_share", "goal-approach"),
+        ("", "-goaltraffic", "goal_traffic_share", "goal-overtaking"),
+    ],
+)
+def test_a_practice_setup_draws_15_percent_of_its_member_and_nothing_else_new(
+    base: str, setup: str, share: str, member: str
+) -> None:
+    """``-approach`` is ``-arrive``, ``-goaltraffic`` is ``-safe-ow``, each with 15 % of its
+    practice member's episodes (the COLREG share scaled by the rest); the share is checked."""
+    name = "rl-gaussian-radar-colreg-ilft-safe-ow"
+    before, after = get_setup(name + base), get_setup(name + setup)
+    assert after.replace(name=before.name, **{share: 0.0}) == before
+    family = after.training_family
+    practice = [n.endswith(member) for n in family.names]
+    np.testing.assert_allclose(family.probabilities[practice].sum(), 0.15)
     colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
     np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25 * 0.85)
     for bad in (-0.1, 1.0):
-        with pytest.raises(ValueError, match="approach_share must be in"):
-            arrive.replace(approach_share=bad)
+        with pytest.raises(ValueError, match=f"{share} must be in"):
+            before.replace(**{share: bad})
     with pytest.raises(ValueError, match="task='open-water'"):
-        RLSetup("x", "positional", "gaussian", approach_share=0.1)
-
-
-def test_the_goaltraffic_setup_draws_15_percent_goal_overtakings_and_nothing_else_new() -> None:
-    ow, goal = (
-        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow"),
-        get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-goaltraffic"),
-    )
-    assert goal.replace(name=ow.name, goal_traffic_share=0.0) == ow
-    family = goal.training_family
-    over = [n.endswith("goal-overtaking") for n in family.names]
-    np.testing.assert_allclose(family.probabilities[over].sum(), 0.15)
-    colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
-    np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25 * 0.85)
-    for bad in (-0.1, 1.0):
-        with pytest.raises(ValueError, match="goal_traffic_share must be in"):
-            ow.replace(goal_traffic_share=bad)
-    with pytest.raises(ValueError, match="task='open-water'"):
-        RLSetup("x", "positional", "gaussian", goal_traffic_share=0.1)
+        RLSetup("x", "positional", "gaussian", **{share: 0.1})
