@@ -55,7 +55,8 @@ for each episode that ends in success (:attr:`RLSetup.success_reward`,
 :class:`usvsim.task.reward.SuccessReward`: the cure tried for goal orbits), ``-approach`` that
 with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`),
 ``-safe-ow-goaltraffic`` ``-safe-ow`` with 15 % of the episodes overtaking a slow vessel about
-where the goal is (:attr:`RLSetup.goal_traffic_share`);
+where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged for pointing off the
+goal within 100 m of it (:attr:`RLSetup.aim_reward`, :class:`usvsim.task.reward.GoalAimReward`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -148,7 +149,7 @@ from usvsim.task.openwater_env import (
     mix_families,
 )
 from usvsim.task.radar_memory import RadarMemoryVectorEnv
-from usvsim.task.reward import SafetyMarginReward, SuccessReward
+from usvsim.task.reward import GoalAimReward, SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 
 __all__ = [
@@ -276,6 +277,9 @@ class RLSetup:
     # open-water: the weight (> 0) of the one-off payment for an episode that ends in success
     # (usvsim.task.reward.SuccessReward, after the fixed horizon's scaling); 0: off
     success_reward: float = 0.0
+    # open-water: the weight (> 0) of the per-decision penalty for pointing off the goal within
+    # 100 m of it (usvsim.task.reward.GoalAimReward, w · (1 - cos β)); 0: off
+    aim_reward: float = 0.0
     # radar+goal: the radar images of the last K decisions as K channels, the newest first
     # (usvsim.task.radar_memory); 1: the image now only (memoryless, the study's)
     radar_frames: int = 1
@@ -296,17 +300,18 @@ class RLSetup:
             or self.colreg_suite_goals
             or self.safety_reward
             or self.success_reward
+            or self.aim_reward
             or self.approach_share
             or self.goal_traffic_share
         ) and (self.task != "open-water"):
             raise ValueError(
                 "RLSetup.colreg_*, reactive_targets, safety_reward, success_reward, "
-                "approach_share and goal_traffic_share need task='open-water'"
+                "aim_reward, approach_share and goal_traffic_share need task='open-water'"
             )
         for share in ("approach_share", "goal_traffic_share"):
             if not 0.0 <= getattr(self, share) < 1.0:
                 raise ValueError(f"RLSetup.{share} must be in [0, 1), got {getattr(self, share)!r}")
-        for name in ("safety_reward", "success_reward"):
+        for name in ("safety_reward", "success_reward", "aim_reward"):
             weight = getattr(self, name)
             if not (math.isfinite(weight) and weight >= 0.0):
                 raise ValueError(
@@ -381,6 +386,8 @@ class RLSetup:
                 env_kwargs.setdefault("safety_reward", SafetyMarginReward(self.safety_reward))
             if self.success_reward:
                 env_kwargs.setdefault("success_reward", SuccessReward(self.success_reward))
+            if self.aim_reward:
+                env_kwargs.setdefault("aim_reward", GoalAimReward(self.aim_reward))
             env: VectorEnv = OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,
@@ -450,6 +457,11 @@ COLREG_ILFT_SAFE_OW_APPROACH = COLREG_ILFT_SAFE_OW_ARRIVE.replace(
 # traffic through the goal; goal_overtaking_family)
 COLREG_ILFT_SAFE_OW_GOALTRAFFIC = COLREG_ILFT_SAFE_OW.replace(
     name=COLREG_ILFT_SAFE_OW.name + "-goaltraffic", goal_traffic_share=0.15
+)
+# -safe-ow charged for pointing off the goal within 100 m of it (GoalAimReward, w = 1: the
+# traffic policies' starboard dead zone near the goal, the goal orbits' onset)
+COLREG_ILFT_SAFE_OW_AIM = COLREG_ILFT_SAFE_OW.replace(
+    name=COLREG_ILFT_SAFE_OW.name + "-aim", aim_reward=1.0
 )
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
@@ -544,6 +556,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_ARRIVE,
         COLREG_ILFT_SAFE_OW_APPROACH,
         COLREG_ILFT_SAFE_OW_GOALTRAFFIC,
+        COLREG_ILFT_SAFE_OW_AIM,
         COLREG_ILFT_MEM,
         COLREG_SCENE,
     )

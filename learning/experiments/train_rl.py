@@ -110,10 +110,11 @@ def device_env_maker(setup: RLSetup, device: str) -> Any:
             "rl-categorical-positional) and the open-water scene and radar setups (rl-*-scene-ow, "
             f"rl-*-radar-ow and their -ft, -cont; the -colreg setups), not {setup.name!r}"
         )
-    if setup.safety_reward or setup.success_reward:
+    if setup.safety_reward or setup.success_reward or setup.aim_reward:
         raise ValueError(
-            f"--device {device}: the torch env has no safety-margin reward or success reward "
-            f"(RLSetup.safety_reward, success_reward; {setup.name!r}); train it with --device cpu"
+            f"--device {device}: the torch env has no safety-margin, success or aim reward "
+            f"(RLSetup.safety_reward, success_reward, aim_reward; {setup.name!r}); train it "
+            "with --device cpu"
         )
     if setup.task == "open-water":
         from usvsim.evaluation.torch_reactive import DeviceReactiveTargets

@@ -67,7 +67,13 @@ from usvsim.task.openwater import (
 from usvsim.task.openwater_batch import OpenWaterBatch
 from usvsim.task.options import EnvOptions, normalized_observation, normalized_positional_space
 from usvsim.task.radar import RadarConfig
-from usvsim.task.reward import GaussianReward, RewardFunction, SafetyMarginReward, SuccessReward
+from usvsim.task.reward import (
+    GaussianReward,
+    GoalAimReward,
+    RewardFunction,
+    SafetyMarginReward,
+    SuccessReward,
+)
 from usvsim.task.vector_env import boat_generators, episodes_option
 from usvsim.task.weather_draw import WEATHER_SETS, WeatherRanges
 from usvsim.vessel.plant import Plant
@@ -323,6 +329,9 @@ class OpenWaterVectorEnv(VectorEnv):
     steps (``info["reward_safety"]``). ``success_reward``
     (:class:`usvsim.task.reward.SuccessReward`; default None: off) pays once at the decision an
     episode ends in success, after the fixed horizon's scaling (``info["reward_success"]``).
+    ``aim_reward`` (:class:`usvsim.task.reward.GoalAimReward`; default None: off) adds a penalty
+    for pointing off the goal within its range of it, from the true pose at the end of each
+    decision period (``info["reward_aim"]``).
 
     ## Starting State
     Boat i draws its episodes from its own generator, seeded ``seed + i`` by
@@ -338,8 +347,8 @@ class OpenWaterVectorEnv(VectorEnv):
     ## Arguments
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
-    ``plant``, ``radar``, ``backend``, ``colreg_reward``, ``safety_reward``, ``success_reward``
-    (wind and waves:
+    ``plant``, ``radar``, ``backend``, ``colreg_reward``, ``safety_reward``, ``success_reward``,
+    ``aim_reward`` (wind and waves:
     ``family=weather_family()``; the default family is calm). ``render_mode`` must be
     ``None``: the top view draws one pole (:mod:`usvsim.task.render`). ``info_observation``
     (e.g. ``"scene"``): ``reset`` and every ``step`` also return that form of the returned
@@ -372,6 +381,7 @@ class OpenWaterVectorEnv(VectorEnv):
         on_decision: Any = None,
         safety_reward: SafetyMarginReward | None = None,
         success_reward: SuccessReward | None = None,
+        aim_reward: GoalAimReward | None = None,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -386,6 +396,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self.colreg = None if colreg_reward is None else ColregReward(colreg_reward, num_envs)
         self.safety = safety_reward
         self.success = success_reward
+        self.aim = aim_reward
         self.on_decision = on_decision
         self.sim = OpenWaterBatch(
             num_envs, observation=observation, action=action, plant=plant, radar=radar,
@@ -449,6 +460,13 @@ class OpenWaterVectorEnv(VectorEnv):
         info = {"goal_ne": self.sim.goal_ne.copy()}
         return obs, self._add_info_observation(info)
 
+    def _goal_bearing_rad(self, res: Any) -> FloatArray:
+        """The goal's bearing off each boat's true heading (rad) at the end of the step's
+        decision period (its last plant state, ``res.end_step - 1``)."""
+        end = res.trajectory[np.arange(self.num_envs), res.end_step - 1]
+        d = self.sim.goal_ne - end[:, 0:2]
+        return np.arctan2(d[:, 1], d[:, 0]) - end[:, 2]
+
     def _add_info_observation(self, info: dict[str, Any]) -> dict[str, Any]:
         """``info`` with ``observation_<kind>`` of ``info_observation`` (unchanged if None)."""
         if self.info_observation is not None:
@@ -478,6 +496,10 @@ class OpenWaterVectorEnv(VectorEnv):
             safety = self.safety(res.period_nearest_m, self.sim.base.safety_distance_m)
             total = total + safety
             extra["reward_safety"] = safety
+        if self.aim is not None:
+            aim = self.aim(self._goal_bearing_rad(res), res.distance_to_goal_m)
+            total = total + aim
+            extra["reward_aim"] = aim
         reward, terminated, truncated = apply_reward_horizon(
             o.reward_horizon, o.gamma, self._horizon, total, res.terminated, res.truncated,
             res.out_of_area, shifted,

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "GaussianReward",
+    "GoalAimReward",
     "RewardFunction",
     "RewardTerms",
     "SafetyMarginReward",
@@ -150,3 +151,44 @@ class SuccessReward:
         """The payment (N,) of N boats, ``is_success`` (N,) True where the decision ended an
         episode in success."""
         return self.weight * np.asarray(is_success, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class GoalAimReward:
+    """A per-decision penalty for pointing off the goal near it (usvsim's own term, not the
+    study's; off unless an env is given one).
+
+    The study's goal term depends on the range alone and is nearly flat near the goal (-0.006 a
+    decision at 11 m), so it hardly pays for where the bow points in the last 100 m. Fine-tuned
+    with the COLREG terms, the traffic policies learned a blanket starboard habit that shows as a
+    dead zone there: with a clean radar image and the goal 5-10° to port at 15-40 m they hold
+    course or turn to starboard, while a goal as far to starboard gets a full turn
+    (``benchmarks/goal_response.py``), and they come to the goal with it to port, the goal orbits'
+    onset (``docs/notes/2026-12-traffic.md``). This term pays, with β the goal's bearing off the
+    heading (rad) and ``d`` its range (m) at the end of the decision period::
+
+        r_aim = -w · (1 - cos β) · 1[d < R]
+
+    0 when pointed at the goal, -w/2 at 60° off, -w abeam; only within ``R`` of the goal, where
+    the approach is flown (beyond it avoidance may need any heading).
+
+    >>> b, d = np.radians([0.0, 60.0, -90.0, 60.0]), np.array([50.0, 50.0, 50.0, 150.0])
+    >>> GoalAimReward()(b, d).round(3).tolist()
+    [-0.0, -0.5, -1.0, 0.0]
+    """
+
+    weight: float = 1.0  # the study's goal weight: abeam near the goal costs a far decision's
+    range_m: float = 100.0  # m; the study's σ_goal
+
+    def __post_init__(self) -> None:
+        for name in ("weight", "range_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"GoalAimReward.{name} must be finite and > 0, got {value!r}")
+
+    def __call__(self, goal_bearing_rad: FloatArray, d_goal_m: FloatArray) -> FloatArray:
+        """The penalty (N,) of N boats whose goal lies ``goal_bearing_rad`` (N,) rad off their
+        heading at ``d_goal_m`` (N,) m."""
+        near = np.asarray(d_goal_m, dtype=np.float64) < self.range_m
+        off = 1.0 - np.cos(np.asarray(goal_bearing_rad, dtype=np.float64))
+        return np.where(near, -self.weight * off, 0.0)

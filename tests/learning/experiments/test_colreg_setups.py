@@ -10,7 +10,7 @@ import pytest
 
 from learning.experiments.setups import RLSetup, get_setup, setup_from_params, setup_params
 from usvsim.task.colreg_reward import COLREG_TERMS, ColregRewardWeights
-from usvsim.task.reward import SafetyMarginReward, SuccessReward
+from usvsim.task.reward import GoalAimReward, SafetyMarginReward, SuccessReward
 
 NAMES = (
     "rl-gaussian-radar-colreg",
@@ -23,6 +23,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ilft-safe-ow-arrive",
     "rl-gaussian-radar-colreg-ilft-safe-ow-approach",
     "rl-gaussian-radar-colreg-ilft-safe-ow-goaltraffic",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-aim",
 )
 
 
@@ -98,7 +99,7 @@ def test_the_il_fine_tuning_keeps_the_input_statistics_and_needs_a_start_file() 
             "safety_reward",
             "safety",
             SafetyMarginReward(weight=2.0),
-            "no safety-margin reward",
+            "no safety-margin, success or aim reward",
         ),
         (
             "rl-gaussian-radar-colreg-ilft-safe-ow-arrive",
@@ -106,7 +107,15 @@ def test_the_il_fine_tuning_keeps_the_input_statistics_and_needs_a_start_file() 
             "success_reward",
             "success",
             SuccessReward(weight=2.0),
-            "success reward",
+            "no safety-margin, success or aim reward",
+        ),
+        (
+            "rl-gaussian-radar-colreg-ilft-safe-ow-aim",
+            "rl-gaussian-radar-colreg-ilft-safe-ow",
+            "aim_reward",
+            "aim",
+            GoalAimReward(weight=1.0, range_m=100.0),
+            "no safety-margin, success or aim reward",
         ),
     ],
 )

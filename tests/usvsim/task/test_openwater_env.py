@@ -27,7 +27,7 @@ from usvsim.task.openwater_env import (
     draw_family_episode,
     goal_approach_family,
 )
-from usvsim.task.reward import GaussianReward, SafetyMarginReward, SuccessReward
+from usvsim.task.reward import GaussianReward, GoalAimReward, SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
 from usvsim.vessel.plant import Plant
 
@@ -292,6 +292,45 @@ def test_success_reward_is_paid_once_at_the_successful_end_after_the_horizon_sca
     assert done1[0] and info["is_success"][0]
     assert info["reward_success"][0] == w and r1[0] == pytest.approx(r0[0] + w, abs=1e-12)
     assert r0[0] < 0.0  # the plain terminal reward, scaled by the decisions left, stays < 0
+
+
+def test_aim_reward_charges_the_goal_off_the_bow_not_ahead(plant):
+    """Two boats start alike (the study's start without its pole, heading at the anchor), one
+    with the goal 60 m dead ahead, one with it 60 m abeam to starboard. After a straight
+    decision the first is charged nearly nothing, the second about w (abeam, 1 - cos 90° = 1);
+    the paid env's reward is the plain env's plus exactly ``info["reward_aim"]``."""
+    base = replace(from_pole_episodes(validation_episodes()[:1])[0], obstacles=())
+    base = replace(base, start=replace(base.start, heading_offset_rad=0.0))
+    psi0 = base.start.start_bearing_rad + math.pi  # the start heading: at the anchor
+    start = base.start_ne
+
+    def goal(off_rad: float) -> tuple[float, float]:
+        g = start + 60.0 * np.array([math.cos(psi0 + off_rad), math.sin(psi0 + off_rad)])
+        return float(g[0]), float(g[1])
+
+    episodes = [replace(base, goal_ne=goal(0.0)), replace(base, goal_ne=goal(math.pi / 2))]
+    kwargs = {"observation": "scene", "plant": plant, "reward_horizon": "fixed"}
+    plain = OpenWaterVectorEnv(2, **kwargs)
+    paid = OpenWaterVectorEnv(2, aim_reward=GoalAimReward(weight=1.0, range_m=100.0), **kwargs)
+    for env in (plain, paid):
+        env.reset(seed=0, options={"episodes": episodes})
+    action = np.zeros((2, 1), dtype=np.float32)
+    _, r0, *_ = plain.step(action)
+    _, r1, *_, info = paid.step(action)
+    aim = info["reward_aim"]
+    assert -0.01 < aim[0] <= 0.0  # ahead: a few degrees of drift at most
+    assert -1.25 < aim[1] < -0.95  # abeam, 6 m on: the goal a little abaft the beam
+    np.testing.assert_allclose(r1, r0 + aim, rtol=0, atol=1e-12)
+
+
+def test_aim_reward_is_zero_beyond_its_range(plant):
+    """The study's episode without its pole starts 100+ m from its goal: no charge there."""
+    ep = replace(from_pole_episodes(validation_episodes()[:1])[0], obstacles=())
+    env = OpenWaterVectorEnv(1, observation="scene", plant=plant,
+                             aim_reward=GoalAimReward(range_m=50.0))  # fmt: skip
+    env.reset(seed=0, options={"episodes": [ep]})
+    _, _, _, _, info = env.step(np.zeros((1, 1), dtype=np.float32))
+    assert info["distance_to_goal_m"][0] > 50.0 and info["reward_aim"][0] == 0.0
 
 
 def test_normalized_positional_observation(plant):

@@ -7,7 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from usvsim.task.reward import GaussianReward, RewardTerms, SafetyMarginReward, SuccessReward
+from usvsim.task.reward import (
+    GaussianReward,
+    GoalAimReward,
+    RewardTerms,
+    SafetyMarginReward,
+    SuccessReward,
+)
 
 
 def test_values_at_known_distances():
@@ -66,3 +72,20 @@ def test_success_reward_pays_the_weight_where_an_episode_succeeds_and_nothing_el
 def test_success_reward_invalid_weight_raises(value):
     with pytest.raises(ValueError, match=r"SuccessReward\.weight"):
         SuccessReward(weight=value)
+
+
+def test_goal_aim_reward_is_one_minus_cosine_inside_its_range():
+    b = np.radians([0.0, 30.0, -30.0, 90.0, 180.0, 90.0])
+    d = np.array([10.0, 10.0, 10.0, 99.9, 50.0, 100.0])  # the last at the range: outside
+    got = GoalAimReward(weight=2.0, range_m=100.0)(b, d)
+    want = [0.0, -2 * (1 - math.cos(math.pi / 6)), -2 * (1 - math.cos(math.pi / 6)), -2.0, -4.0,
+            0.0]  # fmt: skip
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert got[1] == got[2]  # port and starboard alike
+
+
+@pytest.mark.parametrize("field", ["weight", "range_m"])
+@pytest.mark.parametrize("value", [0.0, -1.0, math.inf, math.nan])
+def test_goal_aim_reward_invalid_parameters_raise(field, value):
+    with pytest.raises(ValueError, match=rf"GoalAimReward\.{field}"):
+        GoalAimReward(**{field: value})
