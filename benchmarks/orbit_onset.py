@@ -10,8 +10,9 @@ at the first such moment (the *arrival*):
   centre closer than ``BLOCK_M`` = goal radius 10 m + the success rule's clearance (pole-equivalent
   10 m, i.e. a centre 14 m from the boat for a 5 m vessel), so that no point of the goal circle
   is clear of it;
-- the goal's bearing off the own heading (deg, absolute) and the nearest vessel's range from the
-  own boat (m) and bearing off its heading (deg, absolute);
+- the goal's bearing off the own heading (deg, absolute; and signed, + starboard, − port: the
+  traffic policies come in with the goal to port, ``benchmarks/goal_response.py``) and the
+  nearest vessel's range from the own boat (m) and bearing off its heading (deg, absolute);
 - how long after the arrival every vessel centre is farther than ``BLOCK_M`` from the goal (s;
   0 if the goal was clear; ``inf`` if it stays blocked to the time limit), and for the
   time-limit failures the time left after that (s): how long the boat circled a clear goal.
@@ -51,9 +52,14 @@ def vessel_goal_distances_m(episode: Any, t_s: np.ndarray) -> np.ndarray:
     return np.hypot(pos[..., 0] - goal[0], pos[..., 1] - goal[1]).min(axis=0)
 
 
+def _signed_deg(d_ne: np.ndarray, psi_rad: float) -> float:
+    """The bearing of the vector ``d_ne`` off the heading ``psi_rad`` in degrees (+ starboard)."""
+    return math.degrees(ssa_float(math.atan2(d_ne[1], d_ne[0]) - psi_rad))
+
+
 def _off_deg(d_ne: np.ndarray, psi_rad: float) -> float:
     """|bearing of the vector ``d_ne`` off the heading ``psi_rad``| in degrees."""
-    return abs(math.degrees(ssa_float(math.atan2(d_ne[1], d_ne[0]) - psi_rad)))
+    return abs(_signed_deg(d_ne, psi_rad))
 
 
 def onset(record: Any, near_m: float) -> dict[str, float] | None:
@@ -70,7 +76,8 @@ def onset(record: Any, near_m: float) -> dict[str, float] | None:
     if not record.episode.vessels:  # --all: the approach only
         nan = float("nan")
         return {"arrival_s": t_arrive, "vessel_to_goal_m": nan, "blocked": 0.0,
-                "goal_off_deg": _off_deg(goal - own, psi), "vessel_range_m": nan,
+                "goal_off_deg": _off_deg(goal - own, psi),
+                "goal_signed_deg": _signed_deg(goal - own, psi), "vessel_range_m": nan,
                 "vessel_off_deg": nan, "clear_after_s": 0.0, "circled_clear_s": nan}  # fmt: skip
     limit = record.episode.time_limit_s
     t = np.arange(t_arrive, limit + 0.25, 0.5)
@@ -84,6 +91,7 @@ def onset(record: Any, near_m: float) -> dict[str, float] | None:
         "vessel_to_goal_m": float(d_vessel[0]),
         "blocked": float(d_vessel[0] < BLOCK_M),
         "goal_off_deg": _off_deg(goal - own, psi),
+        "goal_signed_deg": _signed_deg(goal - own, psi),
         "vessel_range_m": float(np.hypot(*rel[j])),
         "vessel_off_deg": _off_deg(rel[j], psi),
         "clear_after_s": delay,
@@ -129,6 +137,8 @@ def main() -> None:
             "median_circled_clear_s": round(float(np.nanmedian(cols["circled_clear_s"])), 1),
             "median_arrival_s": round(float(np.median(cols["arrival_s"])), 1),
             "median_goal_off_deg": round(float(np.median(cols["goal_off_deg"])), 1),
+            "goal_to_port": int((cols["goal_signed_deg"] < 0).sum()),
+            "median_goal_signed_deg": round(float(np.median(cols["goal_signed_deg"])), 1),
             "median_vessel_range_m": round(float(np.nanmedian(cols["vessel_range_m"])), 1),
             "median_vessel_off_deg": round(float(np.nanmedian(cols["vessel_off_deg"])), 1),
         }

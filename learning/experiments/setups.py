@@ -55,8 +55,9 @@ for each episode that ends in success (:attr:`RLSetup.success_reward`,
 :class:`usvsim.task.reward.SuccessReward`: the cure tried for goal orbits), ``-approach`` that
 with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`),
 ``-safe-ow-goaltraffic`` ``-safe-ow`` with 15 % of the episodes overtaking a slow vessel about
-where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged for pointing off the
-goal within 100 m of it (:attr:`RLSetup.aim_reward`, :class:`usvsim.task.reward.GoalAimReward`);
+where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged
+for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
+:class:`usvsim.task.reward.GoalAimReward`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 

@@ -39,6 +39,7 @@ def test_arrival_with_a_vessel_parked_on_the_goal_is_blocked_until_the_limit() -
     assert figures["blocked"] == 1.0 and math.isinf(figures["clear_after_s"])
     assert figures["circled_clear_s"] == 0.0
     assert figures["goal_off_deg"] == pytest.approx(math.degrees(math.atan2(12.0, 20.0)))
+    assert figures["goal_signed_deg"] == -figures["goal_off_deg"]  # heading north, goal to port
     assert figures["vessel_range_m"] == pytest.approx(math.hypot(20.0, 7.0))
 
 
