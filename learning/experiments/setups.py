@@ -57,7 +57,7 @@ with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`
 ``-safe-ow-goaltraffic`` ``-safe-ow`` with 15 % of the episodes overtaking a slow vessel about
 where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged
 for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
-:class:`usvsim.task.reward.GoalAimReward`);
+:class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -464,6 +464,10 @@ COLREG_ILFT_SAFE_OW_GOALTRAFFIC = COLREG_ILFT_SAFE_OW.replace(
 COLREG_ILFT_SAFE_OW_AIM = COLREG_ILFT_SAFE_OW.replace(
     name=COLREG_ILFT_SAFE_OW.name + "-aim", aim_reward=1.0
 )
+# the same at w = 2, the safety penalty's weight: abeam near the goal costs as much as a decision
+# inside the safety distance, no more
+COLREG_ILFT_SAFE_OW_AIM2 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE_OW_AIM.name + "2",
+                                                           aim_reward=2.0)  # fmt: skip
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
     harsh_radar_share=0.0,
@@ -558,6 +562,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_APPROACH,
         COLREG_ILFT_SAFE_OW_GOALTRAFFIC,
         COLREG_ILFT_SAFE_OW_AIM,
+        COLREG_ILFT_SAFE_OW_AIM2,
         COLREG_ILFT_MEM,
         COLREG_SCENE,
     )
