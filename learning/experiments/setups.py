@@ -57,7 +57,8 @@ with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`
 ``-safe-ow-goaltraffic`` ``-safe-ow`` with 15 % of the episodes overtaking a slow vessel about
 where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged
 for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
-:class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2);
+:class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2), ``-aim-islet`` ``-aim`` with
+15 % of the episodes ending at a goal beside islets (:attr:`RLSetup.goal_islet_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -146,6 +147,7 @@ from usvsim.task.openwater_env import (
     ScenarioMixture,
     crowded_family,
     goal_approach_family,
+    goal_islet_family,
     harsh_radar_family,
     mix_families,
 )
@@ -275,6 +277,9 @@ class RLSetup:
     # open-water: the share of training episodes in which the boat overtakes a slow vessel about
     # where the goal is (usvsim.task.colreg_family.goal_overtaking_family), mixed in last; 0: none
     goal_traffic_share: float = 0.0
+    # open-water: the share of training episodes that end at a goal beside islets, approached
+    # late and off-angle (usvsim.task.openwater_env.goal_islet_family), mixed in last; 0: none
+    goal_islet_share: float = 0.0
     # open-water: the weight (> 0) of the one-off payment for an episode that ends in success
     # (usvsim.task.reward.SuccessReward, after the fixed horizon's scaling); 0: off
     success_reward: float = 0.0
@@ -304,12 +309,14 @@ class RLSetup:
             or self.aim_reward
             or self.approach_share
             or self.goal_traffic_share
+            or self.goal_islet_share
         ) and (self.task != "open-water"):
             raise ValueError(
                 "RLSetup.colreg_*, reactive_targets, safety_reward, success_reward, "
-                "aim_reward, approach_share and goal_traffic_share need task='open-water'"
+                "aim_reward, approach_share, goal_traffic_share and goal_islet_share need "
+                "task='open-water'"
             )
-        for share in ("approach_share", "goal_traffic_share"):
+        for share in ("approach_share", "goal_traffic_share", "goal_islet_share"):
             if not 0.0 <= getattr(self, share) < 1.0:
                 raise ValueError(f"RLSetup.{share} must be in [0, 1), got {getattr(self, share)!r}")
         for name in ("safety_reward", "success_reward", "aim_reward"):
@@ -348,6 +355,7 @@ class RLSetup:
         """The open-water training distribution (:attr:`crowded_share`, then
         :attr:`colreg_share` of the COLREG members, then :attr:`approach_share` of goal
         approaches, then :attr:`goal_traffic_share` of goal overtakings, then
+        :attr:`goal_islet_share` of goals beside islets, then
         :attr:`harsh_radar_share` of that mixture at the harshest radar)."""
         family = OPEN_WATER_FAMILY
         if self.crowded_share:
@@ -361,6 +369,8 @@ class RLSetup:
             family = mix_families(
                 family, goal_overtaking_family(), self.goal_traffic_share, prefix=""
             )
+        if self.goal_islet_share:
+            family = mix_families(family, goal_islet_family(), self.goal_islet_share, prefix="")
         if self.harsh_radar_share:
             harsh = harsh_radar_family(family)
             family = mix_families(family, harsh, self.harsh_radar_share, prefix="harsh-")
@@ -468,6 +478,11 @@ COLREG_ILFT_SAFE_OW_AIM = COLREG_ILFT_SAFE_OW.replace(
 # inside the safety distance, no more
 COLREG_ILFT_SAFE_OW_AIM2 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE_OW_AIM.name + "2",
                                                            aim_reward=2.0)  # fmt: skip
+# -aim with 15 % of the episodes ending at a goal beside islets, approached late and off-angle
+# (goal_islet_family: the goal orbits of extended-obstacles)
+COLREG_ILFT_SAFE_OW_AIM_ISLET = COLREG_ILFT_SAFE_OW_AIM.replace(
+    name=COLREG_ILFT_SAFE_OW_AIM.name + "-islet", goal_islet_share=0.15
+)
 COLREG_SCENE = COLREG_RADAR.replace(
     name="rl-gaussian-scene-colreg", observation="scene", algorithm_config=OW_TRPO,
     harsh_radar_share=0.0,
@@ -563,6 +578,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_GOALTRAFFIC,
         COLREG_ILFT_SAFE_OW_AIM,
         COLREG_ILFT_SAFE_OW_AIM2,
+        COLREG_ILFT_SAFE_OW_AIM_ISLET,
         COLREG_ILFT_MEM,
         COLREG_SCENE,
     )

@@ -87,6 +87,7 @@ __all__ = [
     "draw_family",
     "draw_family_episode",
     "goal_approach_family",
+    "goal_islet_family",
     "harsh_radar_family",
     "mix_families",
     "weather_family",
@@ -222,6 +223,26 @@ def goal_approach_family() -> ScenarioMixture:
     (module constants above), for training the last metres of an approach; mixed into a
     training family by :func:`mix_families` (``RLSetup.approach_share``)."""
     return ScenarioMixture(members=(_GOAL_APPROACH,), weights=(1.0,), names=("goal-approach",))
+
+
+# goal beside an islet: a late approach, the goal 40-100 m ahead and up to 60° off the heading
+# (the goal orbits begin 25 m out with it 36-47° off), cruise 2-4 m/s, and one or two islets
+# (8-25 m radius) from half-way along the route to beyond the goal, their edges at least the
+# family's 25 m from start and goal (a median 29 m from the goal's centre): the stress suite's
+# extended-obstacles ends, where the radar policies turn away from an islet the goal is nearer
+# than (benchmarks/goal_response.py --islet). usvsim's curriculum, not tuned.
+_GOAL_ISLET = replace(
+    _GOAL_APPROACH, goal_distance_range_m=(40.0, 100.0),
+    heading_offset_range_rad=(-60 * DEG, 60 * DEG), n_extra_range=(1, 2), islet_probability=1.0,
+    islet_radius_range_m=(8.0, 25.0), corridor_along_range=(0.5, 1.5),
+)  # fmt: skip
+
+
+def goal_islet_family() -> ScenarioMixture:
+    """One member, ``goal-islet``: a late approach to a goal with islets beside and beyond it
+    (module constants above); mixed into a training family by :func:`mix_families`
+    (``RLSetup.goal_islet_share``)."""
+    return ScenarioMixture(members=(_GOAL_ISLET,), weights=(1.0,), names=("goal-islet",))
 
 
 RADAR_RANGES = (  # the OpenWaterScenario fields of the radar's degradation

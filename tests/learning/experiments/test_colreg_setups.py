@@ -25,6 +25,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ilft-safe-ow-goaltraffic",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim2",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-aim-islet",
 )
 
 
@@ -166,13 +167,15 @@ def test_the_safe_ow_setup_draws_a_quarter_of_its_episodes_from_the_colreg_membe
     [
         ("-arrive", "-approach", "approach_share", "goal-approach"),
         ("", "-goaltraffic", "goal_traffic_share", "goal-overtaking"),
+        ("-aim", "-aim-islet", "goal_islet_share", "goal-islet"),
     ],
 )
 def test_a_practice_setup_draws_15_percent_of_its_member_and_nothing_else_new(
     base: str, setup: str, share: str, member: str
 ) -> None:
-    """``-approach`` is ``-arrive``, ``-goaltraffic`` is ``-safe-ow``, each with 15 % of its
-    practice member's episodes (the COLREG share scaled by the rest); the share is checked."""
+    """``-approach`` is ``-arrive``, ``-goaltraffic`` is ``-safe-ow``, ``-aim-islet`` is ``-aim``,
+    each with 15 % of its practice member's episodes (the COLREG share scaled by the rest); the
+    share is checked."""
     name = "rl-gaussian-radar-colreg-ilft-safe-ow"
     before, after = get_setup(name + base), get_setup(name + setup)
     assert after.replace(name=before.name, **{share: 0.0}) == before

@@ -26,6 +26,7 @@ from usvsim.task.openwater_env import (
     draw_family,
     draw_family_episode,
     goal_approach_family,
+    goal_islet_family,
 )
 from usvsim.task.reward import GaussianReward, GoalAimReward, SafetyMarginReward, SuccessReward
 from usvsim.task.vector_env import PoleAvoidanceVectorEnv
@@ -377,3 +378,26 @@ def test_goal_approach_episodes_start_near_the_goal_pointed_past_it(plant):
     assert distance.min() >= 14.0 - 1e-9 and distance.max() <= 40.0 + 1e-9
     assert off.max() <= math.radians(115.0) + 1e-9
     assert np.mean(off > math.radians(60.0)) > 0.3 and np.mean(off < math.radians(30.0)) > 0.1
+
+
+def test_goal_islet_episodes_end_at_a_goal_beside_islets(plant):
+    """The goal-islet member: no vessel, the goal 40-100 m from the boat at its start and up to
+    60° off its heading, one or two islets (8-25 m) with edges at least 25 m from start and
+    goal, most of them near the goal's end of the route (within 40 m of the goal's circle)."""
+    episodes = draw_family(goal_islet_family(), 5, 200)
+    assert all(not e.vessels and 1 <= len(e.obstacles) <= 2 for e in episodes)
+    env = OpenWaterVectorEnv(len(episodes), observation="scene", plant=plant)
+    env.reset(seed=0, options={"episodes": list(episodes)})
+    eta, goal = env.sim.inner.state.eta, env.sim.goal_ne
+    distance = np.hypot(goal[:, 0] - eta[:, 0], goal[:, 1] - eta[:, 1])
+    off = np.abs(ssa(np.arctan2(goal[:, 1] - eta[:, 1], goal[:, 0] - eta[:, 0]) - eta[:, 2]))
+    assert distance.min() >= 40.0 - 1e-9 and distance.max() <= 100.0 + 1e-9
+    assert off.max() <= math.radians(60.0) + 1e-9 and np.mean(off > math.radians(30.0)) > 0.3
+    edges = []
+    for e, s in zip(episodes, eta[:, :2], strict=True):
+        for x, y, r in e.obstacles:
+            assert 8.0 <= r <= 25.0
+            assert math.hypot(x - e.goal_ne[0], y - e.goal_ne[1]) - r >= 25.0
+            assert math.hypot(x - s[0], y - s[1]) - r >= 25.0 - 1e-6
+            edges.append(math.hypot(x - e.goal_ne[0], y - e.goal_ne[1]) - r)
+    assert np.mean(np.array(edges) < 50.0) > 0.5
