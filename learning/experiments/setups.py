@@ -57,8 +57,9 @@ with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`
 ``-safe-ow-goaltraffic`` ``-safe-ow`` with 15 % of the episodes overtaking a slow vessel about
 where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged
 for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
-:class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2), ``-aim-islet`` ``-aim`` with
-15 % of the episodes ending at a goal beside islets (:attr:`RLSetup.goal_islet_share`);
+:class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2, ``-aim4`` w = 4),
+``-aim-islet`` ``-aim`` with 15 % of the episodes ending at a goal beside islets
+(:attr:`RLSetup.goal_islet_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
 ``rl-gaussian-scene-colreg`` sees the true scene, not the radar: an upper bound.
 
@@ -478,6 +479,9 @@ COLREG_ILFT_SAFE_OW_AIM = COLREG_ILFT_SAFE_OW.replace(
 # inside the safety distance, no more
 COLREG_ILFT_SAFE_OW_AIM2 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE_OW_AIM.name + "2",
                                                            aim_reward=2.0)  # fmt: skip
+# and at w = 4, twice the safety penalty's weight (the dose series' next step)
+COLREG_ILFT_SAFE_OW_AIM4 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE_OW_AIM.name + "4",
+                                                           aim_reward=4.0)  # fmt: skip
 # -aim with 15 % of the episodes ending at a goal beside islets, approached late and off-angle
 # (goal_islet_family: the goal orbits of extended-obstacles)
 COLREG_ILFT_SAFE_OW_AIM_ISLET = COLREG_ILFT_SAFE_OW_AIM.replace(
@@ -578,6 +582,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_GOALTRAFFIC,
         COLREG_ILFT_SAFE_OW_AIM,
         COLREG_ILFT_SAFE_OW_AIM2,
+        COLREG_ILFT_SAFE_OW_AIM4,
         COLREG_ILFT_SAFE_OW_AIM_ISLET,
         COLREG_ILFT_MEM,
         COLREG_SCENE,

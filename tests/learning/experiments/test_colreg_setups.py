@@ -25,6 +25,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ilft-safe-ow-goaltraffic",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim2",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-aim4",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim-islet",
 )
 
@@ -125,6 +126,14 @@ def test_the_il_fine_tuning_keeps_the_input_statistics_and_needs_a_start_file() 
             "aim_reward",
             "aim",
             GoalAimReward(weight=2.0, range_m=100.0),
+            "no safety-margin, success or aim reward",
+        ),
+        (
+            "rl-gaussian-radar-colreg-ilft-safe-ow-aim4",
+            "rl-gaussian-radar-colreg-ilft-safe-ow",
+            "aim_reward",
+            "aim",
+            GoalAimReward(weight=4.0, range_m=100.0),
             "no safety-margin, success or aim reward",
         ),
     ],
