@@ -35,6 +35,15 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
+def _require_positive(term: object, *names: str) -> None:
+    """Raise ``ValueError`` naming the first of ``term``'s fields ``names`` that is not finite
+    and > 0."""
+    for name in names:
+        value = getattr(term, name)
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{type(term).__name__}.{name} must be finite and > 0, got {value!r}")
+
+
 @dataclass(frozen=True)
 class RewardTerms:
     """The two terms of the reward for N boats, each (N,); the reward is their sum."""
@@ -69,10 +78,7 @@ class GaussianReward:
     goal_sigma_m: float = 100.0  # m; study
 
     def __post_init__(self) -> None:
-        for name in ("pole_weight", "pole_sigma_m", "goal_weight", "goal_sigma_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"GaussianReward.{name} must be finite and > 0, got {value!r}")
+        _require_positive(self, "pole_weight", "pole_sigma_m", "goal_weight", "goal_sigma_m")
 
     def __call__(self, d_pole_m: FloatArray, d_goal_m: FloatArray) -> RewardTerms:
         pole = -self.pole_weight * np.exp(-0.5 * (np.asarray(d_pole_m) / self.pole_sigma_m) ** 2)
@@ -106,10 +112,7 @@ class SafetyMarginReward:
     margin_m: float = 5.0  # m; the study's σ_pole
 
     def __post_init__(self) -> None:
-        for name in ("weight", "margin_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"SafetyMarginReward.{name} must be finite and > 0, got {value!r}")
+        _require_positive(self, "weight", "margin_m")
 
     def __call__(self, period_nearest_m: FloatArray, safety_distance_m: float) -> FloatArray:
         """The penalty (N,) of N boats whose period came within ``period_nearest_m`` (N,) m of
@@ -144,8 +147,7 @@ class SuccessReward:
     weight: float = 2.0  # the study's pole weight: one decision at the pole costs as much
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.weight) and self.weight > 0):
-            raise ValueError(f"SuccessReward.weight must be finite and > 0, got {self.weight!r}")
+        _require_positive(self, "weight")
 
     def __call__(self, is_success: NDArray[np.bool_]) -> FloatArray:
         """The payment (N,) of N boats, ``is_success`` (N,) True where the decision ended an
@@ -181,10 +183,7 @@ class GoalAimReward:
     range_m: float = 100.0  # m; the study's σ_goal
 
     def __post_init__(self) -> None:
-        for name in ("weight", "range_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"GoalAimReward.{name} must be finite and > 0, got {value!r}")
+        _require_positive(self, "weight", "range_m")
 
     def __call__(self, goal_bearing_rad: FloatArray, d_goal_m: FloatArray) -> FloatArray:
         """The penalty (N,) of N boats whose goal lies ``goal_bearing_rad`` (N,) rad off their
