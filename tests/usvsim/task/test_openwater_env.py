@@ -365,16 +365,23 @@ def test_perf_figure_is_a_rate():
     assert math.isfinite(rate) and rate > 0
 
 
-def test_goal_approach_episodes_start_near_the_goal_pointed_past_it(plant):
-    """The goal-approach member: no obstacle or vessel, the goal 14-40 m from the boat at its
-    start and up to 115° off its heading, from ahead to behind the beam."""
-    episodes = draw_family(goal_approach_family(), 5, 200)
-    assert all(not e.obstacles and not e.vessels for e in episodes)
+def _start_geometry(episodes, plant):
+    """The boats' true start poses η (N, 3), their goals' distances (m) and bearings off the
+    heading (rad, absolute) once the episodes are started."""
     env = OpenWaterVectorEnv(len(episodes), observation="scene", plant=plant)
     env.reset(seed=0, options={"episodes": list(episodes)})
     eta, goal = env.sim.inner.state.eta, env.sim.goal_ne
     distance = np.hypot(goal[:, 0] - eta[:, 0], goal[:, 1] - eta[:, 1])
     off = np.abs(ssa(np.arctan2(goal[:, 1] - eta[:, 1], goal[:, 0] - eta[:, 0]) - eta[:, 2]))
+    return eta, distance, off
+
+
+def test_goal_approach_episodes_start_near_the_goal_pointed_past_it(plant):
+    """The goal-approach member: no obstacle or vessel, the goal 14-40 m from the boat at its
+    start and up to 115° off its heading, from ahead to behind the beam."""
+    episodes = draw_family(goal_approach_family(), 5, 200)
+    assert all(not e.obstacles and not e.vessels for e in episodes)
+    _, distance, off = _start_geometry(episodes, plant)
     assert distance.min() >= 14.0 - 1e-9 and distance.max() <= 40.0 + 1e-9
     assert off.max() <= math.radians(115.0) + 1e-9
     assert np.mean(off > math.radians(60.0)) > 0.3 and np.mean(off < math.radians(30.0)) > 0.1
@@ -386,11 +393,7 @@ def test_goal_islet_episodes_end_at_a_goal_beside_islets(plant):
     goal, most of them near the goal's end of the route (within 40 m of the goal's circle)."""
     episodes = draw_family(goal_islet_family(), 5, 200)
     assert all(not e.vessels and 1 <= len(e.obstacles) <= 2 for e in episodes)
-    env = OpenWaterVectorEnv(len(episodes), observation="scene", plant=plant)
-    env.reset(seed=0, options={"episodes": list(episodes)})
-    eta, goal = env.sim.inner.state.eta, env.sim.goal_ne
-    distance = np.hypot(goal[:, 0] - eta[:, 0], goal[:, 1] - eta[:, 1])
-    off = np.abs(ssa(np.arctan2(goal[:, 1] - eta[:, 1], goal[:, 0] - eta[:, 0]) - eta[:, 2]))
+    eta, distance, off = _start_geometry(episodes, plant)
     assert distance.min() >= 40.0 - 1e-9 and distance.max() <= 100.0 + 1e-9
     assert off.max() <= math.radians(60.0) + 1e-9 and np.mean(off > math.radians(30.0)) > 0.3
     edges = []
