@@ -58,6 +58,7 @@ with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`
 where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged
 for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
 :class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2, ``-aim4`` w = 4),
+``-aim2-safe6`` ``-aim2`` with the safety-margin penalty at w = 6, not 2,
 ``-aim-islet`` ``-aim`` with 15 % of the episodes ending at a goal beside islets
 (:attr:`RLSetup.goal_islet_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
@@ -482,6 +483,11 @@ COLREG_ILFT_SAFE_OW_AIM2 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE
 # and at w = 4, twice the safety penalty's weight (the dose series' next step)
 COLREG_ILFT_SAFE_OW_AIM4 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE_OW_AIM.name + "4",
                                                            aim_reward=4.0)  # fmt: skip
+# -aim2 with three times the safety-margin penalty (w = 6): the passes at 4-9 m that end most
+# failed start-short and several-obstacles episodes of the aim runs cost three times as much
+COLREG_ILFT_SAFE_OW_AIM2_SAFE6 = COLREG_ILFT_SAFE_OW_AIM2.replace(
+    name=COLREG_ILFT_SAFE_OW_AIM2.name + "-safe6", safety_reward=6.0
+)
 # -aim with 15 % of the episodes ending at a goal beside islets, approached late and off-angle
 # (goal_islet_family: the goal orbits of extended-obstacles)
 COLREG_ILFT_SAFE_OW_AIM_ISLET = COLREG_ILFT_SAFE_OW_AIM.replace(
@@ -583,6 +589,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_AIM,
         COLREG_ILFT_SAFE_OW_AIM2,
         COLREG_ILFT_SAFE_OW_AIM4,
+        COLREG_ILFT_SAFE_OW_AIM2_SAFE6,
         COLREG_ILFT_SAFE_OW_AIM_ISLET,
         COLREG_ILFT_MEM,
         COLREG_SCENE,

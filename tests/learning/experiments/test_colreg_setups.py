@@ -26,6 +26,7 @@ NAMES = (
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim2",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim4",
+    "rl-gaussian-radar-colreg-ilft-safe-ow-aim2-safe6",
     "rl-gaussian-radar-colreg-ilft-safe-ow-aim-islet",
 )
 
@@ -169,6 +170,17 @@ def test_the_safe_ow_setup_draws_a_quarter_of_its_episodes_from_the_colreg_membe
     family = ow.training_family
     colreg = [n.startswith(("colreg-", "harsh-colreg-")) for n in family.names]
     np.testing.assert_allclose(family.probabilities[colreg].sum(), 0.25)
+
+
+def test_the_safe6_setup_is_aim2_with_three_times_the_safety_penalty() -> None:
+    aim2 = get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-aim2")
+    safe6 = get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-aim2-safe6")
+    assert safe6.replace(name=aim2.name, safety_reward=2.0) == aim2
+    env = safe6.make_vector_env(2)
+    assert env.safety == SafetyMarginReward(weight=6.0, margin_m=5.0)
+    assert env.aim == GoalAimReward(weight=2.0, range_m=100.0)
+    # inside the safety distance a period costs 6, three times -aim2's
+    assert env.safety(np.array([5.0]), 10.0).tolist() == [-6.0]
 
 
 @pytest.mark.parametrize(
