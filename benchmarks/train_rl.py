@@ -44,6 +44,7 @@ from learning.experiments.checkpoint import (
     save_checkpoint,
     slim_copy,
 )
+from learning.experiments.memory_start import setup_goal_mark
 from learning.experiments.setups import SETUPS, get_setup
 from usvsim.common.fileio import atomic_write_text
 from usvsim.evaluation.episodes import evaluate, heldout_episodes, validation_episodes
@@ -86,7 +87,10 @@ def train_one(
 def evaluate_checkpoint(path: Path) -> dict[str, Any]:
     """Validation and held-out rows (:func:`evaluation_row`) of the checkpoint at ``path``."""
     ckpt = load_checkpoint(path)
-    h = PolicyHelmsman(load_agent(ckpt, path), ckpt.observation, ckpt.action)
+    h = PolicyHelmsman(
+        load_agent(ckpt, path), ckpt.observation, ckpt.action,
+        goal_mark=setup_goal_mark(ckpt.setup_params),
+    )  # fmt: skip
     kinds = {"observation": ckpt.observation, "action": ckpt.action}
     return {
         "validation": evaluation_row("validation", evaluate(h, validation_episodes(), **kinds)),

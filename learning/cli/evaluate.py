@@ -44,6 +44,7 @@ from learning.experiments.checkpoint import (
     load_agent,
     load_checkpoint,
 )
+from learning.experiments.memory_start import setup_goal_mark
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_write_text, check_writable_file, json_safe
 from usvsim.common.options import bounds, legacy_path
@@ -193,7 +194,9 @@ def run(args: EvaluateArgs) -> int:
     except CheckpointError as err:
         raise SystemExit(f"usvsim evaluate: {err}") from None
     observation, action = checkpoint_kinds(ckpt)
-    helmsman = PolicyHelmsman(agent, observation, action)
+    helmsman = PolicyHelmsman(
+        agent, observation, action, goal_mark=setup_goal_mark(ckpt.setup_params)
+    )
     sets = [("validation", validation_episodes())]
     if args.heldout:
         sets.append(("held-out", heldout_episodes(n=args.heldout)))

@@ -62,13 +62,18 @@ import torch
 from numpy.typing import NDArray
 
 from learning.algorithms.base import Agent
-from learning.algorithms.networks import space_from_spec, space_to_spec
+from learning.algorithms.networks import space_to_spec
 from learning.algorithms.registry import get_algorithm
-from learning.experiments.memory_start import policy_observation_space, widened_policy_state
+from learning.experiments.memory_start import (
+    policy_observation_space,
+    setup_goal_mark,
+    start_state,
+)
 from learning.experiments.setups import RLSetup, get_setup, setup_params
 from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_open
 from usvsim.task.batch import ActionKind, action_space
+from usvsim.task.goal_mark import with_goal_mark
 from usvsim.task.observations import ObservationKind
 from usvsim.task.radar_memory import RadarMemory, memory_frames
 
@@ -423,15 +428,10 @@ def starting_policy(path: str | os.PathLike[str], setup: RLSetup) -> dict[str, A
             f"{setup.observation}/{setup.action} run ({setup.name})"
         )
     state = {**ckpt.agent, "policy": _cast_floats(ckpt.agent["policy"], torch.float32)}
-    frames = int(getattr(setup, "radar_frames", 1))
-    have = memory_frames(space_from_spec(state["observation_space"]))
-    if frames == have:
-        return state
-    if have != 1:
-        raise CheckpointError(
-            f"{path}: a policy of {have} radar images cannot start a run of {frames} ({setup.name})"
-        )
-    return widened_policy_state(state, frames)
+    try:  # the image channels of the setup's policy (radar memory, goal mark)
+        return start_state(state, ckpt.setup_params, setup)
+    except ValueError as err:
+        raise CheckpointError(f"{path}: {err}") from None
 
 
 def load_agent(checkpoint: Checkpoint, path: str | os.PathLike[str] = "<memory>") -> Agent:
@@ -458,11 +458,12 @@ class PolicyHelmsman:
     observation: ObservationKind
     action: ActionKind
     name: str = "policy"
+    goal_mark: bool = False  # its image's last channel is the goal mark (usvsim.task.goal_mark)
 
     def __post_init__(self) -> None:
         # a policy with radar memory (usvsim.task.radar_memory) keeps each boat's earlier
-        # images itself: the simulations give the image now
-        frames = memory_frames(self.agent.observation_space)
+        # images itself, and draws its goal mark itself: the simulations give the image now
+        frames = memory_frames(self.agent.observation_space) - int(self.goal_mark)
         self.memory = RadarMemory(frames) if frames > 1 else None
 
     def reset(self, n_boats: int) -> None:
@@ -473,6 +474,8 @@ class PolicyHelmsman:
     def act(self, observation: Any) -> NDArray[Any]:
         if self.memory is not None:
             observation = self.memory(observation)
+        if self.goal_mark:
+            observation = with_goal_mark(observation)
         return self.agent.act(observation, deterministic=True)
 
 
@@ -480,7 +483,10 @@ def load_helmsman(path: str | os.PathLike[str]) -> PolicyHelmsman:
     """The policy of the checkpoint at ``path`` as a helmsman named after the file's stem."""
     ckpt = load_checkpoint(path)
     agent = load_agent(ckpt, path)
-    return PolicyHelmsman(agent, *checkpoint_kinds(ckpt), name=Path(path).stem)
+    return PolicyHelmsman(
+        agent, *checkpoint_kinds(ckpt), name=Path(path).stem,
+        goal_mark=setup_goal_mark(ckpt.setup_params),
+    )  # fmt: skip
 
 
 def checkpoint_kinds(checkpoint: Checkpoint) -> tuple[ObservationKind, ActionKind]:

@@ -14,25 +14,41 @@ import torch
 from gymnasium import spaces
 
 from learning.algorithms.networks import space_from_spec, space_to_spec
+from usvsim.task.goal_mark import marked_space
 from usvsim.task.observations import ObservationKind, observation_space
 from usvsim.task.radar_memory import memory_frames, stacked_space
 
-__all__ = ["policy_observation_space", "widened_policy_state"]
+__all__ = [
+    "image_channels",
+    "policy_observation_space",
+    "setup_goal_mark",
+    "start_state",
+    "widened_policy_state",
+]
 
 
 def policy_observation_space(kind: str, setup_params: dict[str, Any]) -> spaces.Space:
     """The single-boat observation space a policy of observation ``kind`` reads: the kind's,
-    with the setup's radar memory (``radar_frames`` in ``setup_params``; absent: 1) stacked."""
+    with the setup's radar memory (``radar_frames`` in ``setup_params``; absent: 1) stacked and
+    its goal mark (``goal_mark``; absent: none, :mod:`usvsim.task.goal_mark`) added."""
     space = observation_space(cast(ObservationKind, kind))
     frames = int(setup_params.get("radar_frames", 1) or 1)
-    return stacked_space(space, frames) if frames > 1 else space
+    space = stacked_space(space, frames) if frames > 1 else space
+    return marked_space(space) if setup_params.get("goal_mark") else space
+
+
+def image_channels(setup_params: dict[str, Any]) -> int:
+    """The image channels a ``radar+goal`` policy of ``setup_params`` reads: its radar images
+    (``radar_frames``) and the goal mark's (``goal_mark``)."""
+    return int(setup_params.get("radar_frames", 1) or 1) + int(bool(setup_params.get("goal_mark")))
 
 
 def widened_policy_state(state: dict[str, Any], frames: int) -> dict[str, Any]:
-    """A one-image ``radar+goal`` agent state for a policy with radar memory of ``frames``
-    images: the convolution's weights for the earlier images start at zero, so the widened
-    policy is the same function of the image now (its actions are those of the original,
-    whatever the earlier images), and the observation space is the stacked one."""
+    """A one-image ``radar+goal`` agent state for a policy of ``frames`` image channels (radar
+    memory's earlier images, the goal mark, :func:`image_channels`): the convolution's weights
+    for the added channels start at zero, so the widened policy is the same function of the
+    image now (its actions are those of the original, whatever the added channels hold), and
+    the observation space is the widened one."""
     space = space_from_spec(state["observation_space"])
     have = memory_frames(space)
     if have != 1:
@@ -46,3 +62,28 @@ def widened_policy_state(state: dict[str, Any], frames: int) -> dict[str, Any]:
     policy[convs[0]] = torch.cat([weight, extra], dim=1)
     spec = space_to_spec(stacked_space(space, frames))
     return {**state, "policy": policy, "observation_space": spec}
+
+
+def setup_goal_mark(setup: Any) -> bool:
+    """Whether a setup (an ``RLSetup``, or a checkpoint's ``setup_params`` dict) draws the goal
+    mark into its policy's image (:mod:`usvsim.task.goal_mark`); False where it has no say."""
+    if isinstance(setup, dict):
+        return bool(setup.get("goal_mark", False))
+    return bool(getattr(setup, "goal_mark", False))
+
+
+def start_state(state: dict[str, Any], start_params: dict[str, Any], setup: Any) -> dict[str, Any]:
+    """The agent state ``state`` of a start file (its setup's ``start_params``) for a run of
+    ``setup``: unchanged where it reads the run's image channels, widened
+    (:func:`widened_policy_state`) where it reads one image; ``ValueError`` otherwise."""
+    channels = image_channels(
+        {"radar_frames": getattr(setup, "radar_frames", 1), "goal_mark": setup_goal_mark(setup)}
+    )
+    have = memory_frames(space_from_spec(state["observation_space"]))
+    if channels == have and setup_goal_mark(start_params) == setup_goal_mark(setup):
+        return state
+    if have != 1:
+        raise ValueError(
+            f"a policy of {have} image channels cannot start a run of {channels} ({setup.name})"
+        )
+    return widened_policy_state(state, channels)

@@ -58,7 +58,10 @@ with 15 % of the episodes starting near the goal (:attr:`RLSetup.approach_share`
 where the goal is (:attr:`RLSetup.goal_traffic_share`), ``-safe-ow-aim`` ``-safe-ow`` charged
 for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
 :class:`usvsim.task.reward.GoalAimReward`, w = 1; ``-aim2`` w = 2, ``-aim4`` w = 4),
-``-aim2-safe6`` ``-aim2`` with the safety-margin penalty at w = 6, not 2,
+``-aim2-safe6`` ``-aim2`` with the safety-margin penalty at w = 6, not 2, ``-aim2-mark``
+``-aim2`` with the goal drawn into the image as a second channel (:attr:`RLSetup.goal_mark`,
+:mod:`usvsim.task.goal_mark`; a one-image start file is widened, the new channel's weights at
+zero),
 ``-aim-islet`` ``-aim`` with 15 % of the episodes ending at a goal beside islets
 (:attr:`RLSetup.goal_islet_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
@@ -142,6 +145,7 @@ from usvsim.task.colreg_family import (
     goal_overtaking_family,
 )
 from usvsim.task.colreg_reward import ColregRewardWeights, colreg_weights
+from usvsim.task.goal_mark import GoalMarkVectorEnv
 from usvsim.task.observations import ObservationKind
 from usvsim.task.openwater_env import (
     OPEN_WATER_FAMILY,
@@ -291,6 +295,9 @@ class RLSetup:
     # radar+goal: the radar images of the last K decisions as K channels, the newest first
     # (usvsim.task.radar_memory); 1: the image now only (memoryless, the study's)
     radar_frames: int = 1
+    # radar+goal: the goal's circle drawn as the image's last channel (usvsim.task.goal_mark);
+    # a one-channel start file is widened with that channel's weights at zero
+    goal_mark: bool = False
 
     def __post_init__(self) -> None:
         if not (isinstance(self.radar_frames, int) and self.radar_frames >= 1):
@@ -298,6 +305,10 @@ class RLSetup:
         if self.radar_frames > 1 and self.observation != "radar+goal":
             raise ValueError(
                 f"RLSetup.radar_frames > 1 needs observation='radar+goal', got {self.observation!r}"
+            )
+        if self.goal_mark and self.observation != "radar+goal":
+            raise ValueError(
+                f"RLSetup.goal_mark needs observation='radar+goal', got {self.observation!r}"
             )
         if not 0.0 <= self.colreg_share < 1.0:
             raise ValueError(f"RLSetup.colreg_share must be in [0, 1), got {self.colreg_share!r}")
@@ -420,6 +431,8 @@ class RLSetup:
             )
         if self.radar_frames > 1:
             env = RadarMemoryVectorEnv(env, self.radar_frames)
+        if self.goal_mark:
+            env = GoalMarkVectorEnv(env)
         return env
 
     def with_num_envs(self, num_envs: int) -> RLSetup:
@@ -487,6 +500,11 @@ COLREG_ILFT_SAFE_OW_AIM4 = COLREG_ILFT_SAFE_OW_AIM.replace(name=COLREG_ILFT_SAFE
 # failed start-short and several-obstacles episodes of the aim runs cost three times as much
 COLREG_ILFT_SAFE_OW_AIM2_SAFE6 = COLREG_ILFT_SAFE_OW_AIM2.replace(
     name=COLREG_ILFT_SAFE_OW_AIM2.name + "-safe6", safety_reward=6.0
+)
+# -aim2 with the goal mark: the goal's circle as the image's second channel (beside an islet the
+# radar policies turn away whatever the goal's bearing; goal_response.py --islet)
+COLREG_ILFT_SAFE_OW_AIM2_MARK = COLREG_ILFT_SAFE_OW_AIM2.replace(
+    name=COLREG_ILFT_SAFE_OW_AIM2.name + "-mark", goal_mark=True
 )
 # -aim with 15 % of the episodes ending at a goal beside islets, approached late and off-angle
 # (goal_islet_family: the goal orbits of extended-obstacles)
@@ -590,6 +608,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_AIM2,
         COLREG_ILFT_SAFE_OW_AIM4,
         COLREG_ILFT_SAFE_OW_AIM2_SAFE6,
+        COLREG_ILFT_SAFE_OW_AIM2_MARK,
         COLREG_ILFT_SAFE_OW_AIM_ISLET,
         COLREG_ILFT_MEM,
         COLREG_SCENE,

@@ -410,10 +410,11 @@ def train_rl(
     trainer: Any = train
     make_env: Any = env_maker(setup)
     if device != "cpu":
-        if setup.radar_frames > 1:
+        if setup.radar_frames > 1 or setup.goal_mark:
             raise UserError(
-                f"{setup.name}: radar memory (radar_frames {setup.radar_frames}) trains on "
-                f"--device cpu only, got --device {device}"
+                f"{setup.name}: radar memory and the goal mark (radar_frames "
+                f"{setup.radar_frames}, goal_mark {setup.goal_mark}) train on --device cpu "
+                f"only, got --device {device}"
             )
         from learning.algorithms.device_loop import train_on_device
 

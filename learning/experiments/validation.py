@@ -45,6 +45,7 @@ import numpy as np
 
 from learning.algorithms.base import Agent
 from learning.experiments.checkpoint import PolicyHelmsman
+from learning.experiments.memory_start import setup_goal_mark
 from usvsim.common.fileio import atomic_write_text, json_safe
 from usvsim.common.splits import selection_mode
 from usvsim.evaluation.episodes import EpisodeRecord, evaluate, validation_episodes
@@ -158,7 +159,7 @@ def family_records(
     """The records of ``agent``'s deterministic policy on ``episodes`` (default:
     :func:`family_validation_episodes`)."""
     return evaluate_open_water(
-        PolicyHelmsman(agent, setup.observation, setup.action),
+        PolicyHelmsman(agent, setup.observation, setup.action, goal_mark=setup_goal_mark(setup)),
         family_validation_episodes() if episodes is None else episodes,
         observation=setup.observation,
         action=setup.action,
@@ -214,7 +215,7 @@ def policy_records(
     """The episode records of ``agent``'s deterministic policy on ``specs`` (default: the 15
     validation episodes)."""
     return evaluate(
-        PolicyHelmsman(agent, setup.observation, setup.action),
+        PolicyHelmsman(agent, setup.observation, setup.action, goal_mark=setup_goal_mark(setup)),
         validation_episodes() if specs is None else specs,
         observation=setup.observation,
         action=setup.action,

@@ -103,7 +103,7 @@ def test_a_memory_policy_cannot_start_a_one_image_run(tmp_path: Path) -> None:
     )
     path = tmp_path / "mem.pt"
     save_checkpoint(Checkpoint.from_agent(agent, setup), path)
-    with pytest.raises(CheckpointError, match="2 radar images cannot start a run of 1"):
+    with pytest.raises(CheckpointError, match="2 image channels cannot start a run of 1"):
         starting_policy(path, get_setup(ONE))
 
 
