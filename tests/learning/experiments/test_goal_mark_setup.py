@@ -22,38 +22,10 @@ from learning.experiments.checkpoint import (
 from learning.experiments.setups import RLSetup, get_setup
 from learning.experiments.train_rl import train_rl
 from usvsim.common.errors import UserError
-from usvsim.task.batch import action_space
 from usvsim.task.goal_mark import GoalMarkVectorEnv, with_goal_mark
-from usvsim.task.observations import observation_space
-from usvsim.task.openwater_env import OpenWaterVectorEnv
 
 MARKED = "rl-gaussian-radar-colreg-ilft-safe-ow-aim2-mark"
 PARENT = "rl-gaussian-radar-colreg-ilft-safe-ow-aim2"
-
-
-def _one_image_checkpoint(tmp_path: Path) -> Path:
-    """A one-image radar+goal policy (random weights, perturbed) saved as a checkpoint."""
-    setup = get_setup(PARENT)
-    agent = get_algorithm(setup.algorithm).make_agent(
-        observation_space("radar+goal"), action_space("gaussian"), setup.run_config(4)
-    )
-    with torch.no_grad():
-        for p in agent.policy.parameters():
-            p.add_(0.05 * torch.randn_like(p))
-    path = tmp_path / "one.pt"
-    save_checkpoint(Checkpoint.from_agent(agent, setup), path)
-    return path
-
-
-def _radar_obs(n: int = 5, steps: int = 3) -> list[dict[str, Any]]:
-    env = OpenWaterVectorEnv(n, observation="radar+goal")
-    obs, _ = env.reset(seed=2)
-    out = [obs]
-    rng = np.random.default_rng(1)
-    for _ in range(steps - 1):
-        obs = env.step(rng.uniform(-1, 1, (n, 1)).astype(np.float32))[0]
-        out.append({k: v.copy() for k, v in obs.items()})
-    return out
 
 
 def _marked_agent() -> Any:
@@ -78,27 +50,31 @@ def test_the_goal_mark_needs_the_radar_observation() -> None:
         RLSetup("x", "scene", "gaussian", goal_mark=True)
 
 
-def test_the_widened_start_is_the_same_policy_whatever_the_mark(tmp_path: Path) -> None:
-    path = _one_image_checkpoint(tmp_path)
+def test_the_widened_start_is_the_same_policy_whatever_the_mark(
+    one_image_checkpoint: Path, radar_observations: list[dict[str, Any]]
+) -> None:
+    path = one_image_checkpoint
     setup, agent = _marked_agent()
     agent.load_policy(starting_policy(path, setup))
     original = load_helmsman(path)
     assert not original.goal_mark and original.memory is None
-    for obs in _radar_obs():
+    for obs in radar_observations:
         marked = with_goal_mark(obs)
         assert marked["radar"][:, 1].any()  # a mark to ignore
         expected = original.agent.act(obs, deterministic=True)
         assert np.array_equal(agent.act(marked, deterministic=True), expected)
 
 
-def test_a_marked_checkpoint_round_trips_and_its_helmsman_draws_the_mark(tmp_path: Path) -> None:
+def test_a_marked_checkpoint_round_trips_and_its_helmsman_draws_the_mark(
+    tmp_path: Path, radar_observations: list[dict[str, Any]]
+) -> None:
     setup, agent = _marked_agent()
     with torch.no_grad():
         agent.policy.trunk.conv.weight[:, 1].normal_(0.0, 0.5)  # the mark matters
     ckpt = Checkpoint.from_agent(agent, setup)
     save_checkpoint(ckpt, tmp_path / "full.pt")
     save_checkpoint(slim_copy(ckpt), tmp_path / "slim.pt")
-    observations = _radar_obs()
+    observations = radar_observations
     for file in (tmp_path / "full.pt", tmp_path / "slim.pt"):
         assert load_checkpoint(file).setup_params["goal_mark"] is True
         helmsman = load_helmsman(file)
@@ -121,7 +97,9 @@ def test_a_marked_policy_continues_a_marked_run(tmp_path: Path) -> None:
     assert state["policy"]["trunk.conv.weight"].shape[1] == 2  # not widened twice
 
 
-def test_the_goal_mark_is_refused_on_the_device_backend(tmp_path: Path) -> None:
+def test_the_goal_mark_is_refused_on_the_device_backend(
+    tmp_path: Path, one_image_checkpoint: Path
+) -> None:
     with pytest.raises(UserError, match=r"goal mark .* --device cpu only"):
         train_rl(get_setup(MARKED), tmp_path / "run", iterations=1, device="torch-cpu",
-                 init_policy=_one_image_checkpoint(tmp_path))  # fmt: skip
+                 init_policy=one_image_checkpoint)  # fmt: skip

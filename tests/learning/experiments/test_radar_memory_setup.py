@@ -23,38 +23,10 @@ from learning.experiments.checkpoint import (
 from learning.experiments.setups import RLSetup, get_setup
 from learning.experiments.train_rl import train_rl
 from usvsim.common.errors import UserError
-from usvsim.task.batch import action_space
-from usvsim.task.observations import observation_space
-from usvsim.task.openwater_env import OpenWaterVectorEnv
 from usvsim.task.radar_memory import RadarMemory, RadarMemoryVectorEnv
 
 MEM = "rl-gaussian-radar-colreg-ilft-safe-ow-mem"
 ONE = "rl-gaussian-radar-colreg-ilft-safe-ow"
-
-
-def _one_image_checkpoint(tmp_path: Path) -> Path:
-    """A one-image radar+goal policy (random weights, non-zero biases) saved as a checkpoint."""
-    setup = get_setup(ONE)
-    agent = get_algorithm(setup.algorithm).make_agent(
-        observation_space("radar+goal"), action_space("gaussian"), setup.run_config(4)
-    )
-    with torch.no_grad():
-        for p in agent.policy.parameters():
-            p.add_(0.05 * torch.randn_like(p))
-    path = tmp_path / "one.pt"
-    save_checkpoint(Checkpoint.from_agent(agent, setup), path)
-    return path
-
-
-def _radar_obs(n: int = 5, steps: int = 3) -> list[dict[str, Any]]:
-    env = OpenWaterVectorEnv(n, observation="radar+goal")
-    obs, _ = env.reset(seed=2)
-    out = [obs]
-    rng = np.random.default_rng(1)
-    for _ in range(steps - 1):
-        obs = env.step(rng.uniform(-1, 1, (n, 1)).astype(np.float32))[0]
-        out.append({k: v.copy() for k, v in obs.items()})
-    return out
 
 
 def test_the_memory_setup_differs_from_its_parent_by_the_frames_only() -> None:
@@ -77,8 +49,10 @@ def test_radar_memory_needs_the_radar_observation() -> None:
         RLSetup("x", "positional", "gaussian", radar_frames=2)
 
 
-def test_the_widened_start_is_the_same_policy_whatever_the_earlier_image(tmp_path: Path) -> None:
-    path = _one_image_checkpoint(tmp_path)
+def test_the_widened_start_is_the_same_policy_whatever_the_earlier_image(
+    one_image_checkpoint: Path, radar_observations: list[dict[str, Any]]
+) -> None:
+    path = one_image_checkpoint
     setup = get_setup(MEM)
     env = setup.make_vector_env(5)
     agent = get_algorithm(setup.algorithm).make_agent(
@@ -87,7 +61,7 @@ def test_the_widened_start_is_the_same_policy_whatever_the_earlier_image(tmp_pat
     agent.load_policy(starting_policy(path, setup))
     original = load_helmsman(path)
     assert original.memory is None
-    first, later = _radar_obs()[0], _radar_obs()[2]
+    first, later = radar_observations[0], radar_observations[2]
     stacked = {"radar": np.concatenate([first["radar"], later["radar"]], axis=1), **{
         "goal": first["goal"]}}  # fmt: skip
     expected = original.agent.act(first, deterministic=True)
@@ -107,7 +81,9 @@ def test_a_memory_policy_cannot_start_a_one_image_run(tmp_path: Path) -> None:
         starting_policy(path, get_setup(ONE))
 
 
-def test_a_memory_checkpoint_round_trips_and_its_helmsman_remembers(tmp_path: Path) -> None:
+def test_a_memory_checkpoint_round_trips_and_its_helmsman_remembers(
+    tmp_path: Path, radar_observations: list[dict[str, Any]]
+) -> None:
     setup = get_setup(MEM)
     env = setup.make_vector_env(2)
     agent = get_algorithm(setup.algorithm).make_agent(
@@ -119,7 +95,7 @@ def test_a_memory_checkpoint_round_trips_and_its_helmsman_remembers(tmp_path: Pa
     ckpt = Checkpoint.from_agent(agent, setup)
     save_checkpoint(ckpt, path)
     save_checkpoint(slim_copy(ckpt), tmp_path / "slim.pt")
-    observations = _radar_obs()
+    observations = radar_observations
     for file in (path, tmp_path / "slim.pt"):
         assert load_checkpoint(file).setup_params["radar_frames"] == 2
         helmsman = load_helmsman(file)
@@ -135,10 +111,12 @@ def test_a_memory_checkpoint_round_trips_and_its_helmsman_remembers(tmp_path: Pa
     assert not np.array_equal(agent.act(twice, deterministic=True), expected)
 
 
-def test_radar_memory_is_refused_on_the_device_backend(tmp_path: Path) -> None:
+def test_radar_memory_is_refused_on_the_device_backend(
+    tmp_path: Path, one_image_checkpoint: Path
+) -> None:
     with pytest.raises(UserError, match=r"radar memory .* --device cpu only"):
         train_rl(get_setup(MEM), tmp_path / "run", iterations=1, device="torch-cpu",
-                 init_policy=_one_image_checkpoint(tmp_path))  # fmt: skip
+                 init_policy=one_image_checkpoint)  # fmt: skip
 
 
 def test_the_il_memory_setup_differs_from_its_parent_by_the_frames_only() -> None:
