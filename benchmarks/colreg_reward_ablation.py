@@ -133,15 +133,26 @@ def train_one(variant: str, seed: int, args: argparse.Namespace) -> None:
 SCORING = ("setup", "sets", "val_episodes", "test_episodes", "reactive_targets")
 
 
+def scored_this_run(record: dict[str, Any], summary: dict[str, Any] | None) -> bool:
+    """Whether a kept ``scores.json`` record is of the run now in its folder: True without a
+    summary to compare (a record kept without its run) or where either lacks a wall-clock;
+    otherwise the summary's wall-clock must be the one the record was scored at (a run resumed
+    in a copied folder has trained on, and its kept record is stale)."""
+    wall = None if summary is None else summary.get("wall_time_s")
+    kept = record.get("train_wall_s")
+    return wall is None or kept is None or float(kept) == float(wall)
+
+
 def cached(out: Path, args: argparse.Namespace) -> dict[str, Any] | None:
     """A finished run's record from its ``scores.json`` where it was scored with these scoring
-    arguments (:data:`SCORING`), else None."""
+    arguments (:data:`SCORING`) and is of the run now in ``out`` (:func:`scored_this_run`),
+    else None."""
     path = out / "scores.json"
     if not path.is_file():
         return None
     record: dict[str, Any] = json.loads(path.read_text())
     same = all(record.get("scoring", {}).get(k) == getattr(args, k) for k in SCORING)
-    return record if same else None
+    return record if same and scored_this_run(record, finished(out)) else None
 
 
 def run_one(variant: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:

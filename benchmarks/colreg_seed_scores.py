@@ -7,8 +7,10 @@ run: ``summary.json``, ``best.pt``, ``latest.pt``) is scored as
 COLREG suite's VALIDATION split, the one with the higher pooled success × compliance chosen,
 only it scored on the TEST split. The record is kept in ``DIR/scores.json`` (the ablation's
 format: a folder the ablation scored is read, not scored again, and a kept record in a folder
-without checkpoints is enough). The classical helmsmen of ``--baselines`` run on the same test
-episodes. Writes ``OUT/seeds.json`` and ``OUT/seeds.md`` (atomic):
+without checkpoints is enough; a record whose training wall-clock is not the folder's
+``summary.json``'s, a run resumed after it was scored, is scored again). The classical
+helmsmen of ``--baselines`` run on the same test episodes. Writes ``OUT/seeds.json`` and
+``OUT/seeds.md`` (atomic):
 
 - one row per seed, and per label the IQM over seeds of the per-set rates with rliable's 95 %
   interval (``colreg_reward_ablation.across_seeds``);
@@ -32,7 +34,14 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the ablation's scoring, shared
 
-from colreg_reward_ablation import across_seeds, choose_and_test, finished, fmt_rate, pooled
+from colreg_reward_ablation import (
+    across_seeds,
+    choose_and_test,
+    finished,
+    fmt_rate,
+    pooled,
+    scored_this_run,
+)
 
 from usvsim.common.fileio import atomic_write_text
 from usvsim.evaluation.colreg_suite import run_colreg, select_colreg_sets
@@ -54,7 +63,7 @@ def seed_record(label: str, run: Path, args: argparse.Namespace) -> dict[str, An
     summary = finished(run)
     if kept.is_file():
         record: dict[str, Any] = json.loads(kept.read_text())
-        if _same_scoring(record, args):
+        if _same_scoring(record, args) and scored_this_run(record, summary):
             setup = record.get("setup") or (summary or {}).get("setup", "")  # ablation records
             kept_record = {k: v for k, v in record.items() if k != "scoring"}
             return {**kept_record, "variant": label, "setup": setup}

@@ -59,6 +59,21 @@ def test_a_kept_record_is_read_without_checkpoints_only_for_the_same_scoring(
         seeds.seed_record("rl-radar", tmp_path, other)
 
 
+def test_a_kept_record_of_a_run_since_resumed_is_not_read(tmp_path: Path) -> None:
+    """A run folder copied and resumed keeps the old ``scores.json``: its wall-clock is no
+    longer the summary's, so the record is stale and the seed is scored again."""
+    args = seeds.parse(["--runs", f"x={tmp_path}", "--sets", "imazu-01"])
+    scoring = {k: getattr(args, k) for k in seeds.SCORING}
+    kept = {"variant": "all", "seed": 2, "test": {}, "train_wall_s": 2055.0, "scoring": scoring}
+    (tmp_path / "scores.json").write_text(json.dumps(kept))
+    summary = {"interrupted": False, "seed": 2, "wall_time_s": 2055.0}
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    assert seeds.seed_record("rl-radar", tmp_path, args)["seed"] == 2  # the same run: read
+    (tmp_path / "summary.json").write_text(json.dumps({**summary, "wall_time_s": 4079.0}))
+    with pytest.raises(SystemExit, match=r"no best\.pt or latest\.pt"):
+        seeds.seed_record("rl-radar", tmp_path, args)
+
+
 def test_runs_are_required() -> None:
     with pytest.raises(SystemExit):
         seeds.parse(["--baselines", "vo-radar"])
