@@ -144,11 +144,12 @@ class GoalMarkVectorEnv(VectorWrapper):
 
     def step(self, actions: Any) -> tuple[Any, Any, Any, Any, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(actions)
-        if "final_obs" in info:
+        ended = np.flatnonzero(np.asarray(terminated) | np.asarray(truncated))
+        if ended.size and "final_obs" in info:  # the ended boats' rows, marked in one batch
             final = info["final_obs"].copy()
-            for i, row in enumerate(final):
-                if row is not None:
-                    marked = with_goal_mark({k: np.asarray(v)[None] for k, v in row.items()})
-                    final[i] = {k: v[0] for k, v in marked.items()}
+            rows = [final[i] for i in ended.tolist()]
+            marked = with_goal_mark({k: np.stack([r[k] for r in rows]) for k in rows[0]})
+            for j, i in enumerate(ended.tolist()):
+                final[i] = {k: v[j] for k, v in marked.items()}
             info = {**info, "final_obs": final}
         return with_goal_mark(obs), reward, terminated, truncated, info
