@@ -151,6 +151,9 @@ class ILSetup:
     # radar+goal: the radar images of the last K decisions as K channels (RLSetup.radar_frames;
     # the demonstrations' images stacked along each run alike); 1: the image now only
     radar_frames: int = 1
+    # radar+goal: the goal's circle drawn as the image's last channel (RLSetup.goal_mark,
+    # usvsim.task.goal_mark), in the training env and on every demonstration's images alike
+    goal_mark: bool = False
 
     def __post_init__(self) -> None:
         if not (isinstance(self.radar_frames, int) and self.radar_frames >= 1):
@@ -158,6 +161,10 @@ class ILSetup:
         if self.radar_frames > 1 and self.observation != "radar+goal":
             raise ValueError(
                 f"ILSetup.radar_frames > 1 needs observation='radar+goal', got {self.observation!r}"
+            )
+        if self.goal_mark and self.observation != "radar+goal":
+            raise ValueError(
+                f"ILSetup.goal_mark needs observation='radar+goal', got {self.observation!r}"
             )
         if self.task not in TASKS:
             raise ValueError(f"ILSetup.task must be one of {TASKS}, got {self.task!r}")
@@ -389,6 +396,15 @@ IL_SETUPS: dict[str, ILSetup] = {
             demos="open-water+colreg",
             family="open-water+colreg",
             radar_frames=2,
+        ),
+        # the same with the goal mark (the RL traffic runs hardly read it: the expert's turns
+        # towards a goal beside an islet are the lesson; docs/notes/2026-12-traffic.md)
+        dataclasses.replace(
+            _IL_GAUSSIAN_RADAR_OW,
+            name="il-gaussian-radar-ow-colreg-mark",
+            demos="open-water+colreg",
+            family="open-water+colreg",
+            goal_mark=True,
         ),
     )
 }

@@ -14,6 +14,7 @@ import torch
 from gymnasium import spaces
 
 from learning.algorithms.networks import space_from_spec, space_to_spec
+from usvsim.common.errors import UserError
 from usvsim.task.goal_mark import marked_space
 from usvsim.task.observations import ObservationKind, observation_space
 from usvsim.task.radar_memory import memory_frames, stacked_space
@@ -21,6 +22,7 @@ from usvsim.task.radar_memory import memory_frames, stacked_space
 __all__ = [
     "image_channels",
     "policy_observation_space",
+    "refuse_image_wrappers_off_cpu",
     "setup_goal_mark",
     "start_state",
     "widened_policy_state",
@@ -70,6 +72,17 @@ def setup_goal_mark(setup: Any) -> bool:
     if isinstance(setup, dict):
         return bool(setup.get("goal_mark", False))
     return bool(getattr(setup, "goal_mark", False))
+
+
+def refuse_image_wrappers_off_cpu(setup: Any, device: str) -> None:
+    """``UserError`` where ``setup`` (RL or IL) has radar memory or the goal mark and trains on
+    a ``device`` other than cpu: both are NumPy wrappers of the CPU env only."""
+    frames = int(getattr(setup, "radar_frames", 1))
+    if device != "cpu" and (frames > 1 or setup_goal_mark(setup)):
+        raise UserError(
+            f"{setup.name}: radar memory and the goal mark (radar_frames {frames}, goal_mark "
+            f"{setup_goal_mark(setup)}) train on --device cpu only, got --device {device}"
+        )
 
 
 def start_state(state: dict[str, Any], start_params: dict[str, Any], setup: Any) -> dict[str, Any]:

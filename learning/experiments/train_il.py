@@ -37,6 +37,7 @@ from learning.experiments.checkpoint import (
     save_checkpoint,
 )
 from learning.experiments.il_setups import ILSetup
+from learning.experiments.memory_start import refuse_image_wrappers_off_cpu
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import setup_from_params
 from learning.experiments.train_rl import il_device_env_maker, open_water_fields
@@ -64,11 +65,11 @@ from learning.imitation.preprocess import (
     expert_data,
     harsh_radar_runs,
 )
-from usvsim.common.errors import UserError
 from usvsim.common.fileio import atomic_open, remove_stale_temporaries
 from usvsim.common.splits import selection_mode
 from usvsim.evaluation.episodes import selection_episodes, validation_episodes
 from usvsim.evaluation.likeness import ExpertReference, expert_reference, likeness
+from usvsim.task.goal_mark import GoalMarkVectorEnv, with_goal_mark
 from usvsim.task.openwater_env import OpenWaterVectorEnv
 from usvsim.task.radar_memory import RadarMemoryVectorEnv, stack_episode_frames
 from usvsim.task.scenario import EpisodeSpec
@@ -341,6 +342,7 @@ def train_il(
         setup, state, history = _resume_state(setup, out / "latest.pt")
         seed = int(state["agent"]["config"]["seed"])
         rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
+    refuse_image_wrappers_off_cpu(setup, device)  # before any file is written or demo read
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # half-written files of a killed earlier run
     data, n_demos, n_skipped = expert_pairs(setup, folders, log)
@@ -398,15 +400,12 @@ def train_il(
             )
         else:
             env = PoleAvoidanceVectorEnv(n, observation=setup.observation, action=setup.action)
-        return RadarMemoryVectorEnv(env, setup.radar_frames) if setup.radar_frames > 1 else env
+        if setup.radar_frames > 1:
+            env = RadarMemoryVectorEnv(env, setup.radar_frames)
+        return GoalMarkVectorEnv(env) if setup.goal_mark else env
 
     trainer: Any = train_gail
     if device != "cpu":
-        if setup.radar_frames > 1:
-            raise UserError(
-                f"{setup.name}: radar memory (radar_frames {setup.radar_frames}) trains on "
-                f"--device cpu only, got --device {device}"
-            )
         trainer, make_env = train_gail_on_device, il_device_env_maker(setup, device)
     run.start = time.perf_counter()  # the clock counts GAIL, warm start included
     try:
@@ -483,6 +482,9 @@ def expert_pairs(
         assert isinstance(data.obs, dict)
         stacked = stack_episode_frames(data.obs["radar"], data.episode, setup.radar_frames)
         data = dataclasses.replace(data, obs={**data.obs, "radar": stacked})
+    if setup.goal_mark:  # the mark after the memory's channels, as GoalMarkVectorEnv draws it
+        assert isinstance(data.obs, dict)
+        data = dataclasses.replace(data, obs=with_goal_mark(data.obs))
     n_runs = len(kept) // (setup.harsh_radar_copies + 1)
     copies = (
         f", each also {setup.harsh_radar_copies}× at the harshest radar level"

@@ -35,6 +35,7 @@ from learning.experiments.checkpoint import (
     save_checkpoint,
     starting_policy,
 )
+from learning.experiments.memory_start import refuse_image_wrappers_off_cpu
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
 from learning.experiments.validation import (
@@ -45,7 +46,6 @@ from learning.experiments.validation import (
     validate,
     validation_record,
 )
-from usvsim.common.errors import UserError
 from usvsim.common.fileio import remove_stale_temporaries
 from usvsim.common.splits import selection_mode
 
@@ -409,13 +409,8 @@ def train_rl(
     start = first_policy(setup, init_policy) if state is None else None
     trainer: Any = train
     make_env: Any = env_maker(setup)
+    refuse_image_wrappers_off_cpu(setup, device)
     if device != "cpu":
-        if setup.radar_frames > 1 or setup.goal_mark:
-            raise UserError(
-                f"{setup.name}: radar memory and the goal mark (radar_frames "
-                f"{setup.radar_frames}, goal_mark {setup.goal_mark}) train on --device cpu "
-                f"only, got --device {device}"
-            )
         from learning.algorithms.device_loop import train_on_device
 
         trainer, make_env = train_on_device, device_env_maker(setup, device)

@@ -103,3 +103,49 @@ def test_the_goal_mark_is_refused_on_the_device_backend(
     with pytest.raises(UserError, match=r"goal mark .* --device cpu only"):
         train_rl(get_setup(MARKED), tmp_path / "run", iterations=1, device="torch-cpu",
                  init_policy=one_image_checkpoint)  # fmt: skip
+
+
+def test_the_il_marked_setup_differs_from_its_parent_by_the_mark_only() -> None:
+    from learning.experiments.il_setups import ILSetup, get_il_setup
+
+    marked, parent = (
+        get_il_setup("il-gaussian-radar-ow-colreg-mark"),
+        get_il_setup("il-gaussian-radar-ow-colreg"),
+    )
+    assert marked.goal_mark and not parent.goal_mark
+    assert marked.replace(name=parent.name, goal_mark=False) == parent
+    with pytest.raises(ValueError, match="goal_mark needs observation='radar\\+goal'"):
+        ILSetup("x", "scene", "gaussian", goal_mark=True)
+
+
+def test_the_expert_pairs_of_a_marked_setup_carry_the_mark_last(tmp_path: Path) -> None:
+    """The same demonstrations with and without the mark: the image channels before the last
+    are the unmarked data's (radar memory's included), the last is the goal part's mark."""
+    from learning.experiments.il_setups import get_il_setup
+    from learning.experiments.train_il import expert_pairs
+    from learning.imitation.demonstrations import save_recordings
+    from learning.imitation.family_demos import record_family_demonstrations
+    from usvsim.task.goal_mark import goal_mark_images
+    from usvsim.task.radar import RadarConfig
+
+    save_recordings(record_family_demonstrations(3, seed=5), tmp_path)
+    one = get_il_setup("il-gaussian-radar-ow").replace(harsh_radar_copies=0, radar_frames=2)
+    plain, _, _ = expert_pairs(one, (tmp_path,), lambda _: None)
+    data, _, _ = expert_pairs(one.replace(goal_mark=True), (tmp_path,), lambda _: None)
+    assert isinstance(plain.obs, dict) and isinstance(data.obs, dict)
+    assert data.obs["radar"].shape == (len(plain), 3, 50, 119)
+    assert np.array_equal(data.obs["radar"][:, :2], plain.obs["radar"])
+    mark = data.obs["radar"][:, 2:]
+    assert np.array_equal(mark, goal_mark_images(plain.obs["goal"], RadarConfig()))
+    assert (mark.reshape(len(plain), -1).max(axis=1) == 255).all()  # every pair shows its goal
+    assert np.array_equal(data.actions, plain.actions)
+
+
+def test_the_il_goal_mark_is_refused_on_the_device_backend(tmp_path: Path) -> None:
+    from learning.experiments.il_setups import get_il_setup
+    from learning.experiments.train_il import train_il
+
+    with pytest.raises(UserError, match=r"goal mark .* --device cpu only"):
+        train_il(get_il_setup("il-gaussian-radar-ow-colreg-mark"), tmp_path / "run",
+                 iterations=1, device="torch-cpu")  # fmt: skip
+    assert not (tmp_path / "run").exists()  # refused before anything was written
