@@ -20,9 +20,9 @@ from usvsim.task.observations import ObservationKind, observation_space
 from usvsim.task.radar_memory import memory_frames, stacked_space
 
 __all__ = [
+    "check_cpu_only_options",
     "image_channels",
     "policy_observation_space",
-    "refuse_image_wrappers_off_cpu",
     "setup_goal_mark",
     "start_state",
     "widened_policy_state",
@@ -74,14 +74,23 @@ def setup_goal_mark(setup: Any) -> bool:
     return bool(getattr(setup, "goal_mark", False))
 
 
-def refuse_image_wrappers_off_cpu(setup: Any, device: str) -> None:
-    """``UserError`` where ``setup`` (RL or IL) has radar memory or the goal mark and trains on
-    a ``device`` other than cpu: both are NumPy wrappers of the CPU env only."""
+def check_cpu_only_options(setup: Any, device: str) -> None:
+    """``UserError`` where ``setup`` (RL or IL) trains on a ``device`` other than cpu with an
+    option of the CPU env only: radar memory or the goal mark (NumPy wrappers), unsafe ends (an
+    argument of ``OpenWaterVectorEnv``). The message names the options that are on."""
     frames = int(getattr(setup, "radar_frames", 1))
-    if device != "cpu" and (frames > 1 or setup_goal_mark(setup)):
+    on = [
+        name
+        for name, used in (
+            (f"radar memory (radar_frames {frames})", frames > 1),
+            ("the goal mark (goal_mark)", setup_goal_mark(setup)),
+            ("unsafe ends (unsafe_ends)", bool(getattr(setup, "unsafe_ends", False))),
+        )
+        if used
+    ]
+    if device != "cpu" and on:
         raise UserError(
-            f"{setup.name}: radar memory and the goal mark (radar_frames {frames}, goal_mark "
-            f"{setup_goal_mark(setup)}) train on --device cpu only, got --device {device}"
+            f"{setup.name}: {' and '.join(on)} train on --device cpu only, got --device {device}"
         )
 
 

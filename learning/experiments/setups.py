@@ -61,7 +61,8 @@ for pointing off the goal within 100 m of it (:attr:`RLSetup.aim_reward`,
 ``-aim2-safe6`` ``-aim2`` with the safety-margin penalty at w = 6, not 2, ``-aim2-mark``
 ``-aim2`` with the goal drawn into the image as a second channel (:attr:`RLSetup.goal_mark`,
 :mod:`usvsim.task.goal_mark`; a one-image start file is widened, the new channel's weights at
-zero),
+zero), ``-aim2-unsafe-ends`` ``-aim2`` with a training episode ended by a decision period
+inside the safety distance, as by a collision (:attr:`RLSetup.unsafe_ends`),
 ``-aim-islet`` ``-aim`` with 15 % of the episodes ending at a goal beside islets
 (:attr:`RLSetup.goal_islet_share`);
 ``-colreg-reactive`` meets targets steered by vo (:attr:`RLSetup.reactive_targets`);
@@ -292,6 +293,10 @@ class RLSetup:
     # open-water: the weight (> 0) of the per-decision penalty for pointing off the goal within
     # 100 m of it (usvsim.task.reward.GoalAimReward, w · (1 - cos β)); 0: off
     aim_reward: float = 0.0
+    # open-water: a decision period inside the success rule's safety distance ends the training
+    # episode, as a collision does (usvsim.task.openwater_env.OpenWaterVectorEnv unsafe_ends;
+    # under the fixed horizon its reward carries the decisions left); False: it goes on
+    unsafe_ends: bool = False
     # radar+goal: the radar images of the last K decisions as K channels, the newest first
     # (usvsim.task.radar_memory); 1: the image now only (memoryless, the study's)
     radar_frames: int = 1
@@ -323,11 +328,12 @@ class RLSetup:
             or self.approach_share
             or self.goal_traffic_share
             or self.goal_islet_share
+            or self.unsafe_ends
         ) and (self.task != "open-water"):
             raise ValueError(
                 "RLSetup.colreg_*, reactive_targets, safety_reward, success_reward, "
-                "aim_reward, approach_share, goal_traffic_share and goal_islet_share need "
-                "task='open-water'"
+                "aim_reward, approach_share, goal_traffic_share, goal_islet_share and "
+                "unsafe_ends need task='open-water'"
             )
         for share in ("approach_share", "goal_traffic_share", "goal_islet_share"):
             if not 0.0 <= getattr(self, share) < 1.0:
@@ -412,6 +418,8 @@ class RLSetup:
                 env_kwargs.setdefault("success_reward", SuccessReward(self.success_reward))
             if self.aim_reward:
                 env_kwargs.setdefault("aim_reward", GoalAimReward(self.aim_reward))
+            if self.unsafe_ends:
+                env_kwargs.setdefault("unsafe_ends", True)
             env: VectorEnv = OpenWaterVectorEnv(
                 num_envs,
                 observation=self.observation,
@@ -505,6 +513,12 @@ COLREG_ILFT_SAFE_OW_AIM2_SAFE6 = COLREG_ILFT_SAFE_OW_AIM2.replace(
 # radar policies turn away whatever the goal's bearing; goal_response.py --islet)
 COLREG_ILFT_SAFE_OW_AIM2_MARK = COLREG_ILFT_SAFE_OW_AIM2.replace(
     name=COLREG_ILFT_SAFE_OW_AIM2.name + "-mark", goal_mark=True
+)
+# -aim2 with the training episode ended by a period inside the safety distance, as by a
+# collision: the unsafe passes (goal reached after passing at 3-10 m) that end most failed
+# start-short and several-obstacles episodes become failures in training too
+COLREG_ILFT_SAFE_OW_AIM2_UNSAFE_ENDS = COLREG_ILFT_SAFE_OW_AIM2.replace(
+    name=COLREG_ILFT_SAFE_OW_AIM2.name + "-unsafe-ends", unsafe_ends=True
 )
 # -aim with 15 % of the episodes ending at a goal beside islets, approached late and off-angle
 # (goal_islet_family: the goal orbits of extended-obstacles)
@@ -609,6 +623,7 @@ SETUPS: dict[str, RLSetup] = {
         COLREG_ILFT_SAFE_OW_AIM4,
         COLREG_ILFT_SAFE_OW_AIM2_SAFE6,
         COLREG_ILFT_SAFE_OW_AIM2_MARK,
+        COLREG_ILFT_SAFE_OW_AIM2_UNSAFE_ENDS,
         COLREG_ILFT_SAFE_OW_AIM_ISLET,
         COLREG_ILFT_MEM,
         COLREG_SCENE,

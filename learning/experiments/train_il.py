@@ -37,7 +37,7 @@ from learning.experiments.checkpoint import (
     save_checkpoint,
 )
 from learning.experiments.il_setups import ILSetup
-from learning.experiments.memory_start import refuse_image_wrappers_off_cpu
+from learning.experiments.memory_start import check_cpu_only_options
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import setup_from_params
 from learning.experiments.train_rl import il_device_env_maker, open_water_fields
@@ -342,7 +342,7 @@ def train_il(
         setup, state, history = _resume_state(setup, out / "latest.pt")
         seed = int(state["agent"]["config"]["seed"])
         rows = read_log_rows(out / "log.csv", int(state["agent"]["iteration"]))
-    refuse_image_wrappers_off_cpu(setup, device)  # before any file is written or demo read
+    check_cpu_only_options(setup, device)  # before any file is written or demo read
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # half-written files of a killed earlier run
     data, n_demos, n_skipped = expert_pairs(setup, folders, log)

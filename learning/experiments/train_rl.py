@@ -35,7 +35,7 @@ from learning.experiments.checkpoint import (
     save_checkpoint,
     starting_policy,
 )
-from learning.experiments.memory_start import refuse_image_wrappers_off_cpu
+from learning.experiments.memory_start import check_cpu_only_options
 from learning.experiments.run_log import Milestones, RunLog, advance, progress_bar, read_log_rows
 from learning.experiments.setups import RLSetup, setup_from_params
 from learning.experiments.validation import (
@@ -409,7 +409,7 @@ def train_rl(
     start = first_policy(setup, init_policy) if state is None else None
     trainer: Any = train
     make_env: Any = env_maker(setup)
-    refuse_image_wrappers_off_cpu(setup, device)
+    check_cpu_only_options(setup, device)
     if device != "cpu":
         from learning.algorithms.device_loop import train_on_device
 

@@ -361,7 +361,11 @@ class OpenWaterVectorEnv(VectorEnv):
 
     ## Episode End
     Terminated: goal reached or a collision (and, under the fixed horizon, leaving the area);
-    truncated: the episode's time limit or leaving the area (its ``area_radius_m``). Autoreset
+    truncated: the episode's time limit or leaving the area (its ``area_radius_m``). With
+    ``unsafe_ends=True`` (training only; default False) a decision period that comes within the
+    success rule's safety distance also terminates the episode (``info["unsafe_end"]``): the
+    episode has failed by that rule, and under the fixed horizon its terminal reward carries the
+    decisions left, as a collision's does. Autoreset
     ``SAME_STEP``: ``info["final_obs"]``, ``info["final_info"]`` as in
     :class:`usvsim.task.vector_env.PoleAvoidanceVectorEnv`.
 
@@ -369,7 +373,7 @@ class OpenWaterVectorEnv(VectorEnv):
     ``num_envs``, ``observation``, ``action``, ``family``, ``reward_horizon``, ``gamma``,
     ``normalize_observation``, ``reward`` (a :class:`usvsim.task.reward.RewardFunction`),
     ``plant``, ``radar``, ``backend``, ``colreg_reward``, ``safety_reward``, ``success_reward``,
-    ``aim_reward`` (wind and waves:
+    ``aim_reward``, ``unsafe_ends`` (wind and waves:
     ``family=weather_family()``; the default family is calm). ``render_mode`` must be
     ``None``: the top view draws one pole (:mod:`usvsim.task.render`). ``info_observation``
     (e.g. ``"scene"``): ``reset`` and every ``step`` also return that form of the returned
@@ -403,6 +407,7 @@ class OpenWaterVectorEnv(VectorEnv):
         safety_reward: SafetyMarginReward | None = None,
         success_reward: SuccessReward | None = None,
         aim_reward: GoalAimReward | None = None,
+        unsafe_ends: bool = False,
     ) -> None:
         self.options = EnvOptions(reward_horizon, gamma, normalize_observation, render_mode)
         if render_mode is not None:
@@ -418,6 +423,7 @@ class OpenWaterVectorEnv(VectorEnv):
         self.safety = safety_reward
         self.success = success_reward
         self.aim = aim_reward
+        self.unsafe_ends = bool(unsafe_ends)
         self.on_decision = on_decision
         self.sim = OpenWaterBatch(
             num_envs, observation=observation, action=action, plant=plant, radar=radar,
@@ -521,10 +527,14 @@ class OpenWaterVectorEnv(VectorEnv):
             aim = self.aim(self._goal_bearing_rad(res), res.distance_to_goal_m)
             total = total + aim
             extra["reward_aim"] = aim
+        ended, cut = res.terminated, res.truncated
+        if self.unsafe_ends:  # failed by the success rule: an end, as a collision is
+            unsafe = (res.period_nearest_m < self.sim.base.safety_distance_m) & ~ended
+            ended, cut = ended | unsafe, cut & ~unsafe
+            extra["unsafe_end"] = unsafe
         reward, terminated, truncated = apply_reward_horizon(
-            o.reward_horizon, o.gamma, self._horizon, total, res.terminated, res.truncated,
-            res.out_of_area, shifted,
-        )  # fmt: skip
+            o.reward_horizon, o.gamma, self._horizon, total, ended, cut, res.out_of_area, shifted
+        )
         if self.success is not None:  # after the horizon's scaling (SuccessReward)
             success = self.success(res.is_success & terminated)
             reward = reward + success

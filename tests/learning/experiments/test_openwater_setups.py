@@ -335,3 +335,26 @@ def test_usvsim_train_il_scene_ow_end_to_end(tmp_path: Path) -> None:
         ),
     )
     assert int(first_best["iteration"]) == best["iteration"]
+
+
+def test_the_unsafe_ends_setup_differs_from_aim2_by_the_flag_and_ends_its_env_so() -> None:
+    parent = get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-aim2")
+    strict = get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-aim2-unsafe-ends")
+    assert strict.unsafe_ends and not parent.unsafe_ends
+    assert strict.replace(name=parent.name, unsafe_ends=False) == parent
+    assert setup_from_params(parent, setup_params(strict)).unsafe_ends
+    env = strict.with_num_envs(2).make_vector_env(2)
+    assert isinstance(env, OpenWaterVectorEnv) and env.unsafe_ends
+    assert not parent.make_vector_env(2).unsafe_ends
+    with pytest.raises(ValueError, match="unsafe_ends need task='open-water'"):
+        strict.replace(task="pole")
+
+
+def test_unsafe_ends_is_refused_on_the_device_backend(tmp_path: Path) -> None:
+    from learning.experiments.train_rl import train_rl
+    from usvsim.common.errors import UserError
+
+    setup = get_setup("rl-gaussian-radar-colreg-ilft-safe-ow-aim2-unsafe-ends")
+    with pytest.raises(UserError, match=r"unsafe ends \(unsafe_ends\) train on --device cpu only"):
+        train_rl(setup, tmp_path / "run", iterations=1, device="torch-cpu",
+                 init_policy="usvsim/models/radar-gaussian-gail-trpo-traffic.pt")  # fmt: skip

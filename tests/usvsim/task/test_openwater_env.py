@@ -404,3 +404,33 @@ def test_goal_islet_episodes_end_at_a_goal_beside_islets(plant):
             assert math.hypot(x - s[0], y - s[1]) - r >= 25.0 - 1e-6
             edges.append(math.hypot(x - e.goal_ne[0], y - e.goal_ne[1]) - r)
     assert np.mean(np.array(edges) < 50.0) > 0.5
+
+
+def test_unsafe_ends_terminates_the_first_period_inside_the_safety_distance(plant):
+    """Straight at the study's pole under the fixed horizon: with ``unsafe_ends`` the episode is
+    the plain env's, reward for reward, until the first decision period whose nearest distance
+    is inside the safety distance; that one terminates (``unsafe_end``), its reward the plain
+    step's reward scaled by the decisions left, while the plain env sails on."""
+    ep = from_pole_episodes(validation_episodes()[:1])[0]
+    kwargs = {"observation": "scene", "plant": plant, "reward_horizon": "fixed"}
+    plain = OpenWaterVectorEnv(1, **kwargs)
+    strict = OpenWaterVectorEnv(1, unsafe_ends=True, **kwargs)
+    d_safe = strict.sim.base.safety_distance_m
+    for env in (plain, strict):
+        env.reset(seed=0, options={"episodes": [ep]})
+    action = np.zeros((1, 1), dtype=np.float32)
+    taken = 0
+    while taken < 60:
+        _, r0, done0, cut0, _ = plain.step(action)
+        _, r1, done1, cut1, info1 = strict.step(action)
+        taken += 1
+        inside = bool(info1["min_distance_m"][0] < d_safe)
+        assert info1["unsafe_end"][0] == (inside and not done0[0])
+        if inside:
+            break
+        assert (r1[0], done1[0], cut1[0]) == (r0[0], done0[0], cut0[0])
+    assert taken > 3 and inside and not done0[0] and done1[0] and not cut1[0]
+    left = plain.sim.base.max_decisions - taken
+    assert r1[0] == pytest.approx(r0[0] * (1 + 0.99 * (1 - 0.99**left) / 0.01), rel=1e-12)
+    assert r1[0] < 20 * r0[0] < 0.0  # the decisions left weigh on the end
+    assert info1["final_info"]["unsafe_end"][0] and not info1["final_info"]["is_success"][0]
