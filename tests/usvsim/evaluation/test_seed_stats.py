@@ -177,7 +177,7 @@ def test_usvsim_models_shows_the_iqm_beside_the_shipped_figure() -> None:
             "rl-categorical-radar",
             "il-gaussian-radar",
             "il-gaussian-radar-ow-colreg",
-            "rl-gaussian-radar-colreg-ilft-safe-ow",
+            "rl-gaussian-radar-colreg-ilft-safe-ow-aim2-unsafe-ends",
         }
     )
     # issue 37: every recommended model's setup was trained over >= 3 seeds
