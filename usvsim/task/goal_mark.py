@@ -53,6 +53,7 @@ __all__ = [
 IMAGE_KEY, GOAL_KEY = "radar", "goal"
 GOAL_MARK_RADIUS_M = 10.0  # m; the study's goal circle (usvsim.task.scenario.Scenario)
 MARK = 255  # the mark's intensity, a radar return's full scale
+MARK_BLOCK = 2048  # boats marked per NumPy pass in with_goal_mark (bounds its memory)
 
 
 def goal_polar(goal: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -104,8 +105,15 @@ def with_goal_mark(observation: dict[str, Any]) -> dict[str, Any]:
     if image.ndim != 4:
         raise ValueError(f"with_goal_mark takes radar images (N, C, H, W), got {image.shape}")
     cfg = RadarConfig(n_rows=image.shape[2], n_cols=image.shape[3])
-    mark = goal_mark_images(np.asarray(observation[GOAL_KEY]).reshape(-1, 2), cfg)
-    return {**observation, IMAGE_KEY: np.concatenate([image, mark], axis=1)}
+    goal = np.asarray(observation[GOAL_KEY]).reshape(-1, 2)
+    n, c = image.shape[:2]
+    out = np.empty((n, c + 1, *image.shape[2:]), dtype=np.uint8)
+    out[:, :c] = image
+    # in blocks of boats: the mark's geometry takes 8-byte temporaries per pixel, which for a
+    # demonstration set's 160,000 images would need tens of GB at once
+    for lo in range(0, n, MARK_BLOCK):
+        out[lo : lo + MARK_BLOCK, c:] = goal_mark_images(goal[lo : lo + MARK_BLOCK], cfg)
+    return {**observation, IMAGE_KEY: out}
 
 
 def marked_space(space: spaces.Space) -> spaces.Dict:

@@ -9,6 +9,7 @@ import pytest
 
 from usvsim.task.goal_mark import (
     MARK,
+    MARK_BLOCK,
     GoalMarkVectorEnv,
     goal_mark_images,
     goal_polar,
@@ -106,3 +107,17 @@ def test_the_wrapper_marks_observations_and_final_observations() -> None:
                 assert np.array_equal(row["radar"][0], base["radar"][0])
                 assert np.array_equal(row["radar"][1], goal_mark_images(base["goal"][None])[0, 0])
     assert ended > 0
+
+
+def test_marking_in_blocks_is_marking_at_once() -> None:
+    """A batch larger than one block is marked as ``goal_mark_images`` marks it whole."""
+    rng = np.random.default_rng(3)
+    n = MARK_BLOCK + 37
+    obs = {
+        "radar": rng.integers(0, 256, (n, 1, 50, 119), dtype=np.uint8),
+        "goal": rng.normal(0.0, 1.0, (n, 2)).astype(np.float32),
+    }
+    marked = with_goal_mark(obs)["radar"]
+    assert marked.shape == (n, 2, 50, 119) and marked.dtype == np.uint8
+    assert np.array_equal(marked[:, :1], obs["radar"])
+    assert np.array_equal(marked[:, 1:], goal_mark_images(obs["goal"], RadarConfig()))
