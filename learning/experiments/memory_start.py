@@ -4,6 +4,9 @@ A policy with radar memory reads K radar images as K channels; its checkpoint sa
 setup's ``radar_frames``. :func:`policy_observation_space` is the space such a policy reads (the
 checkpoint reader checks the stored weights against it); :func:`widened_policy_state` turns a
 one-image policy into the first policy of a memory run with the same actions.
+:func:`check_cpu_only_options` refuses the options of the CPU env only (radar memory, the goal
+mark, and unsafe ends, an env argument kept with them so that RL and IL refuse in one place)
+on another ``--device``.
 """
 
 from __future__ import annotations
